@@ -1,0 +1,128 @@
+"""Command line: ``cyclo-fmu efficiency|paper``.
+
+Units at this edge: r/min for speeds, N*m for torques, W for powers; converted once on the way
+in and out. Errors: one line on stderr, exit status 2.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+import numpy as np
+
+from model_core import (CycloidInputError, DriveDesign, LOSS_NAMES, design_from_toml,
+                        operating_point, rad_s_to_rpm, rpm_to_rad_s)
+from model_core.kinematics import MODES, parse_mode
+from model_core.losses import LOSS_DESCRIPTIONS
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, non-zero exit
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def _number(name):
+    def conv(text):
+        try:
+            return float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} = {text!r}: not a number")
+    return conv
+
+
+def _load_design(path):
+    return DriveDesign() if path is None else design_from_toml(__import__("pathlib").Path(path))
+
+
+def _json_num(x):
+    x = float(x)
+    return None if not math.isfinite(x) else x
+
+
+def cmd_efficiency(args) -> int:
+    design = _load_design(args.design)
+    a, b, h = parse_mode(args.mode)
+    if not math.isfinite(args.speed):
+        raise CycloidInputError("speed", args.speed, "must be a finite number of r/min")
+    if not math.isfinite(args.torque):
+        raise CycloidInputError("torque", args.torque, "must be a finite number of N*m")
+    op = operating_point(design, a + b, rpm_to_rad_s(args.speed), args.torque)
+    losses = {k: float(v) for k, v in op.losses.as_dict().items()}
+    p_in = float(op.input_power)
+    w_out = float(op.speeds[b])
+    t_out = -float(op.torques[b])   # torque the output shaft delivers to the load
+    flow = op.mode if bool(op.flow_forward) else b + a
+    result = {
+        "mode": op.mode, "flow_mode": flow, "held_shaft": h,
+        "eta": None if bool(op.locked) else _json_num(op.eta),
+        "eta0": _json_num(op.eta0), "locked": bool(op.locked),
+        "losses_W": losses,
+        "loss_share": {k: (v / p_in if p_in > 0 else None) for k, v in losses.items()},
+        "loss_power_W": float(op.loss_power),
+        "input_speed_rpm": args.speed, "input_torque_Nm": float(op.torques[a]),
+        "input_power_W": float(op.torques[a] * op.speeds[a]),
+        "output_speed_rpm": float(rad_s_to_rpm(w_out)), "output_torque_Nm": t_out,
+        "output_power_W": t_out * w_out,
+        "reaction_torque_Nm": float(op.torques[h]),
+    }
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return 0
+    print(f"cycloid drive, mode {op.mode} (shaft {a} drives, {b} driven, {h} held), "
+          f"power flows {flow[0]} -> {flow[1]}")
+    print(f"  input   {args.speed:10.1f} r/min  {args.torque:9.4f} N*m  {result['input_power_W']:9.2f} W")
+    print(f"  output  {result['output_speed_rpm']:10.1f} r/min  {t_out:9.4f} N*m  "
+          f"{result['output_power_W']:9.2f} W")
+    print(f"  reaction torque on held shaft {h}: {result['reaction_torque_Nm']:.4f} N*m")
+    if op.locked:
+        print(f"  LOCKED: back-driving is self-locking (eta0 = {float(op.eta0):.4f} <= i0 = "
+              f"{design.i0:.4f}); the drive holds")
+    else:
+        print(f"  efficiency eta = {100 * float(op.eta):.2f} %   basic efficiency eta0 = "
+              f"{100 * float(op.eta0):.3f} %")
+    print("  partial losses:")
+    for k in LOSS_NAMES:
+        share = f"{100 * losses[k] / p_in:6.2f} %" if p_in > 0 else "   n/a"
+        print(f"    {k}  {losses[k]:9.3f} W  {share} of input   {LOSS_DESCRIPTIONS[k]}")
+    print(f"    sum  {result['loss_power_W']:9.3f} W")
+    return 0
+
+
+def cmd_paper(args) -> int:
+    from .paper import run_paper_comparison
+    return run_paper_comparison(_load_design(args.design), args.out, args.json)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="cyclo-fmu", description="Cycloid-drive losses, efficiency and FMI tools.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    e = sub.add_parser("efficiency", help="efficiency and partial losses at one operating point")
+    e.add_argument("--mode", required=True, help=f"operating mode, one of {', '.join(MODES)}")
+    e.add_argument("--speed", required=True, type=_number("speed"),
+                   help="signed speed of the driving shaft, r/min")
+    e.add_argument("--torque", required=True, type=_number("torque"),
+                   help="torque delivered into the driving shaft, N*m")
+    e.add_argument("--design", help="design file (TOML); default: the paper's test drive")
+    e.add_argument("--json", action="store_true", help="print one JSON object")
+    e.set_defaults(func=cmd_efficiency)
+    pp = sub.add_parser("paper", help="the paper's Section 5 comparison, theory side")
+    pp.add_argument("--out", default="out", help="folder for the figures (default: out)")
+    pp.add_argument("--design", help="design file (TOML); default: the paper's test drive")
+    pp.add_argument("--json", action="store_true", help="print one JSON object")
+    pp.set_defaults(func=cmd_paper)
+    return p
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except CycloidInputError as exc:
+        print(f"cyclo-fmu: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

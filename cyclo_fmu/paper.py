@@ -1,0 +1,89 @@
+"""``cyclo-fmu paper``: the paper's Section 5 comparison, theory side, with figures."""
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from model_core import LOSS_NAMES, efficiency_map, operating_point, rad_s_to_rpm, rpm_to_rad_s
+from model_core.losses import LOSS_DESCRIPTIONS
+from model_core.paper import PAPER_THEORY, BenchEnvelope, envelope_statistics
+
+
+def _figures(design, envelope, out: Path) -> list[Path]:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    speeds = envelope.speeds()
+    torques = np.linspace(envelope.torque_min, envelope.torque_max, 30)
+    fig, axes = plt.subplots(2, 2, figsize=(10, 7.5))
+    for row, mode in enumerate(("S1", "S2")):
+        m = efficiency_map(design, mode, speeds, torques)
+        ax = axes[row, 0]
+        for i in range(0, len(speeds), 2):
+            ax.plot(torques, 100 * m.eta[i], label=f"{rad_s_to_rpm(speeds[i]):.0f} r/min")
+        ref = PAPER_THEORY[mode]
+        ax.axhspan(100 * ref["min"], 100 * ref["max"], color="0.85", label="paper theory range")
+        ax.axhline(100 * ref["mean"], color="k", ls="--", lw=0.8, label="paper theory mean")
+        ax.set(xlabel="input torque T_S / N*m", ylabel=f"efficiency eta_{mode} / %",
+               title=f"mode {mode}: efficiency over input torque")
+        ax.legend(fontsize=7)
+        ax = axes[row, 1]
+        p_in = m.input_power
+        p_out = p_in * m.eta
+        sc = ax.scatter(p_in.ravel(), p_out.ravel(), c=100 * m.eta.ravel(), s=8, cmap="viridis")
+        fig.colorbar(sc, ax=ax, label="efficiency / %")
+        ax.set(xlabel="input power / W", ylabel="output power / W",
+               title=f"mode {mode}: output over input power")
+    fig.tight_layout()
+    f1 = out / "efficiency_S1_S2.png"
+    fig.savefig(f1, dpi=110)
+    plt.close(fig)
+
+    # Fig. 7-like: partial losses at the rated point, plain rollers vs needle bearings
+    w_rated, t_rated = rpm_to_rad_s(2800.0), 0.85
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    variants = [("plain rollers (default)", design),
+                ("needle-bearing rollers", replace(design, ring_rollers="needle",
+                                                   disc_rollers="needle"))]
+    x = np.arange(len(LOSS_NAMES))
+    width = 0.2
+    for j, mode in enumerate(("S1", "S2")):
+        for k, (label, d) in enumerate(variants):
+            op = operating_point(d, mode, w_rated, t_rated)
+            vals = [float(getattr(op.losses, n)) for n in LOSS_NAMES]
+            ax.bar(x + (2 * j + k - 1.5) * width, vals, width,
+                   label=f"{mode}, {label}: eta = {100 * float(op.eta):.1f} %")
+    ax.set_xticks(x, [f"{n}\n{LOSS_DESCRIPTIONS[n]}" for n in LOSS_NAMES], fontsize=7)
+    ax.set(ylabel="power loss / W", title="Partial losses at 2800 r/min, 0.85 N*m input")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    f2 = out / "partial_losses.png"
+    fig.savefig(f2, dpi=110)
+    plt.close(fig)
+    return [f1, f2]
+
+
+def run_paper_comparison(design, out, as_json: bool) -> int:
+    envelope = BenchEnvelope()
+    stats = {mode: envelope_statistics(design, mode, envelope) for mode in ("S1", "S2")}
+    files = _figures(design, envelope, Path(out)) if out else []
+    if as_json:
+        print(json.dumps(stats, indent=2))
+        return 0
+    print("Paper, Section 5, theory side: efficiency over the bench envelope")
+    print(f"  envelope: input speed {envelope.speed_min_rpm:.0f}-{envelope.speed_max_rpm:.0f} r/min, "
+          f"input torque {envelope.torque_min}-{envelope.torque_max} N*m "
+          f"(250 W, 2800 r/min motor on a frequency regulator), {envelope.n_speed}x{envelope.n_torque} grid")
+    print(f"  {'mode':4}  {'model min/mean/max %':>24}   {'paper theory min/mean/max %':>28}")
+    for mode, s in stats.items():
+        r = PAPER_THEORY[mode]
+        print(f"  {mode:4}  {100 * s['min']:7.2f} {100 * s['mean']:7.2f} {100 * s['max']:7.2f}   "
+              f"   {100 * r['min']:7.2f} {100 * r['mean']:7.2f} {100 * r['max']:7.2f}")
+    for f in files:
+        print(f"  figure: {f}")
+    return 0

@@ -1,0 +1,387 @@
+"""Design data of the constrained cycloid drive: geometry, lubricant and friction settings.
+
+All values are SI inside (m, Pa, kg/m^3, m^2/s). Design files (TOML) use mm and mm^2/s, the
+units of drawings and data sheets; the conversion happens once, in :func:`design_from_toml`
+and :func:`design_to_toml`.
+
+The default is the paper's test drive (Table 3 of Mackic et al.). Values the paper does not
+give are marked **assumption** in the field documentation below, with the reason.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .errors import CycloidInputError
+from . import geometry
+
+ROLLER_KINDS = ("plain", "needle")
+PROFILE_MODIFICATIONS = ("equidistant", "offset")
+DISC_PIN_SLIDING = ("paper", "kinematic")
+CONTACT_LAWS = ("hertz", "linear")
+
+
+def _f(default, unit, doc, toml_unit=None, scale=1.0):
+    """A dataclass field carrying its SI unit, its design-file unit and its documentation."""
+    return field(default=default, metadata={"unit": unit, "toml_unit": toml_unit or unit,
+                                            "scale": scale, "doc": doc})
+
+
+MM = 1e-3       # design files give lengths in mm
+UM = 1e-6       # roughness in micrometres
+MM2_S = 1e-6    # kinematic viscosity in mm^2/s
+
+
+@dataclass(frozen=True)
+class Lubricant:
+    """The grease. Paper: lithium-complex NLGI 2 grease (KP2PN-20), nu = 200 mm^2/s."""
+
+    kinematic_viscosity: float = _f(200e-6, "m^2/s", "Base-oil kinematic viscosity [paper, Table 3].",
+                                    "mm^2/s", MM2_S)
+    density: float = _f(900.0, "kg/m^3",
+                        "Base-oil density. **Assumption**: 900 kg/m^3, typical mineral base oil "
+                        "at 40 C; the paper gives none. Only the product rho*nu (dynamic viscosity) "
+                        "enters, in the Benedict-Kelley coefficient.")
+
+    @property
+    def dynamic_viscosity(self) -> float:
+        """Dynamic viscosity eta = rho * nu in Pa*s."""
+        return self.density * self.kinematic_viscosity
+
+
+@dataclass(frozen=True)
+class Friction:
+    """Friction settings of the contacts.
+
+    Sliding contacts (roller bore on its pin, when the roller set is "plain") use the
+    Benedict-Kelley mixed-lubrication coefficient, bounded between ``mu_full_film`` and
+    ``mu_boundary``. Rolling contacts (roller on the cycloid tooth, disc roller in its hole) use a
+    rolling-resistance coefficient (rolling-resistance force per normal force). Rolling bearings
+    (the eccentric bearing; rollers of kind "needle") use the SKF 2014 frictional-moment model,
+    load-dependent terms only, as the paper states.
+    """
+
+    mu_boundary: float = _f(0.0906, "1",
+                            "Boundary-lubrication friction coefficient of the sliding contacts, the "
+                            "upper clamp of the Benedict-Kelley coefficient. **Calibrated**: 0.0906 "
+                            "makes the default design's mean S1 efficiency over the bench envelope "
+                            "equal the paper's theory mean 65.25 % "
+                            "(model_core.paper.calibrate_mu_boundary); it lies at the low end of "
+                            "the 0.08-0.15 range of greased steel on steel.")
+    mu_full_film: float = _f(0.01, "1",
+                             "Lower clamp of the Benedict-Kelley coefficient where its logarithm "
+                             "turns negative (full film). **Assumption**: 0.01.")
+    pin_roughness: float = _f(1.915e-6, "m",
+                              "Composite roughness Ra of pin and roller bore. **Assumption**: the "
+                              "paper measured no pins; we combine its Table 3 values by its Eq. (30), "
+                              "sqrt(1.263^2 + 1.439^2) = 1.915 um = 75 uin. That lies beyond the "
+                              "pole (50 uin) of the Benedict-Kelley roughness factor: surfaces this "
+                              "rough run in boundary lubrication, so the sliding coefficient is "
+                              "mu_boundary. Smoother pins (below 1.27 um) enter the mixed regime.",
+                              "um", UM)
+    rolling_ring: float = _f(0.002, "1",
+                             "Rolling-resistance coefficient mu_r5 of ring roller on cycloid tooth "
+                             "(Eq. 26). **Assumption**: 0.002, lubricated steel line contact "
+                             "(0.001-0.003 in handbooks).")
+    rolling_disc: float = _f(0.002, "1",
+                             "Rolling-resistance coefficient mu_r2 of disc roller in its hole "
+                             "(Eq. 23). **Assumption**: 0.002, as mu_r5.")
+    skf_R1: float = _f(1.09e-6, "1", "SKF rolling-frictional-moment constant R1 (cylindrical/needle "
+                       "roller bearings). **Assumption**: needle bearings are treated as "
+                       "cylindrical roller bearings, which the SKF table covers.")
+    skf_S1: float = _f(0.16, "1", "SKF sliding-frictional-moment constant S1 (cylindrical roller).")
+    skf_S2: float = _f(0.0015, "1", "SKF sliding-frictional-moment constant S2 (cylindrical roller).")
+    skf_Krs: float = _f(6e-8, "1", "SKF replenishment/starvation constant K_rs for grease.")
+    skf_Kz: float = _f(5.1, "1", "SKF bearing-type constant K_Z (cylindrical roller bearings).")
+    skf_mu_bl: float = _f(0.15, "1", "SKF boundary sliding coefficient mu_bl (cylindrical roller).")
+    skf_mu_ehl: float = _f(0.02, "1", "SKF full-film sliding coefficient mu_EHL (cylindrical roller).")
+
+
+@dataclass(frozen=True)
+class DriveDesign:
+    """A constrained (1-DOF) cycloid drive: central ring 1 with z1 rollers, cycloid gear(s) with
+    z1-1 teeth, disc 2 with k rollers in holes of the gear, eccentric shaft S.
+
+    Defaults: the paper's test drive (Table 3). Lengths in m.
+    """
+
+    z1: int = _f(15, "1", "Number of rollers on the central ring [paper, Table 3].")
+    n_disc_rollers: int = _f(7, "1", "Number k of rollers on the disc [paper, Table 3].")
+    e: float = _f(2e-3, "m", "Eccentricity [paper, Table 3].", "mm", MM)
+    lam: float = _f(1.6, "1", "Coefficient of the trochoid lambda = r_p/(e*z1) [paper, Table 3]; "
+                    "the short-width coefficient is K1 = 1/lambda.")
+    d_v1: float = _f(12e-3, "m", "Outer diameter of the ring rollers [paper, Table 3].", "mm", MM)
+    d_o1: float = _f(8e-3, "m", "Ring pin diameter (bore of the ring roller). **Assumption**: 8 mm, "
+                     "the bore of a standard drawn-cup needle bearing with D = 12 mm (HK0808 "
+                     "series), so the plain and needle variants fit the same pin.", "mm", MM)
+    b1: float = _f(12e-3, "m", "Width of the ring rollers [paper, Table 3].", "mm", MM)
+    d_v2: float = _f(14e-3, "m", "Outer diameter of the disc rollers [paper, Table 3].", "mm", MM)
+    d_o2: float = _f(10e-3, "m", "Disc pin diameter. **Assumption**: 10 mm, the bore of a "
+                     "drawn-cup needle bearing with D = 14 mm (HK1010 series).", "mm", MM)
+    b2: float = _f(12e-3, "m", "Width of the disc rollers [paper, Table 3].", "mm", MM)
+    d_m2: float = _f(56e-3, "m", "Pitch diameter of the disc rollers [paper, Table 3].", "mm", MM)
+    D_cz: float = _f(18e-3, "m", "Diameter of the holes in the cycloid gear. **Assumption**: "
+                     "the standard design D_CZ = d_v2 + 2e = 18 mm (no hole clearance).", "mm", MM)
+    D_p: float = _f(32e-3, "m", "Outer diameter of the eccentric (cycloid-gear) bearing "
+                    "[paper, Table 3].", "mm", MM)
+    d_p: float = _f(25e-3, "m", "Bore (raceway) diameter of the eccentric bearing. **Assumption**: "
+                    "25 mm, a drawn-cup needle bearing with D = 32 mm (HK2516 series).", "mm", MM)
+    delta_z: float = _f(0.05e-3, "m", "Size of the profile correction [paper, Table 3].", "mm", MM)
+    profile_modification: str = _f("equidistant", "-",
+                                   "Kind of the profile correction delta_z: 'equidistant' (the "
+                                   "profile is generated with the roller radius enlarged by "
+                                   "delta_z) or 'offset' (pin-circle radius reduced by delta_z). "
+                                   "**Assumption**: equidistant, the usual single correction and "
+                                   "the one whose first contact lies at cos(phi) = K1.")
+    torque_share: float = _f(0.5, "1", "Share of the torque carried by the first of the two "
+                             "cycloid gears. **Assumption**: 0.5, the paper's equal split; designers "
+                             "often use 0.55 for manufacturing errors.")
+    ring_rollers: str = _f("plain", "-", "Ring rollers: 'plain' (roller slides on its pin) or "
+                           "'needle' (needle bearing). **Assumption**: plain, the design whose "
+                           "largest losses are the roller-pin sliding losses (paper, Fig. 7).")
+    disc_rollers: str = _f("plain", "-", "Disc rollers: 'plain' or 'needle', as ring_rollers.")
+    disc_pin_sliding: str = _f("paper", "-",
+                               "Sliding speed of a plain disc roller on its pin: 'paper' uses Eq. (24) "
+                               "as printed, (D_CZ/2)(d_o2/d_v2)|w_p - w_s|; 'kinematic' the derived "
+                               "e (d_o2/d_v2)|w_p - w_s| (a hole translating on a circle of radius e "
+                               "drives the roller surface at e*Omega). **Choice**: 'paper', because the "
+                               "paper's published efficiencies rest on Eq. (24); 'kinematic' gives "
+                               "D_CZ/(2e) = 4.5 times less disc-pin sliding (README, Known "
+                               "deviations).")
+    youngs_modulus: float = _f(206e9, "Pa", "Young's modulus of the steel parts (C45). Used by "
+                               "the linear law only through its documented stiffness.", "GPa", 1e9)
+    contact_law: str = _f("hertz", "-", "Contact force law: 'hertz' (Palmgren line contact, "
+                          "delta = 3.84e-5 Q^0.9 / l^0.8, mm and N; Harris, Rolling Bearing "
+                          "Analysis) or 'linear' (Q = linear_stiffness * delta).")
+    linear_stiffness: float = _f(2e8, "N/m", "Contact stiffness per contact for contact_law "
+                                 "'linear'. A very large value gives the rigid limit.", "N/mm", 1e3)
+    n_positions: int = _f(8, "1", "Mesh positions per ring-roller pitch over which losses are "
+                          "averaged (the efficiency changes by < 5e-5 from 8 to 64).")
+    lubricant: Lubricant = field(default_factory=Lubricant)
+    friction: Friction = field(default_factory=Friction)
+
+    def __post_init__(self):
+        validate_design(self)
+
+    # -- derived geometry (the paper's notation) --------------------------------------------
+    @property
+    def i0(self) -> float:
+        """Basic speed ratio i0 = (n1/n2) at nS = 0 = (z1-1)/z1 (Eq. 1, Table 1)."""
+        return (self.z1 - 1) / self.z1
+
+    @property
+    def z_c(self) -> int:
+        """Number of teeth of the cycloid gear, z1 - 1."""
+        return self.z1 - 1
+
+    @property
+    def r_p(self) -> float:
+        """Pitch radius of the ring rollers, r_p = lambda*e*z1 (from Eq. 3)."""
+        return self.lam * self.e * self.z1
+
+    @property
+    def K1(self) -> float:
+        """Short-width coefficient K1 = e*z1/r_p = 1/lambda."""
+        return 1.0 / self.lam
+
+    @property
+    def r_w(self) -> float:
+        """Pitch radius of the disc rollers, d_m2/2."""
+        return self.d_m2 / 2
+
+    def replace(self, **changes) -> "DriveDesign":
+        """A copy with fields changed (validated). Nested: lubricant=..., friction=..."""
+        return dataclasses.replace(self, **changes)
+
+
+# ---------------------------------------------------------------------------------------------
+def _check_finite(obj, prefix=""):
+    for f in dataclasses.fields(obj):
+        v = getattr(obj, f.name)
+        if isinstance(v, bool):
+            raise CycloidInputError(prefix + f.name, v, "must be a number, not a boolean")
+        if isinstance(v, (int, float)) and not math.isfinite(v):
+            raise CycloidInputError(prefix + f.name, v, "must be a finite number")
+
+
+def validate_design(d: DriveDesign) -> None:
+    """Reject impossible designs with a :class:`CycloidInputError` naming the field."""
+    _check_finite(d)
+    _check_finite(d.lubricant, "lubricant.")
+    _check_finite(d.friction, "friction.")
+    for name in ("z1", "n_disc_rollers", "n_positions"):
+        v = getattr(d, name)
+        if int(v) != v:
+            raise CycloidInputError(name, v, "must be a whole number")
+    if d.z1 < 3:
+        raise CycloidInputError("z1", d.z1, "a cycloid drive needs at least 3 ring rollers")
+    if d.n_disc_rollers < 2:
+        raise CycloidInputError("n_disc_rollers", d.n_disc_rollers, "needs at least 2 disc rollers")
+    if d.n_positions < 2:
+        raise CycloidInputError("n_positions", d.n_positions, "needs at least 2 mesh positions")
+    for name in ("e", "lam", "d_v1", "d_o1", "b1", "d_v2", "d_o2", "b2", "d_m2", "D_cz", "D_p",
+                 "d_p", "youngs_modulus", "linear_stiffness", "torque_share"):
+        v = getattr(d, name)
+        if not v > 0:
+            raise CycloidInputError(name, v, "must be positive")
+    if d.delta_z < 0:
+        raise CycloidInputError("delta_z", d.delta_z, "profile correction must not be negative")
+    if d.torque_share > 1:
+        raise CycloidInputError("torque_share", d.torque_share, "a share must not exceed 1")
+    if d.lam <= 1:
+        raise CycloidInputError("lam", d.lam, f"K1 = 1/lambda = {1 / d.lam:.4g} must be < 1 "
+                                "(a prolate epicycloid); K1 >= 1 gives no valid cycloid tooth")
+    if d.d_o1 >= d.d_v1:
+        raise CycloidInputError("d_o1", d.d_o1, f"ring pin must be smaller than its roller "
+                                f"(d_v1 = {d.d_v1})")
+    if d.d_o2 >= d.d_v2:
+        raise CycloidInputError("d_o2", d.d_o2, f"disc pin must be smaller than its roller "
+                                f"(d_v2 = {d.d_v2})")
+    if d.D_cz < d.d_v2 + 2 * d.e - 1e-12:
+        raise CycloidInputError("D_cz", d.D_cz, f"holes must clear the disc rollers: "
+                                f"D_cz >= d_v2 + 2e = {d.d_v2 + 2 * d.e:.6g} m")
+    if d.d_p >= d.D_p:
+        raise CycloidInputError("d_p", d.d_p, f"bearing bore must be smaller than D_p = {d.D_p}")
+    rho_min = geometry.min_radius_of_curvature(d.z1, d.e, d.lam)
+    if d.d_v1 / 2 + d.delta_z >= rho_min:
+        raise CycloidInputError("d_v1", d.d_v1, f"roller radius (+ correction) exceeds the smallest "
+                                f"radius of curvature of the cycloid, {rho_min:.6g} m: the profile "
+                                "is undercut (looped)")
+    if d.r_w - d.D_cz / 2 <= d.D_p / 2:
+        raise CycloidInputError("d_m2", d.d_m2, "the holes cut into the eccentric bearing seat "
+                                f"(d_m2/2 - D_cz/2 must exceed D_p/2 = {d.D_p / 2})")
+    if 2 * d.r_w * math.sin(math.pi / d.n_disc_rollers) <= d.D_cz:
+        raise CycloidInputError("D_cz", d.D_cz, "neighbouring holes overlap")
+    if d.r_w + d.D_cz / 2 >= d.r_p - d.e - d.d_v1 / 2:
+        raise CycloidInputError("d_m2", d.d_m2, "the holes reach beyond the root of the teeth")
+    for name, allowed in (("ring_rollers", ROLLER_KINDS), ("disc_rollers", ROLLER_KINDS),
+                          ("profile_modification", PROFILE_MODIFICATIONS),
+                          ("contact_law", CONTACT_LAWS),
+                          ("disc_pin_sliding", DISC_PIN_SLIDING)):
+        if getattr(d, name) not in allowed:
+            raise CycloidInputError(name, getattr(d, name), f"must be one of {', '.join(allowed)}")
+    lub, fr = d.lubricant, d.friction
+    for name in ("kinematic_viscosity", "density"):
+        if not getattr(lub, name) > 0:
+            raise CycloidInputError("lubricant." + name, getattr(lub, name), "must be positive")
+    for f in dataclasses.fields(fr):
+        if getattr(fr, f.name) < 0:
+            raise CycloidInputError("friction." + f.name, getattr(fr, f.name), "must not be negative")
+    if fr.mu_full_film > fr.mu_boundary:
+        raise CycloidInputError("friction.mu_full_film", fr.mu_full_film,
+                                f"must not exceed mu_boundary = {fr.mu_boundary}")
+
+
+# -- design files -----------------------------------------------------------------------------
+_SECTIONS = (("geometry", None), ("lubricant", "lubricant"), ("friction", "friction"))
+
+
+def _to_si(v: float, scale: float) -> float:
+    # divide by an exact integer (1000, 1e6) so that 18 mm -> 0.018 round-trips exactly
+    return v / round(1 / scale) if scale < 1 else v * scale
+
+
+def _from_si(v: float, scale: float) -> float:
+    return v * round(1 / scale) if scale < 1 else v / scale
+
+
+def _toml_key(f) -> str:
+    u = f.metadata.get("toml_unit", "1")
+    suffix = {"mm": "_mm", "um": "_um", "mm^2/s": "_mm2_s", "GPa": "_GPa", "N/mm": "_N_mm"}.get(u, "")
+    return f.name + suffix
+
+
+def _section_to_dict(obj) -> dict:
+    out = {}
+    for f in dataclasses.fields(obj):
+        if f.name in ("lubricant", "friction"):
+            continue
+        v = getattr(obj, f.name)
+        if isinstance(v, float):
+            v = float(f"{_from_si(v, f.metadata.get('scale', 1.0)):.12g}")
+        out[_toml_key(f)] = v
+    return out
+
+
+def _section_from_dict(cls, data: dict, section: str) -> dict:
+    keys = {_toml_key(f): f for f in dataclasses.fields(cls) if f.name not in ("lubricant", "friction")}
+    kwargs = {}
+    for key, value in data.items():
+        if key not in keys:
+            raise CycloidInputError(f"[{section}].{key}", value, "unknown key in design file "
+                                    f"(known: {', '.join(sorted(keys))})")
+        f = keys[key]
+        if isinstance(f.default, str):
+            if not isinstance(value, str):
+                raise CycloidInputError(f"[{section}].{key}", value, "must be a string")
+            kwargs[f.name] = value
+        elif isinstance(f.default, int) and not isinstance(f.default, bool):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or int(value) != value:
+                raise CycloidInputError(f"[{section}].{key}", value, "must be a whole number")
+            kwargs[f.name] = int(value)
+        else:
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise CycloidInputError(f"[{section}].{key}", value, "must be a number")
+            kwargs[f.name] = _to_si(float(value), f.metadata.get("scale", 1.0))
+    return kwargs
+
+
+def design_to_dict(design: DriveDesign) -> dict:
+    """The design as nested dict in design-file units (mm, mm^2/s, um)."""
+    return {"geometry": _section_to_dict(design), "lubricant": _section_to_dict(design.lubricant),
+            "friction": _section_to_dict(design.friction)}
+
+
+def design_from_dict(data: dict) -> DriveDesign:
+    """Build a validated design from a dict in design-file units; missing keys keep defaults."""
+    if not isinstance(data, dict):
+        raise CycloidInputError("design", data, "must be a table")
+    for section in data:
+        if section not in ("geometry", "lubricant", "friction"):
+            raise CycloidInputError(f"[{section}]", "...", "unknown section in design file "
+                                    "(known: geometry, lubricant, friction)")
+    for section in ("geometry", "lubricant", "friction"):
+        if not isinstance(data.get(section, {}), dict):
+            raise CycloidInputError(f"[{section}]", data[section], "must be a table")
+    lub = Lubricant(**_section_from_dict(Lubricant, data.get("lubricant", {}), "lubricant"))
+    fr = Friction(**_section_from_dict(Friction, data.get("friction", {}), "friction"))
+    geo = _section_from_dict(DriveDesign, data.get("geometry", {}), "geometry")
+    return DriveDesign(lubricant=lub, friction=fr, **geo)
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return repr(v)
+
+
+def design_to_toml(design: DriveDesign) -> str:
+    """The design as TOML text (lengths in mm, viscosity in mm^2/s, roughness in um)."""
+    lines = ["# cyclo-fmu design file: lengths in mm, viscosity in mm^2/s, roughness in um"]
+    for section, values in design_to_dict(design).items():
+        lines.append(f"\n[{section}]")
+        lines += [f"{k} = {_toml_value(v)}" for k, v in values.items()]
+    return "\n".join(lines) + "\n"
+
+
+def design_from_toml(source) -> DriveDesign:
+    """Read a design from a TOML file path or TOML text."""
+    if isinstance(source, Path) or (isinstance(source, str) and "\n" not in source
+                                    and source.endswith(".toml")):
+        path = Path(source)
+        try:
+            text = path.read_text()
+        except OSError as exc:
+            raise CycloidInputError("design file", str(path), f"cannot be read ({exc.strerror})")
+    else:
+        text = source
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise CycloidInputError("design file", str(source)[:60], f"is not valid TOML ({exc})")
+    return design_from_dict(data)

@@ -1,0 +1,184 @@
+"""Efficiency: basic efficiency eta0 (Eqs. 28, 29), the six operating modes (Kreines/Mueller,
+Table 2 corrected), power-flow direction in all four quadrants, self-locking.
+
+Torques are those the outside applies on the reducer's shafts (Modelica flange convention), so
+the power into the reducer at a shaft is T*w and the loss is T1 w1 + T2 w2 + TS wS >= 0.
+
+Kreines' rule with the carrier held: T2 = -i0 * eta0^w * T1, TS = -(T1 + T2), where
+w = sign(T1 (w1 - wS)) is +1 when shaft 1 drives in the relative motion. It gives
+
+    mode  fixed  w   efficiency                         eta0 = 0.962
+    12    S     +1   eta0                                0.962
+    21    S     -1   eta0                                0.962
+    1S    2     -1   (eta0 - i0) / (eta0 (1 - i0))        0.4470
+    S1    2     +1   (1 - i0) / (1 - i0 eta0)             0.6527
+    2S    1     -1   (eta0 - i0) / (1 - i0)               0.4300
+    S2    1     +1   eta0 (1 - i0) / (1 - i0 eta0)        0.6279
+
+(the paper's Table 2 prints 1S and S1 garbled). Back-driving into S is self-locking when
+eta0 <= i0 (the formula turns non-positive); it is then reported as locked.
+
+Operating point: the loss model gives P_L(|T1|, w2 - wS) from the frictionless contact forces
+at the ring torque T1. The basic efficiency follows from Eq. (28) on the relative motion,
+eta0 = 1 - P_L/|T1 w1'| (w = +1) or 1/(1 + P_L/|T1 w1'|) (w = -1, shaft 2 drives relatively),
+and T1 from the given input torque depends on eta0 through Kreines' rule: a scalar fixed point,
+solved by a vectorised secant iteration. The efficiency of the mode is then Eq. (28) directly,
+1 - P_L/P_in, which equals the Kreines formula (a test checks it).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import kinematics
+from .errors import CycloidInputError
+from .losses import PartialLosses, partial_losses
+
+_FIXED_POINT_TOL = 1e-9   # on eta0: the driving torque then matches T_in to ~1e-8
+_FIXED_POINT_MAX = 30
+
+
+def kreines_efficiency(mode: str, eta0, i0):
+    """Efficiency of an operating mode from the basic efficiency eta0 (corrected Table 2)."""
+    a, b, _ = kinematics.parse_mode(mode)
+    eta0 = np.asarray(eta0, float)
+    table = {
+        "12": lambda: eta0,
+        "21": lambda: eta0,
+        "1S": lambda: (eta0 - i0) / (eta0 * (1 - i0)),
+        "S1": lambda: (1 - i0) / (1 - i0 * eta0),
+        "2S": lambda: (eta0 - i0) / (1 - i0),
+        "S2": lambda: eta0 * (1 - i0) / (1 - i0 * eta0),
+    }
+    return table[a + b]()
+
+
+def basic_efficiency(T1, T2, w1, w2):
+    """eta0 = -(T2 w2)/(T1 w1) with the carrier held and shaft 1 driving (Eq. 29)."""
+    return -(np.asarray(T2) * np.asarray(w2)) / (np.asarray(T1) * np.asarray(w1))
+
+
+def torque_coefficients(eta0, w, i0):
+    """(c1, c2, cS) with T_shaft = c * T1 by Kreines' rule and the torque balance."""
+    c2 = -i0 * np.where(w > 0, eta0, 1.0 / eta0)
+    return np.ones_like(c2), c2, -(1.0 + c2)
+
+
+@dataclass(frozen=True)
+class OperatingPoint:
+    """Steady operating point of the drive (arrays broadcast over the inputs).
+
+    speeds and torques: dicts keyed "1", "2", "S" (rad/s; N*m applied by the outside on the
+    shaft). ``eta`` is the efficiency of the actual power flow (NaN where locked or unloaded);
+    ``flow_mode`` the mode the power actually flows in ("S1", or "1S" when back-driven).
+    """
+
+    mode: str
+    flow_forward: np.ndarray
+    speeds: dict
+    torques: dict
+    eta: np.ndarray
+    eta0: np.ndarray
+    locked: np.ndarray
+    losses: PartialLosses
+    input_power: np.ndarray
+    output_power: np.ndarray
+    i0: float
+
+    @property
+    def driving(self) -> str:
+        return kinematics.parse_mode(self.mode)[0]
+
+    @property
+    def driven(self) -> str:
+        return kinematics.parse_mode(self.mode)[1]
+
+    @property
+    def held(self) -> str:
+        return kinematics.parse_mode(self.mode)[2]
+
+    @property
+    def loss_power(self) -> np.ndarray:
+        return self.losses.total
+
+    @property
+    def eta_kreines(self) -> np.ndarray:
+        """Kreines-formula efficiency of the actual flow from eta0 (equals eta; a check)."""
+        fwd = kreines_efficiency(self.mode, self.eta0, self.i0)
+        rev = kreines_efficiency(kinematics.reverse_mode(self.mode), self.eta0, self.i0)
+        return np.where(self.flow_forward, fwd, rev)
+
+
+def operating_point(design, mode: str, w_in, T_in) -> OperatingPoint:
+    """Solve the drive at input speed w_in (rad/s, signed) and input torque T_in (N*m, the
+    torque delivered into the driving shaft, signed). Arrays broadcast (maps)."""
+    a, b, h = kinematics.parse_mode(mode)
+    w_in, T_in = np.broadcast_arrays(np.asarray(w_in, float), np.asarray(T_in, float))
+    if not np.all(np.isfinite(w_in)):
+        raise CycloidInputError("speed", w_in[~np.isfinite(w_in)].flat[0], "must be finite")
+    if not np.all(np.isfinite(T_in)):
+        raise CycloidInputError("torque", T_in[~np.isfinite(T_in)].flat[0], "must be finite")
+    if np.any(w_in == 0):
+        raise CycloidInputError("speed", 0.0, "zero input speed gives no direction of motion "
+                                "(the efficiency is undefined at standstill)")
+    i0 = design.i0
+    w = kinematics.shaft_speeds(mode, w_in, design.z1)
+    w1p, w2p = kinematics.relative_speeds(w["1"], w["2"], w["S"])
+    idx = {"1": 0, "2": 1, "S": 2}
+    # direction of the relative power flow from the frictionless torques
+    c_free = torque_coefficients(np.ones_like(T_in), np.ones_like(T_in), i0)
+    T1_free = T_in / c_free[idx[a]]
+    wdir = np.where(T1_free * w1p >= 0, 1.0, -1.0)
+    base = np.abs(w1p)
+    def guarded(eta0):
+        # where shaft 2 drives relatively (w = -1), 1/eta0 enters Kreines' rule: keep eta0 off
+        # the locking pole eta0 <= i0 (such points are reported as locked)
+        return np.where(wdir < 0, np.maximum(eta0, i0 * (1 + 1e-9)), eta0)
+
+    def ring_torque(eta0):
+        c = torque_coefficients(guarded(eta0), wdir, i0)[idx[a]]
+        return T_in / c
+
+    state = {}   # warm start of the contact solutions between iterations
+
+    def eta0_from(eta0):
+        T1 = ring_torque(eta0)
+        L = partial_losses(design, np.abs(T1), w2p, state=state)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = np.where(T1 != 0, L.total / (np.abs(T1) * base), 0.0)
+        return np.where(wdir > 0, 1.0 - x, 1.0 / (1.0 + x)), L, T1
+
+    # secant iteration on g(eta0) = f(eta0) - eta0, started from the frictionless point
+    x0 = np.ones_like(T_in)
+    f0, _, _ = eta0_from(x0)
+    x1 = f0
+    f1, L, T1 = eta0_from(x1)
+    g0, g1 = f0 - x0, f1 - x1
+    for _ in range(_FIXED_POINT_MAX):
+        if np.all(np.abs(g1) <= _FIXED_POINT_TOL):
+            break
+        denom = g1 - g0
+        safe = np.abs(denom) > 1e-300
+        x2 = np.where(safe, x1 - g1 * (x1 - x0) / np.where(safe, denom, 1.0), f1)
+        x0, g0 = x1, g1
+        x1 = x2
+        f1, L, T1 = eta0_from(x1)
+        g1 = f1 - x1
+    eta0 = f1   # consistent with the losses L evaluated at T1
+    c = torque_coefficients(guarded(eta0), wdir, i0)
+    # all torques from T1 and eta0, so that Kreines' rule and the energy balance hold exactly;
+    # the driving torque reproduces T_in to the fixed-point tolerance (about 1e-9 relative)
+    torques = {"1": T1 * c[0], "2": T1 * c[1], "S": T1 * c[2]}
+    p_a, p_b = torques[a] * w[a], torques[b] * w[b]
+    forward = T_in * w[a] >= 0
+    p_in = np.where(forward, p_a, p_b)
+    p_out = -np.where(forward, p_b, p_a)
+    k_fwd = kreines_efficiency(mode, eta0, i0)
+    k_rev = kreines_efficiency(kinematics.reverse_mode(mode), eta0, i0)
+    locked = np.where(forward, k_fwd, k_rev) <= 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        eta = np.where(locked | (p_in <= 0), np.nan, 1.0 - L.total / p_in)
+    return OperatingPoint(mode=a + b, flow_forward=forward, speeds=w, torques=torques, eta=eta,
+                          eta0=eta0, locked=locked, losses=L, input_power=p_in,
+                          output_power=p_out, i0=i0)

@@ -1,0 +1,137 @@
+"""Efficiency: Kreines formulas, Eq. (28) in every mode and quadrant, energy balance,
+self-locking, trends, mesh-cycle convergence, the paper's numbers."""
+import numpy as np
+import pytest
+
+from model_core import (MODES, DriveDesign, Friction, kreines_efficiency, operating_point,
+                        partial_losses, rpm_to_rad_s)
+from model_core.efficiency import basic_efficiency
+from model_core.kinematics import parse_mode, reverse_mode
+from model_core.paper import PAPER_THEORY, envelope_statistics
+
+I0 = 14 / 15
+
+
+@pytest.mark.parametrize("mode, expected", [
+    ("12", 0.962), ("21", 0.962), ("S1", 0.6527), ("S2", 0.6279), ("1S", 0.4470), ("2S", 0.4300)])
+def test_kreines_table(mode, expected):
+    assert kreines_efficiency(mode, 0.962, I0) == pytest.approx(expected, abs=5e-5)
+
+
+def test_kreines_relations():
+    for eta0 in (0.9, 0.95, 0.99):
+        assert kreines_efficiency("S2", eta0, I0) == pytest.approx(eta0 * kreines_efficiency("S1", eta0, I0))
+        assert kreines_efficiency("2S", eta0, I0) == pytest.approx(eta0 * kreines_efficiency("1S", eta0, I0))
+    assert kreines_efficiency("1S", 1.0, I0) == pytest.approx(1.0)
+    assert kreines_efficiency("1S", I0, I0) == pytest.approx(0.0)   # locking limit eta0 = i0
+
+
+def _input_speed(mode, rpm=1500.0):
+    """A representative input speed: fast for S, slow for a shaft that is geared up."""
+    a = parse_mode(mode)[0]
+    return rpm_to_rad_s(rpm if a == "S" else rpm / 15)
+
+
+def _input_torque(mode):
+    a = parse_mode(mode)[0]
+    return 0.6 if a == "S" else 8.0
+
+
+@pytest.mark.parametrize("mode", MODES)
+@pytest.mark.parametrize("sw, st", [(1, 1), (-1, -1), (1, -1), (-1, 1)])
+def test_energy_balance_and_eq28_equals_kreines(design, mode, sw, st):
+    op = operating_point(design, mode, sw * _input_speed(mode), st * _input_torque(mode))
+    p_ext = sum(op.torques[s] * op.speeds[s] for s in "12S")   # power into the reducer
+    assert p_ext == pytest.approx(float(op.loss_power), rel=1e-8)
+    assert float(op.loss_power) > 0
+    assert float(op.input_power) == pytest.approx(float(op.output_power + op.loss_power), rel=1e-9)
+    assert bool(op.flow_forward) == (sw * st > 0)
+    a = parse_mode(mode)[0]
+    assert float(op.torques[a]) == pytest.approx(st * _input_torque(mode), rel=1e-8)
+    if not op.locked:
+        assert float(op.eta) == pytest.approx(float(op.eta_kreines), rel=1e-9)
+        assert 0 < float(op.eta) < 1
+
+
+def test_eq29_basic_efficiency(design):
+    op = operating_point(design, "12", 30.0, 8.0)
+    eta0 = basic_efficiency(op.torques["1"], op.torques["2"], op.speeds["1"], op.speeds["2"])
+    assert float(eta0) == pytest.approx(float(op.eta0), rel=1e-9)
+    assert float(op.eta) == pytest.approx(float(op.eta0), rel=1e-9)
+
+
+def test_same_relative_motion_same_losses(design):
+    """Losses depend only on the relative motion: S1 and 12 at the same w1-wS, T1 agree."""
+    op = operating_point(design, "S1", 200.0, 0.6)
+    L = partial_losses(design, abs(float(op.torques["1"])), float(op.speeds["2"] - op.speeds["S"]))
+    assert float(L.total) == pytest.approx(float(op.loss_power), rel=1e-9)
+
+
+def test_self_locking_back_drive_is_reported_locked():
+    sticky = DriveDesign(friction=Friction(mu_boundary=0.3))
+    op = operating_point(sticky, "1S", rpm_to_rad_s(100), 8.0)
+    assert float(op.eta0) < I0
+    assert bool(op.locked) and np.isnan(op.eta)
+    # the forward direction of the same drive still runs
+    fwd = operating_point(sticky, "S1", rpm_to_rad_s(1500), 0.6)
+    assert not bool(fwd.locked) and 0 < float(fwd.eta) < 1
+
+
+def test_default_drive_back_drives(design):
+    op = operating_point(design, "1S", rpm_to_rad_s(100), 8.0)
+    assert not bool(op.locked)
+    assert float(op.eta0) > I0
+
+
+def test_efficiency_rises_with_torque(design):
+    """The paper (Section 5): efficiency increases with torque."""
+    for mode in ("S1", "S2"):
+        op = operating_point(design, mode, rpm_to_rad_s(2000), np.linspace(0.3, 0.85, 6))
+        assert np.all(np.diff(op.eta) > 0), op.eta
+
+
+def test_mesh_cycle_average_converged(design):
+    etas = [float(operating_point(design.replace(n_positions=n), "S1", 250.0, 0.5).eta)
+            for n in (design.n_positions, 64)]
+    assert abs(etas[0] - etas[1]) < 5e-5
+
+
+def test_largest_losses_are_roller_pin_sliding_and_needles_help(design):
+    op = operating_point(design, "S1", rpm_to_rad_s(2800), 0.85)
+    L = op.losses.as_dict()
+    two_largest = sorted(L, key=L.get)[-2:]
+    assert set(two_largest) == {"PL3", "PL6"}
+    needle = operating_point(design.replace(ring_rollers="needle", disc_rollers="needle"),
+                             "S1", rpm_to_rad_s(2800), 0.85)
+    assert float(needle.eta) > float(op.eta) + 0.05
+    assert float(needle.losses.PL6) < 0.5 * float(op.losses.PL6)
+
+
+@pytest.mark.parametrize("mode", ["S1", "S2"])
+def test_paper_envelope(design, mode):
+    s = envelope_statistics(design, mode)
+    ref = PAPER_THEORY[mode]
+    assert ref["min"] - 0.01 <= s["min"] and s["max"] <= ref["max"] + 0.01
+    assert abs(s["mean"] - ref["mean"]) <= 0.01
+
+
+def test_vectorised_map_equals_points(design):
+    w = rpm_to_rad_s(np.array([[1000.0], [2800.0]]))
+    T = np.array([[0.3, 0.85]])
+    grid = operating_point(design, "S2", w, T)
+    for i in range(2):
+        for j in range(2):
+            single = operating_point(design, "S2", float(w[i, 0]), float(T[0, j]))
+            assert float(single.eta) == pytest.approx(float(grid.eta[i, j]), rel=1e-9)
+
+
+def test_unloaded_and_bad_points(design):
+    from model_core import CycloidInputError
+    with pytest.raises(CycloidInputError, match="speed"):
+        operating_point(design, "S1", 0.0, 0.5)
+    with pytest.raises(CycloidInputError, match="torque"):
+        operating_point(design, "S1", 100.0, float("nan"))
+    with pytest.raises(CycloidInputError, match="mode"):
+        operating_point(design, "S3", 100.0, 0.5)
+    op = operating_point(design, "S1", 100.0, 0.0)
+    assert float(op.loss_power) == 0 and np.isnan(op.eta)
