@@ -58,7 +58,8 @@ def _figures(design, envelope, out: Path) -> list[Path]:
             vals = [float(getattr(op.losses, n)) for n in LOSS_NAMES]
             ax.bar(x + (2 * j + k - 1.5) * width, vals, width,
                    label=f"{mode}, {label}: eta = {100 * float(op.eta):.1f} %")
-    ax.set_xticks(x, [f"{n}\n{LOSS_DESCRIPTIONS[n]}" for n in LOSS_NAMES], fontsize=7)
+    ax.set_xticks(x, [f"{n}\n" + LOSS_DESCRIPTIONS[n].replace(" ", "\n", 2) for n in LOSS_NAMES],
+                  fontsize=7)
     ax.set(ylabel="power loss / W", title="Partial losses at 2800 r/min, 0.85 N*m input")
     ax.legend(fontsize=7)
     fig.tight_layout()
