@@ -106,27 +106,38 @@ def loaded_half_angles(psi, n):
     return np.take_along_axis(ang, order, -1)
 
 
+def _roller_set_forces(design, gear_torque, state, key, make_geometry, width):
+    """Solve one roller set; its geometry (angles, levers, clearances) is kept in ``state``."""
+    geom = None if state is None else state.get((key, "geometry"))
+    if geom is None:
+        geom = make_geometry()
+        if state is not None:
+            state[(key, "geometry")] = geom
+    angles, levers, clear = geom
+    stiff = (design.linear_stiffness if design.contact_law == "linear"
+             else palmgren_stiffness(width))
+    T = np.asarray(gear_torque, float)[..., None]
+    full = T.shape[:-1] + levers.shape
+    F = _roller_forces(np.broadcast_to(levers, full), np.broadcast_to(clear, full),
+                       np.broadcast_to(T, full[:-1]), design.contact_law, stiff, state, key)
+    return angles, F
+
+
 def ring_roller_forces(design, gear_torque, psi, state=None, key="ring"):
     """Normal forces F_Ni (N) between tooth and ring rollers (Eqs. 10-12).
 
     gear_torque: torque T_c (N*m) the ring rollers exert on one cycloid gear about its centre,
     shape (...); psi: mesh position(s), shape (m,). Returns (phi, F) for the rollers of the
     loaded half, shapes (m, n) and (..., m, n), n = ceil(z1/2); the other rollers carry nothing.
-    ``state``: optional dict that keeps the solved rotation under ``key`` for a warm start of
-    the next call with nearby torques.
+    ``state``: optional dict that keeps geometry and the solved rotation under ``key``, for a
+    warm start of the next call with nearby torques at the same positions.
     """
-    phi = loaded_half_angles(psi, design.z1)
-    levers = geometry.ring_roller_levers(phi, design.e, design.z1, design.lam)
-    clear = geometry.modification_clearance(phi, design.lam, design.delta_z,
-                                            design.profile_modification)
-    stiff = (design.linear_stiffness if design.contact_law == "linear"
-             else palmgren_stiffness(design.b1))
-    T = np.asarray(gear_torque, float)[..., None]
-    F = _roller_forces(np.broadcast_to(levers, T.shape[:-1] + levers.shape),
-                       np.broadcast_to(clear, T.shape[:-1] + levers.shape),
-                       np.broadcast_to(T, T.shape[:-1] + levers.shape[:-1]),
-                       design.contact_law, stiff, state, key)
-    return phi, F
+    def make_geometry():
+        phi = loaded_half_angles(psi, design.z1)
+        return (phi, geometry.ring_roller_levers(phi, design.e, design.z1, design.lam),
+                geometry.modification_clearance(phi, design.lam, design.delta_z,
+                                                design.profile_modification))
+    return _roller_set_forces(design, gear_torque, state, key, make_geometry, design.b1)
 
 
 def disc_roller_forces(design, gear_torque, psi, state=None, key="disc"):
@@ -135,17 +146,12 @@ def disc_roller_forces(design, gear_torque, psi, state=None, key="disc"):
     Returns (theta, F) for the rollers of the loaded half, shapes (m, n) and (..., m, n),
     n = ceil(k/2); every force is parallel to the line of centres.
     """
-    theta = loaded_half_angles(psi, design.n_disc_rollers)
-    levers = geometry.disc_roller_levers(theta, design.r_w)
-    clear = np.full_like(levers, geometry.hole_clearance(design.D_cz, design.d_v2, design.e))
-    stiff = (design.linear_stiffness if design.contact_law == "linear"
-             else palmgren_stiffness(design.b2))
-    T = np.asarray(gear_torque, float)[..., None]
-    F = _roller_forces(np.broadcast_to(levers, T.shape[:-1] + levers.shape),
-                       np.broadcast_to(clear, T.shape[:-1] + levers.shape),
-                       np.broadcast_to(T, T.shape[:-1] + levers.shape[:-1]),
-                       design.contact_law, stiff, state, key)
-    return theta, F
+    def make_geometry():
+        theta = loaded_half_angles(psi, design.n_disc_rollers)
+        levers = geometry.disc_roller_levers(theta, design.r_w)
+        return (theta, levers,
+                np.full_like(levers, geometry.hole_clearance(design.D_cz, design.d_v2, design.e)))
+    return _roller_set_forces(design, gear_torque, state, key, make_geometry, design.b2)
 
 
 def eccentric_bearing_force(design, phi, F_ring, F_disc):
