@@ -35,7 +35,7 @@ from . import kinematics
 from .errors import CycloidInputError
 from .losses import PartialLosses, partial_losses
 
-_FIXED_POINT_TOL = 1e-9   # on eta0: the driving torque then matches T_in to ~1e-8
+_FIXED_POINT_TOL = 1e-9   # on eta0: the known torque is then reproduced to ~1e-8
 _FIXED_POINT_MAX = 30
 
 
@@ -110,15 +110,20 @@ class OperatingPoint:
         return np.where(self.flow_forward, fwd, rev)
 
 
-def operating_point(design, mode: str, w_in, T_in) -> OperatingPoint:
-    """Solve the drive at input speed w_in (rad/s, signed) and input torque T_in (N*m, the
-    torque delivered into the driving shaft, signed). Arrays broadcast (maps)."""
+def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> OperatingPoint:
+    """Solve the drive at driving-shaft speed w_in (rad/s, signed) and one known torque:
+    T_in, the torque delivered into the driving shaft, or T_out, the torque the load applies on
+    the driven shaft (both as applied by the outside; N*m, signed). Arrays broadcast (maps)."""
     a, b, h = kinematics.parse_mode(mode)
-    w_in, T_in = np.broadcast_arrays(np.asarray(w_in, float), np.asarray(T_in, float))
+    if (T_in is None) == (T_out is None):
+        raise CycloidInputError("torque", None, "give exactly one of T_in and T_out")
+    known = a if T_out is None else b
+    w_in, T_known = np.broadcast_arrays(np.asarray(w_in, float),
+                                     np.asarray(T_in if T_out is None else T_out, float))
     if not np.all(np.isfinite(w_in)):
         raise CycloidInputError("speed", w_in[~np.isfinite(w_in)].flat[0], "must be finite")
-    if not np.all(np.isfinite(T_in)):
-        raise CycloidInputError("torque", T_in[~np.isfinite(T_in)].flat[0], "must be finite")
+    if not np.all(np.isfinite(T_known)):
+        raise CycloidInputError("torque", T_known[~np.isfinite(T_known)].flat[0], "must be finite")
     if np.any(w_in == 0):
         raise CycloidInputError("speed", 0.0, "zero input speed gives no direction of motion "
                                 "(the efficiency is undefined at standstill)")
@@ -127,8 +132,8 @@ def operating_point(design, mode: str, w_in, T_in) -> OperatingPoint:
     w1p, w2p = kinematics.relative_speeds(w["1"], w["2"], w["S"])
     idx = {"1": 0, "2": 1, "S": 2}
     # direction of the relative power flow from the frictionless torques
-    c_free = torque_coefficients(np.ones_like(T_in), np.ones_like(T_in), i0)
-    T1_free = T_in / c_free[idx[a]]
+    c_free = torque_coefficients(np.ones_like(T_known), np.ones_like(T_known), i0)
+    T1_free = T_known / c_free[idx[known]]
     wdir = np.where(T1_free * w1p >= 0, 1.0, -1.0)
     base = np.abs(w1p)
     def guarded(eta0):
@@ -137,8 +142,8 @@ def operating_point(design, mode: str, w_in, T_in) -> OperatingPoint:
         return np.where(wdir < 0, np.maximum(eta0, i0 * (1 + 1e-9)), eta0)
 
     def ring_torque(eta0):
-        c = torque_coefficients(guarded(eta0), wdir, i0)[idx[a]]
-        return T_in / c
+        c = torque_coefficients(guarded(eta0), wdir, i0)[idx[known]]
+        return T_known / c
 
     state = {}   # warm start of the contact solutions between iterations
 
@@ -150,7 +155,7 @@ def operating_point(design, mode: str, w_in, T_in) -> OperatingPoint:
         return np.where(wdir > 0, 1.0 - x, 1.0 / (1.0 + x)), L, T1
 
     # secant iteration on g(eta0) = f(eta0) - eta0, started from the frictionless point
-    x0 = np.ones_like(T_in)
+    x0 = np.ones_like(T_known)
     f0, _, _ = eta0_from(x0)
     x1 = f0
     f1, L, T1 = eta0_from(x1)
@@ -168,10 +173,10 @@ def operating_point(design, mode: str, w_in, T_in) -> OperatingPoint:
     eta0 = f1   # consistent with the losses L evaluated at T1
     c = torque_coefficients(guarded(eta0), wdir, i0)
     # all torques from T1 and eta0, so that Kreines' rule and the energy balance hold exactly;
-    # the driving torque reproduces T_in to the fixed-point tolerance (about 1e-9 relative)
+    # the known torque is reproduced to the fixed-point tolerance (about 1e-9 relative)
     torques = {"1": T1 * c[0], "2": T1 * c[1], "S": T1 * c[2]}
     p_a, p_b = torques[a] * w[a], torques[b] * w[b]
-    forward = T_in * w[a] >= 0
+    forward = (T_known * w[a] >= 0) if known == a else (T_known * w[b] <= 0)
     p_in = np.where(forward, p_a, p_b)
     p_out = -np.where(forward, p_b, p_a)
     k_fwd = kreines_efficiency(mode, eta0, i0)

@@ -135,3 +135,15 @@ def test_unloaded_and_bad_points(design):
         operating_point(design, "S3", 100.0, 0.5)
     op = operating_point(design, "S1", 100.0, 0.0)
     assert float(op.loss_power) == 0 and np.isnan(op.eta)
+
+
+@pytest.mark.parametrize("mode", MODES)
+@pytest.mark.parametrize("sign", [1, -1])
+def test_known_output_torque_gives_the_same_point(design, mode, sign):
+    fwd = operating_point(design, mode, _input_speed(mode), sign * _input_torque(mode))
+    b = parse_mode(mode)[1]
+    back = operating_point(design, mode, _input_speed(mode), T_out=float(fwd.torques[b]))
+    for s in "12S":
+        assert float(back.torques[s]) == pytest.approx(float(fwd.torques[s]), rel=1e-7)
+    assert float(back.loss_power) == pytest.approx(float(fwd.loss_power), rel=1e-7)
+    assert bool(back.flow_forward) == bool(fwd.flow_forward)
