@@ -1,0 +1,110 @@
+"""A precomputed efficiency map of one operating mode, for time-stepping hosts (FMUs).
+
+``ModeMap`` solves the full model (efficiency.operating_point, contacts and mesh-cycle average
+included) once, on a log-spaced grid of load torque |tau_out| x driving speed |w_in|, for both
+power-flow directions, and stores the basic efficiency eta0 and the shares of the partial
+losses. A step then costs one bilinear interpolation in plain Python floats (a numpy call per
+step would cost more than the rest of the step): eta0 gives every torque by Kreines' rule, so
+the energy balance tau_in w_in + tau_out w_out = P_loss holds exactly at every step, and the
+interpolation error only enters through eta0.
+"""
+from __future__ import annotations
+
+import math
+from bisect import bisect_right
+
+import numpy as np
+
+from . import kinematics
+from .efficiency import operating_point
+from .losses import LOSS_NAMES
+
+_SHAFT_INDEX = {"1": 0, "2": 1, "S": 2}
+
+
+class ModeMap:
+    """eta0 and loss shares of one mode over |tau_out| x |w_in|, both flow directions.
+
+    Bilinear in (ln |tau_out|, ln |w_in|), clamped at the grid edges; ``out_of_range`` counts
+    the clamped look-ups (below the grid the losses' shares and eta0 of the edge are used; at
+    zero speed or torque the losses vanish with the power).
+    """
+
+    def __init__(self, design, mode, torque_max, speed_max, n_torque=36, n_speed=28, span=1e-3):
+        if not (torque_max > 0 and speed_max > 0):
+            raise ValueError("the map needs positive torque and speed ranges")
+        self.a, self.b, self.h = kinematics.parse_mode(mode)
+        self.mode = self.a + self.b
+        self.i0 = design.i0
+        unit = kinematics.shaft_speeds(self.mode, 1.0, design.z1)
+        self.ratio = (float(unit["1"]), float(unit["2"]), float(unit["S"]))
+        self._k = _SHAFT_INDEX[self.b]
+        T = np.geomspace(torque_max * span, torque_max, n_torque)
+        W = np.geomspace(speed_max * span, speed_max, n_speed)
+        WW, TT = np.meshgrid(W, T, indexing="ij")
+        sign_b = math.copysign(1.0, self.ratio[self._k])
+        self._tables = {}
+        self._wdir = {}
+        for forward in (True, False):
+            # forward: the load absorbs power, tau_out * w_out < 0
+            op = operating_point(design, self.mode, WW, T_out=(-sign_b if forward else sign_b) * TT)
+            shares = np.stack([getattr(op.losses, n) for n in LOSS_NAMES], -1)
+            shares = shares / np.maximum(shares.sum(-1, keepdims=True), 1e-300)
+            table = np.concatenate([op.eta0[..., None], shares], -1)
+            self._tables[forward] = table.tolist()          # [j_speed][i_torque][0: eta0, 1..: shares]
+            w1p = (self.ratio[0] - self.ratio[2]) * WW
+            self._wdir[forward] = 1 if float((op.torques["1"] * w1p).flat[0]) >= 0 else -1
+        self._lt = [math.log(t) for t in T]
+        self._lw = [math.log(w) for w in W]
+        self.torque_range = (float(T[0]), float(T[-1]))
+        self.speed_range = (float(W[0]), float(W[-1]))
+        self.names = LOSS_NAMES
+        self.out_of_range = 0
+
+    def _interp(self, table, t, w):
+        gt, gw = self._lt, self._lw
+        lt = math.log(t) if t > 0 else gt[0]
+        lw = math.log(w) if w > 0 else gw[0]
+        if lt < gt[0] or lt > gt[-1] or lw < gw[0] or lw > gw[-1]:
+            if t > 0 and w > 0:
+                self.out_of_range += 1
+            lt = min(max(lt, gt[0]), gt[-1])
+            lw = min(max(lw, gw[0]), gw[-1])
+        i = min(bisect_right(gt, lt) - 1, len(gt) - 2)
+        j = min(bisect_right(gw, lw) - 1, len(gw) - 2)
+        ft = (lt - gt[i]) / (gt[i + 1] - gt[i])
+        fw = (lw - gw[j]) / (gw[j + 1] - gw[j])
+        a, b = table[j][i], table[j][i + 1]
+        c, d = table[j + 1][i], table[j + 1][i + 1]
+        u, v = (1 - fw) * (1 - ft), (1 - fw) * ft
+        x, y = fw * (1 - ft), fw * ft
+        return [u * a[n] + v * b[n] + x * c[n] + y * d[n] for n in range(len(a))]
+
+    def solve(self, w_in: float, tau_out: float):
+        """Steady state at driving speed w_in (rad/s) and load torque tau_out (N*m, applied by
+        the load on the driven shaft). Returns (speeds, torques, losses, eta, eta0, locked,
+        forward): speeds and torques as tuples over shafts (1, 2, S), losses a list in
+        LOSS_NAMES order (W), eta the efficiency of the actual flow (0 without power or when
+        locked)."""
+        r1, r2, rS = self.ratio
+        speeds = (r1 * w_in, r2 * w_in, rS * w_in)
+        k = self._k
+        forward = tau_out * speeds[k] <= 0
+        row = self._interp(self._tables[forward], abs(tau_out), abs(w_in))
+        eta0 = row[0]
+        wdir = self._wdir[forward]
+        e = eta0 if wdir > 0 else 1.0 / max(eta0, self.i0 * (1 + 1e-9))
+        c2 = -self.i0 * e
+        c = (1.0, c2, -(1.0 + c2))
+        T1 = tau_out / c[k]
+        torques = (T1, T1 * c2, T1 * c[2])
+        p_loss = torques[0] * speeds[0] + torques[1] * speeds[1] + torques[2] * speeds[2]
+        losses = [s * p_loss for s in row[1:]]
+        a = _SHAFT_INDEX[self.a]
+        p_a, p_b = torques[a] * speeds[a], torques[k] * speeds[k]
+        p_in, p_out = (p_a, -p_b) if forward else (p_b, -p_a)
+        # Kreines: only power flowing into S from 1 or 2 can lock, when eta0 <= i0
+        flow = self.mode if forward else self.b + self.a
+        locked = flow[1] == "S" and eta0 <= self.i0
+        eta = p_out / p_in if (p_in > 0 and not locked) else 0.0
+        return speeds, torques, losses, eta, eta0, locked, forward

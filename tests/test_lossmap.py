@@ -1,0 +1,49 @@
+"""The precomputed mode map used by the FMU agrees with the direct core."""
+import numpy as np
+import pytest
+
+from model_core import DriveDesign, Friction, operating_point, rpm_to_rad_s
+from model_core.kinematics import parse_mode
+from model_core.lossmap import ModeMap
+from model_core.paper import BenchEnvelope
+
+IDX = {"1": 0, "2": 1, "S": 2}
+
+
+@pytest.mark.parametrize("mode", ["S1", "S2"])
+def test_map_matches_core_over_envelope_both_directions(design, mode):
+    m = ModeMap(design, mode, 30.0, 350.0)
+    env = BenchEnvelope(n_speed=5, n_torque=5)
+    b = parse_mode(mode)[1]
+    worst = 0.0
+    for w in env.speeds():
+        for T in env.torques():
+            for sign in (1, -1):
+                op = operating_point(design, mode, w, sign * T)
+                speeds, torques, losses, eta, eta0, locked, fwd = m.solve(float(w), float(op.torques[b]))
+                worst = max(worst, abs(eta - float(op.eta)))
+                assert fwd == bool(op.flow_forward)
+                p = sum(t * s for t, s in zip(torques, speeds))
+                assert p == pytest.approx(sum(losses), rel=1e-12)      # exact energy balance
+                assert torques[IDX[b]] == pytest.approx(float(op.torques[b]), rel=1e-12)
+    assert worst < 1e-3, worst   # 0.1 percentage point
+    assert m.out_of_range == 0
+
+
+def test_map_locks_like_the_core():
+    sticky = DriveDesign(friction=Friction(mu_boundary=0.3))
+    m = ModeMap(sticky, "S1", 30.0, 350.0)
+    # the load drives the ring (power into shaft 1): back-driving 1 -> S is self-locking
+    speeds, torques, losses, eta, eta0, locked, fwd = m.solve(rpm_to_rad_s(1500), 9.0)
+    assert not fwd and locked and eta == 0.0
+    assert eta0 < sticky.i0
+    assert torques[2] * speeds[2] > 0            # the driving shaft must still push (LossyGear)
+    assert sum(losses) > 0
+    core = operating_point(sticky, "S1", rpm_to_rad_s(1500), T_out=9.0)
+    assert bool(core.locked)
+
+
+def test_map_zero_speed_and_torque(design):
+    m = ModeMap(design, "S2", 30.0, 350.0)
+    assert sum(m.solve(0.0, 5.0)[2]) == 0.0
+    assert sum(m.solve(100.0, 0.0)[2]) == 0.0
