@@ -137,8 +137,10 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> Operat
     wdir = np.where(T1_free * w1p >= 0, 1.0, -1.0)
     base = np.abs(w1p)
     def guarded(eta0):
-        # where shaft 2 drives relatively (w = -1), 1/eta0 enters Kreines' rule: keep eta0 off
-        # the locking pole eta0 <= i0 (such points are reported as locked)
+        # with the known torque on S and shaft 2 driving relatively (w = -1), T1 = T_S/(i0/eta0 - 1)
+        # has a pole at the locking limit eta0 = i0: keep off it (such points are locked)
+        if known != "S":
+            return eta0
         return np.where(wdir < 0, np.maximum(eta0, i0 * (1 + 1e-9)), eta0)
 
     def ring_torque(eta0):

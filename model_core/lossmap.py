@@ -93,7 +93,12 @@ class ModeMap:
         row = self._interp(self._tables[forward], abs(tau_out), abs(w_in))
         eta0 = row[0]
         wdir = self._wdir[forward]
-        e = eta0 if wdir > 0 else 1.0 / max(eta0, self.i0 * (1 + 1e-9))
+        if wdir > 0:
+            e = eta0
+        elif k == 2:   # the known torque is on S: keep 1 - i0/eta0 off zero (locking pole)
+            e = 1.0 / max(eta0, self.i0 * (1 + 1e-9))
+        else:
+            e = 1.0 / eta0
         c2 = -self.i0 * e
         c = (1.0, c2, -(1.0 + c2))
         T1 = tau_out / c[k]
