@@ -1,0 +1,62 @@
+"""Build the project's FMUs with pythonfmu (FMI 2.0 co-simulation, no external tool).
+
+The slaves and the physics core are bundled under a versioned package name
+(``cyclofmu_<version>_slaves`` with ``_bundled_core`` inside) and each slave script under a
+versioned module name, so that neither collides with a host's imports nor with another of our
+FMUs of a different version in the same process. numpy and scipy are not bundled: the FMU uses
+the host interpreter's environment (see README, limits).
+"""
+from __future__ import annotations
+
+import argparse
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+from . import __version__
+
+HERE = Path(__file__).resolve().parent
+BUNDLE = "cyclofmu_" + __version__.replace(".", "_") + "_slaves"
+
+#: model name -> module in cyclo_fmu/slaves
+SLAVES = {"CycloidDrive": "cycloid_drive"}
+
+
+def build_fmu(name: str = "CycloidDrive", dest="dist") -> Path:
+    """Build ``dest/<name>.fmu`` and return its path."""
+    from pythonfmu.builder import FmuBuilder
+
+    if name not in SLAVES:
+        raise ValueError(f"unknown FMU {name!r}; known: {', '.join(SLAVES)}")
+    dest = Path(dest)
+    dest.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="cyclofmu_build_") as tmp:
+        stage = Path(tmp)
+        pkg = stage / BUNDLE
+        ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
+        shutil.copytree(HERE / "slaves", pkg, ignore=ignore)
+        shutil.copytree(HERE.parent / "model_core", pkg / "_bundled_core", ignore=ignore)
+        script = stage / f"{BUNDLE}_{name}.py"
+        script.write_text(f'"""pythonfmu entry point of {name} (cyclo-fmu {__version__})."""\n'
+                          f"from {BUNDLE}.{SLAVES[name]} import {name}  # noqa: F401\n")
+        sys.path.insert(0, str(stage))
+        try:
+            out = FmuBuilder.build_FMU(script, dest=dest, project_files=[pkg],
+                                       needsExecutionTool="false")
+        finally:
+            sys.path.remove(str(stage))
+            for mod in [m for m in sys.modules if m == BUNDLE or m.startswith(BUNDLE + ".")
+                        or m == script.stem]:
+                del sys.modules[mod]
+    return Path(out)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="build_fmu", description="Build the cyclo-fmu FMUs.")
+    p.add_argument("--dest", default="dist", help="output folder (default: dist)")
+    p.add_argument("names", nargs="*", default=list(SLAVES), help="FMUs to build")
+    args = p.parse_args(argv)
+    for name in args.names:
+        print(build_fmu(name, args.dest))
+    return 0

@@ -1,0 +1,171 @@
+"""FMI 2.0 co-simulation slave of the cycloid reducer (massless, quasi-static).
+
+Ports, as Modelica flanges (a torque is what the outside applies on the reducer's shaft, so the
+power into the reducer at a shaft is tau*w):
+  inputs   w_in   speed of the driving shaft (rad/s)
+           tau_out torque the load applies on the driven shaft (N*m)
+  outputs  w_out  speed of the driven shaft (rad/s)
+           tau_in torque the driver applies on the driving shaft (N*m)
+           tau_housing torque the support applies on the held shaft (N*m)
+           P_loss = tau_in*w_in + tau_out*w_out >= 0 and the partial losses PL1..PL6 (W)
+           eta efficiency of the actual power flow, locked (self-locking back-drive holds)
+Forward motoring into a brake: tau_in*w_in > 0, tau_out*w_out < 0.
+
+Parameters: ``mode`` (12, 21, 1S, S1, 2S, S2) and the design values a system engineer varies
+(defaults: the paper's test drive). At initialization the full physics core is solved on a grid
+(model_core.lossmap.ModeMap); a step interpolates it (``exact = false``) or solves the full core
+(``exact = true``, about 4 ms a step).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from . import core
+from .base import Boolean, Fmi2Status, Integer, Real, String, UnitSlave
+
+# FMU parameter -> (design section or None, design field, unit, description)
+DESIGN_PARAMETERS = [
+    ("z1", None, "z1", None, "number of ring rollers", Integer),
+    ("n_disc_rollers", None, "n_disc_rollers", None, "number of disc rollers k", Integer),
+    ("e", None, "e", "m", "eccentricity", Real),
+    ("lam", None, "lam", "1", "coefficient of the trochoid lambda = r_p/(e z1)", Real),
+    ("d_v1", None, "d_v1", "m", "ring roller diameter", Real),
+    ("d_o1", None, "d_o1", "m", "ring pin diameter", Real),
+    ("b1", None, "b1", "m", "ring roller width", Real),
+    ("d_v2", None, "d_v2", "m", "disc roller diameter", Real),
+    ("d_o2", None, "d_o2", "m", "disc pin diameter", Real),
+    ("b2", None, "b2", "m", "disc roller width", Real),
+    ("d_m2", None, "d_m2", "m", "pitch diameter of the disc rollers", Real),
+    ("D_cz", None, "D_cz", "m", "hole diameter in the cycloid gear", Real),
+    ("D_p", None, "D_p", "m", "outer diameter of the eccentric bearing", Real),
+    ("d_p", None, "d_p", "m", "bore of the eccentric bearing", Real),
+    ("delta_z", None, "delta_z", "m", "profile correction", Real),
+    ("ring_rollers", None, "ring_rollers", None, "ring rollers: plain or needle", String),
+    ("disc_rollers", None, "disc_rollers", None, "disc rollers: plain or needle", String),
+    ("nu", "lubricant", "kinematic_viscosity", "m2/s", "lubricant kinematic viscosity", Real),
+    ("rho_oil", "lubricant", "density", "kg/m3", "lubricant density", Real),
+    ("mu_boundary", "friction", "mu_boundary", "1",
+     "boundary friction coefficient of the sliding roller-pin contacts (calibrated)", Real),
+    ("pin_roughness", "friction", "pin_roughness", "m", "composite roughness of pin and roller bore", Real),
+    ("mu_rolling", "friction", "rolling_ring", "1",
+     "rolling-resistance coefficient of the rollers (ring and disc)", Real),
+]
+
+OUTPUT_LOSSES = ("PL1", "PL2", "PL3", "PL5", "PL6")
+
+
+class CycloidDrive(UnitSlave):
+    author = "cyclo-fmu"
+    description = ("Constrained cycloid drive: load-dependent losses and efficiency "
+                   "(Mackic et al.), quasi-static, all six modes and four quadrants")
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        default = core.DriveDesign()
+        self.parameter("mode", "S1", None, "operating mode: driving shaft, driven shaft "
+                       "(12, 21, 1S, S1, 2S, S2; 1 ring, 2 disc, S eccentric)", String)
+        for name, section, field, unit, desc, kind in DESIGN_PARAMETERS:
+            owner = default if section is None else getattr(default, section)
+            self.parameter(name, getattr(owner, field), unit, desc, kind)
+        self.parameter("exact", False, None, "solve the full model every step instead of "
+                       "interpolating the map built at initialization", Boolean)
+        self.parameter("map_torque_max", 30.0, "N.m", "largest |tau_out| in the loss map")
+        self.parameter("map_speed_max", 350.0, "rad/s", "largest |w_in| in the loss map")
+        self.input("w_in", 0.0, "rad/s", "speed of the driving shaft")
+        self.input("tau_out", 0.0, "N.m", "torque the load applies on the driven shaft")
+        self.output("w_out", 0.0, "rad/s", "speed of the driven shaft", depends=("w_in",))
+        both = ("w_in", "tau_out")
+        self.output("tau_in", 0.0, "N.m", "torque the driver applies on the driving shaft",
+                    depends=both)
+        self.output("tau_housing", 0.0, "N.m", "torque the support applies on the held shaft",
+                    depends=both)
+        self.output("P_loss", 0.0, "W", "total power loss tau_in*w_in + tau_out*w_out", depends=both)
+        for n in OUTPUT_LOSSES:
+            self.output(n, 0.0, "W", f"partial loss {n}: {core.losses.LOSS_DESCRIPTIONS[n]}",
+                        depends=both)
+        self.output("eta", 0.0, "1", "efficiency of the actual power flow (0 without power or "
+                    "when locked)", depends=both)
+        self.output("eta0", 1.0, "1", "basic efficiency (carrier held)", depends=both)
+        self.output("locked", False, None, "self-locking back-drive holds: the driving shaft "
+                    "must push although the load drives", depends=both, kind=Boolean)
+        self._map = None
+        self._design = None
+        self._warned_range = False
+
+    # -- life cycle ---------------------------------------------------------------------------
+    def _build_design(self):
+        changes, lub, fr = {}, {}, {}
+        for name, section, field, unit, desc, kind in DESIGN_PARAMETERS:
+            v = getattr(self, name)
+            {None: changes, "lubricant": lub, "friction": fr}[section][field] = v
+        fr["rolling_disc"] = fr["rolling_ring"]
+        base = core.DriveDesign()
+        return dataclasses.replace(base, lubricant=dataclasses.replace(base.lubricant, **lub),
+                                   friction=dataclasses.replace(base.friction, **fr), **changes)
+
+    def exit_initialization_mode(self):
+        try:
+            a, b, h = core.kinematics.parse_mode(self.mode)
+            self._mode = a + b
+            self._b = b
+            self._design = self._build_design()
+            for name in ("map_torque_max", "map_speed_max"):
+                v = getattr(self, name)
+                if not (math.isfinite(v) and v > 0):
+                    raise core.CycloidInputError(name, v, "must be a positive number")
+            self._map = None if self.exact else core.lossmap.ModeMap(
+                self._design, self._mode, self.map_torque_max, self.map_speed_max)
+        except (core.CycloidInputError, TypeError) as exc:
+            self.fail(f"invalid parameter: {exc}")
+        self._update()
+
+    def do_step(self, current_time, step_size):
+        self._update()
+        return True
+
+    # -- physics ------------------------------------------------------------------------------
+    def _update(self):
+        w_in, tau_out = self.w_in, self.tau_out
+        self.require_finite(w_in=w_in, tau_out=tau_out)
+        if self._map is not None:
+            speeds, torques, losses, eta, eta0, locked, forward = self._map.solve(w_in, tau_out)
+            if self._map.out_of_range and not self._warned_range:
+                self._warned_range = True
+                self.log(f"operating point outside the loss map (|tau_out| <= "
+                         f"{self.map_torque_max} N.m, |w_in| <= {self.map_speed_max} rad/s): "
+                         "clamped to its edge; raise map_torque_max/map_speed_max",
+                         Fmi2Status.warning, "logStatusWarning")
+            idx = {"1": 0, "2": 1, "S": 2}
+            a, b, h = self._mode[0], self._mode[1], _held(self._mode)
+            self.w_out = speeds[idx[b]]
+            self.tau_in = torques[idx[a]]
+            self.tau_housing = torques[idx[h]]
+            for n, v in zip(OUTPUT_LOSSES, losses):
+                setattr(self, n, v)
+        else:
+            speeds, torques, losses, eta, eta0, locked = self._exact(w_in, tau_out)
+        self.P_loss = self.tau_in * w_in + tau_out * self.w_out
+        self.eta, self.eta0, self.locked = float(eta), float(eta0), bool(locked)
+
+    def _exact(self, w_in, tau_out):
+        a, b = self._mode[0], self._mode[1]
+        h = _held(self._mode)
+        w = core.shaft_speeds(self._mode, w_in, self._design.z1)
+        self.w_out = float(w[b])
+        if w_in == 0 or tau_out == 0:
+            self.tau_in = self.tau_housing = 0.0
+            for n in OUTPUT_LOSSES:
+                setattr(self, n, 0.0)
+            return None, None, None, 0.0, 1.0, False
+        op = core.operating_point(self._design, self._mode, w_in, T_out=tau_out)
+        self.tau_in = float(op.torques[a])
+        self.tau_housing = float(op.torques[h])
+        for n in OUTPUT_LOSSES:
+            setattr(self, n, float(getattr(op.losses, n)))
+        eta = 0.0 if (op.locked or not math.isfinite(float(op.eta))) else float(op.eta)
+        return None, None, None, eta, float(op.eta0), bool(op.locked)
+
+
+def _held(mode):
+    return next(s for s in "12S" if s not in mode)
