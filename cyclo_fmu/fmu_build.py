@@ -23,6 +23,33 @@ BUNDLE = "cyclofmu_" + __version__.replace(".", "_") + "_slaves"
 SLAVES = {"CycloidDrive": "cycloid_drive"}
 
 
+#: The pythonfmu entry script. pythonfmu 0.7 empties this module's namespace when a host
+#: unloads the FMU library (fmpy's freeInstance), but the module stays cached in sys.modules,
+#: so a second load in the same process found no class ("module has no attribute"). The
+#: module's class survives that, so it fetches the slave class again on demand.
+SCRIPT_TEMPLATE = '''"""pythonfmu entry point of {name} (cyclo-fmu {version})."""
+import importlib
+import sys
+import types
+
+from {bundle}.{module} import {name} as _Slave
+
+
+class {name}(_Slave):
+    pass
+
+
+class _ReloadableModule(types.ModuleType):
+    def __getattr__(self, attr):
+        if attr == "{name}":
+            return importlib.import_module("{bundle}.{module}").{name}
+        raise AttributeError(attr)
+
+
+sys.modules[__name__].__class__ = _ReloadableModule
+'''
+
+
 def build_fmu(name: str = "CycloidDrive", dest="dist") -> Path:
     """Build ``dest/<name>.fmu`` and return its path."""
     from pythonfmu.builder import FmuBuilder
@@ -38,8 +65,8 @@ def build_fmu(name: str = "CycloidDrive", dest="dist") -> Path:
         shutil.copytree(HERE / "slaves", pkg, ignore=ignore)
         shutil.copytree(HERE.parent / "model_core", pkg / "_bundled_core", ignore=ignore)
         script = stage / f"{BUNDLE}_{name}.py"
-        script.write_text(f'"""pythonfmu entry point of {name} (cyclo-fmu {__version__})."""\n'
-                          f"from {BUNDLE}.{SLAVES[name]} import {name}  # noqa: F401\n")
+        script.write_text(SCRIPT_TEMPLATE.format(name=name, version=__version__, bundle=BUNDLE,
+                                                 module=SLAVES[name]))
         sys.path.insert(0, str(stage))
         try:
             out = FmuBuilder.build_FMU(script, dest=dest, project_files=[pkg],
