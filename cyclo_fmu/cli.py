@@ -95,6 +95,15 @@ def cmd_paper(args) -> int:
     return run_paper_comparison(_load_design(args.design), args.out, args.json)
 
 
+def cmd_build(args) -> int:
+    from .fmu_build import SLAVES, build_fmu
+    for name in args.names or list(SLAVES):
+        if name not in SLAVES:
+            raise CycloidInputError("FMU name", name, f"must be one of {', '.join(SLAVES)}")
+        print(build_fmu(name, args.dest))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="cyclo-fmu", description="Cycloid-drive losses, efficiency and FMI tools.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -112,6 +121,10 @@ def build_parser() -> argparse.ArgumentParser:
     pp.add_argument("--design", help="design file (TOML); default: the paper's test drive")
     pp.add_argument("--json", action="store_true", help="print one JSON object")
     pp.set_defaults(func=cmd_paper)
+    bp = sub.add_parser("build", help="build the FMUs (dist/CycloidDrive.fmu)")
+    bp.add_argument("--dest", default="dist", help="output folder (default: dist)")
+    bp.add_argument("names", nargs="*", help="FMUs to build (default: all)")
+    bp.set_defaults(func=cmd_build)
     return p
 
 
