@@ -74,11 +74,11 @@ class ModeMap:
         j = min(bisect_right(gw, lw) - 1, len(gw) - 2)
         ft = (lt - gt[i]) / (gt[i + 1] - gt[i])
         fw = (lw - gw[j]) / (gw[j + 1] - gw[j])
-        a, b = table[j][i], table[j][i + 1]
-        c, d = table[j + 1][i], table[j + 1][i + 1]
+        row0, row1 = table[j], table[j + 1]
         u, v = (1 - fw) * (1 - ft), (1 - fw) * ft
         x, y = fw * (1 - ft), fw * ft
-        return [u * a[n] + v * b[n] + x * c[n] + y * d[n] for n in range(len(a))]
+        return [u * p + v * q + x * r + y * s_
+                for p, q, r, s_ in zip(row0[i], row0[i + 1], row1[i], row1[i + 1])]
 
     def solve(self, w_in: float, tau_out: float):
         """Steady state at driving speed w_in (rad/s) and load torque tau_out (N*m, applied by

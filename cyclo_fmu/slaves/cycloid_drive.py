@@ -108,7 +108,8 @@ class CycloidDrive(UnitSlave):
         try:
             a, b, h = core.kinematics.parse_mode(self.mode)
             self._mode = a + b
-            self._b = b
+            idx = {"1": 0, "2": 1, "S": 2}
+            self._shaft_index = (idx[a], idx[b], idx[h])
             self._design = self._build_design()
             for name in ("map_torque_max", "map_speed_max"):
                 v = getattr(self, name)
@@ -127,7 +128,8 @@ class CycloidDrive(UnitSlave):
     # -- physics ------------------------------------------------------------------------------
     def _update(self):
         w_in, tau_out = self.w_in, self.tau_out
-        self.require_finite(w_in=w_in, tau_out=tau_out)
+        if not (math.isfinite(w_in) and math.isfinite(tau_out)):
+            self.require_finite(w_in=w_in, tau_out=tau_out)
         if self._map is not None:
             speeds, torques, losses, eta, eta0, locked, forward = self._map.solve(w_in, tau_out)
             if self._map.out_of_range and not self._warned_range:
@@ -136,17 +138,15 @@ class CycloidDrive(UnitSlave):
                          f"{self.map_torque_max} N.m, |w_in| <= {self.map_speed_max} rad/s): "
                          "clamped to its edge; raise map_torque_max/map_speed_max",
                          Fmi2Status.warning, "logStatusWarning")
-            idx = {"1": 0, "2": 1, "S": 2}
-            a, b, h = self._mode[0], self._mode[1], _held(self._mode)
-            self.w_out = speeds[idx[b]]
-            self.tau_in = torques[idx[a]]
-            self.tau_housing = torques[idx[h]]
-            for n, v in zip(OUTPUT_LOSSES, losses):
-                setattr(self, n, v)
+            ia, ib, ih = self._shaft_index
+            self.w_out = speeds[ib]
+            self.tau_in = torques[ia]
+            self.tau_housing = torques[ih]
+            self.PL1, self.PL2, self.PL3, self.PL5, self.PL6 = losses
         else:
             speeds, torques, losses, eta, eta0, locked = self._exact(w_in, tau_out)
         self.P_loss = self.tau_in * w_in + tau_out * self.w_out
-        self.eta, self.eta0, self.locked = float(eta), float(eta0), bool(locked)
+        self.eta, self.eta0, self.locked = eta, eta0, locked
 
     def _exact(self, w_in, tau_out):
         a, b = self._mode[0], self._mode[1]
@@ -164,6 +164,7 @@ class CycloidDrive(UnitSlave):
         for n in OUTPUT_LOSSES:
             setattr(self, n, float(getattr(op.losses, n)))
         eta = 0.0 if (op.locked or not math.isfinite(float(op.eta))) else float(op.eta)
+        # same reporting as the map: ``eta`` 0 when locked or without power
         return None, None, None, eta, float(op.eta0), bool(op.locked)
 
 
