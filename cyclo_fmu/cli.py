@@ -104,6 +104,31 @@ def cmd_build(args) -> int:
     return 0
 
 
+def cmd_bench(args) -> int:
+    from pathlib import Path
+    from .bench import Sensors, run_bench, scenario
+    from .fmu_build import SLAVES, build_fmu
+    parse_mode(args.mode)
+    try:
+        sc = scenario(args.scenario, args.mode.upper())
+    except ValueError as exc:
+        raise CycloidInputError("scenario", args.scenario, "must be one of paper, runup, "
+                                "loadstep, reversal") from exc
+    out = Path(args.out)
+    fmu_dir = out / "fmus"
+    for name in SLAVES:
+        build_fmu(name, fmu_dir)
+    run = run_bench(sc, fmu_dir, out, Sensors(ideal=args.ideal_sensors, seed=args.seed))
+    print(f"bench: mode {sc.mode}, scenario {sc.name}, {sc.stop_time:.0f} s simulated; "
+          f"files in {out}")
+    if run.windows:
+        print(f"  {'n_in r/min':>10} {'T_in N*m':>9} {'eta bench %':>11} {'eta core %':>10}")
+        for w in run.windows:
+            print(f"  {w['speed_in_rpm']:10.0f} {w['torque_in_Nm']:9.3f} {100 * w['eta']:11.2f} "
+                  f"{100 * w.get('eta_core', float('nan')):10.2f}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="cyclo-fmu", description="Cycloid-drive losses, efficiency and FMI tools.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -125,6 +150,14 @@ def build_parser() -> argparse.ArgumentParser:
     bp.add_argument("--dest", default="dist", help="output folder (default: dist)")
     bp.add_argument("names", nargs="*", help="FMUs to build (default: all)")
     bp.set_defaults(func=cmd_build)
+    bench = sub.add_parser("bench", help="simulate the motor - reducer - brake test bench (SSP)")
+    bench.add_argument("--mode", default="S1", help="operating mode of the reducer (S1, S2, ...)")
+    bench.add_argument("--scenario", default="paper",
+                       help="paper (frequency x load series), runup, loadstep, reversal")
+    bench.add_argument("--out", default="out/bench", help="output folder (default: out/bench)")
+    bench.add_argument("--ideal-sensors", action="store_true", help="switch transducer errors off")
+    bench.add_argument("--seed", type=int, default=1, help="noise seed of the transducers")
+    bench.set_defaults(func=cmd_bench)
     return p
 
 

@@ -20,7 +20,8 @@ HERE = Path(__file__).resolve().parent
 BUNDLE = "cyclofmu_" + __version__.replace(".", "_") + "_slaves"
 
 #: model name -> module in cyclo_fmu/slaves
-SLAVES = {"CycloidDrive": "cycloid_drive"}
+SLAVES = {"CycloidDrive": "cycloid_drive", "InductionMotor": "motor", "FeltBrake": "brake",
+          "Transducer": "transducer"}
 
 
 #: The pythonfmu entry script. pythonfmu 0.7 empties this module's namespace when a host

@@ -65,6 +65,9 @@ class CycloidDrive(UnitSlave):
         default = core.DriveDesign()
         self.parameter("mode", "S1", None, "operating mode: driving shaft, driven shaft "
                        "(12, 21, 1S, S1, 2S, S2; 1 ring, 2 disc, S eccentric)", String)
+        self.parameter("mode_number", 0, None, "the mode as a number for importers that cannot "
+                       "set String parameters (fmpy's SSP master): 0 = use mode, 1..6 = 12, 21, "
+                       "1S, S1, 2S, S2", Integer)
         for name, section, field, unit, desc, kind in DESIGN_PARAMETERS:
             owner = default if section is None else getattr(default, section)
             self.parameter(name, getattr(owner, field), unit, desc, kind)
@@ -106,7 +109,13 @@ class CycloidDrive(UnitSlave):
 
     def exit_initialization_mode(self):
         try:
-            a, b, h = core.kinematics.parse_mode(self.mode)
+            mode = self.mode
+            if self.mode_number:
+                if not 1 <= self.mode_number <= 6:
+                    raise core.CycloidInputError("mode_number", self.mode_number,
+                                                 "must be 0 (use mode) or 1..6")
+                mode = core.MODES[self.mode_number - 1]
+            a, b, h = core.kinematics.parse_mode(mode)
             self._mode = a + b
             idx = {"1": 0, "2": 1, "S": 2}
             self._shaft_index = (idx[a], idx[b], idx[h])

@@ -1,0 +1,333 @@
+"""The motor - reducer - brake test bench of the paper as an SSP of FMUs, run by fmpy.
+
+Components (TestBench.ssp, SSP 1.0): ``motor`` (InductionMotor), ``drive`` (CycloidDrive),
+``brake`` (FeltBrake) and four ``Transducer`` instances: ``t_in`` (HBM T22/20 on the input
+shaft), ``n_in`` (optical speed sensor), ``t_out`` and ``n_out`` (HBM T30FN on the output).
+Causality: the motor integrates the drive train and outputs speed; reducer and brake take speed
+and give torque. Parameters: resources/<component>.ssv bound to each component in the .ssd
+(libcosim applies them) and the same values in resources/TestBench.ssv, which ``run_ssp``
+passes to fmpy as ``parameter_set`` (fmpy ignores ParameterBindings). The paper's series steps the motor
+frequency and the brake torque; each pair is held to steady state.
+"""
+from __future__ import annotations
+
+import csv
+import math
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from model_core import MODES, DriveDesign, operating_point
+from model_core.kinematics import parse_mode
+
+RPM_PER_RAD_S = 30 / math.pi
+
+#: component name -> (FMU, connectors [(name, kind)])
+COMPONENTS = {
+    "motor": ("InductionMotor", [("tau_shaft", "input"), ("w", "output"), ("T_em", "output"),
+                                 ("frequency", "output")]),
+    "drive": ("CycloidDrive", [("w_in", "input"), ("tau_out", "input"), ("w_out", "output"),
+                               ("tau_in", "output"), ("tau_housing", "output"),
+                               ("P_loss", "output"), ("eta", "output")]),
+    "brake": ("FeltBrake", [("w", "input"), ("tau_out", "output"), ("torque_shaft", "output")]),
+    "t_in": ("Transducer", [("x", "input"), ("y", "output")]),
+    "n_in": ("Transducer", [("x", "input"), ("y", "output")]),
+    "t_out": ("Transducer", [("x", "input"), ("y", "output")]),
+    "n_out": ("Transducer", [("x", "input"), ("y", "output")]),
+}
+CONNECTIONS = [
+    ("motor", "w", "drive", "w_in"),
+    ("drive", "tau_in", "motor", "tau_shaft"),
+    ("drive", "w_out", "brake", "w"),
+    ("brake", "tau_out", "drive", "tau_out"),
+    ("drive", "tau_in", "t_in", "x"),
+    ("motor", "w", "n_in", "x"),
+    ("brake", "torque_shaft", "t_out", "x"),
+    ("drive", "w_out", "n_out", "x"),
+]
+RECORDING_COLUMNS = ["time_s", "speed_in_rpm", "torque_in_Nm", "speed_out_rpm", "torque_out_Nm"]
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A scripted test series: frequencies x brake torques, each pair held ``hold`` s."""
+
+    name: str
+    mode: str = "S1"
+    f_first: float = 20.0
+    f_last: float = 50.0
+    f_count: int = 4
+    T_first: float = 3.0
+    T_last: float = 8.0
+    T_count: int = 4
+    hold: float = 3.0
+    settle: float = 1.5            # s from the start of each slot excluded from the window
+    frequency_schedule: str = ""   # overrides the frequency series when given
+    torque_schedule: str = ""      # overrides the torque series when given
+    duration: float = 0.0          # 0: f_count * T_count * hold
+
+    @property
+    def stop_time(self) -> float:
+        return self.duration or self.f_count * self.T_count * self.hold
+
+
+def paper_scenario(mode="S1") -> Scenario:
+    """The paper's series: 20-50 Hz (1000-2800 r/min input) x brake loads giving 0.3-0.85 N*m
+    on the input shaft (about 3-8 N*m at the output in S1, 2.7-7.4 N*m in S2)."""
+    if mode == "S2":
+        return Scenario("paper", mode="S2", T_first=2.7, T_last=7.4)
+    return Scenario("paper", mode=mode)
+
+
+def scenario(name: str, mode: str = "S1") -> Scenario:
+    """Named scenarios: paper, runup, loadstep, reversal."""
+    if name == "paper":
+        return paper_scenario(mode)
+    if name == "runup":
+        return Scenario("runup", mode=mode, f_first=50, f_last=50, f_count=1, T_first=5,
+                        T_last=5, T_count=1, hold=4.0, settle=2.5, duration=4.0)
+    if name == "loadstep":
+        return Scenario("loadstep", mode=mode, f_first=40, f_last=40, f_count=1,
+                        torque_schedule="0 2; 3 7", hold=3.0, settle=1.5, duration=6.0)
+    if name == "reversal":
+        # +40 Hz, then the regulator reverses to -40 Hz: while the output inertia is braked
+        # through the drive, power flows backwards for a moment (back-driving)
+        return Scenario("reversal", mode=mode, frequency_schedule="0 40; 3 -40", T_first=1.0,
+                        T_last=1.0, T_count=1, hold=3.0, settle=2.0, duration=8.0)
+    raise ValueError(f"scenario = {name!r}: must be one of paper, runup, loadstep, reversal")
+
+
+@dataclass(frozen=True)
+class Sensors:
+    """Transducer settings. Defaults: assumptions for the paper's HBM transducers, calibrated
+    (no gain or offset error); noise and quantisation at the level of the acquisition chain."""
+
+    ideal: bool = False
+    torque_noise: float = 0.003        # N*m
+    torque_resolution: float = 0.0005  # N*m
+    speed_noise: float = 0.5           # r/min
+    speed_resolution: float = 0.1      # r/min
+    bandwidth: float = 200.0           # Hz
+    torque_in_gain_error: float = 0.0
+    torque_in_offset: float = 0.0
+    torque_out_gain_error: float = 0.0
+    torque_out_offset: float = 0.0
+    seed: int = 1
+
+
+def bench_parameters(sc: Scenario, sensors: Sensors = Sensors()) -> dict:
+    """Parameter values 'component.variable' -> value for the SSV."""
+    if sc.mode not in MODES:
+        raise ValueError(f"mode = {sc.mode!r}: must be one of {', '.join(MODES)}")
+    # Python types decide the SSV types: float -> Real, int -> Integer, bool -> Boolean
+    p = {
+        "drive.mode_number": MODES.index(sc.mode) + 1,
+        "motor.f_first": float(sc.f_first), "motor.f_last": float(sc.f_last),
+        "motor.f_count": int(sc.f_count), "motor.hold_time": float(sc.hold),
+        "motor.loads_per_frequency": int(sc.T_count),
+        "brake.T_first": float(sc.T_first), "brake.T_last": float(sc.T_last),
+        "brake.T_count": int(sc.T_count), "brake.hold_time": float(sc.hold),
+    }
+    for name, scale, noise, res, gain, off in (
+            ("t_in", 1.0, sensors.torque_noise, sensors.torque_resolution,
+             sensors.torque_in_gain_error, sensors.torque_in_offset),
+            ("n_in", RPM_PER_RAD_S, sensors.speed_noise, sensors.speed_resolution, 0.0, 0.0),
+            ("t_out", 1.0, sensors.torque_noise, sensors.torque_resolution,
+             sensors.torque_out_gain_error, sensors.torque_out_offset),
+            ("n_out", RPM_PER_RAD_S, sensors.speed_noise, sensors.speed_resolution, 0.0, 0.0)):
+        p.update({f"{name}.scale": float(scale), f"{name}.noise": float(noise),
+                  f"{name}.resolution": float(res), f"{name}.gain_error": float(gain),
+                  f"{name}.offset": float(off), f"{name}.bandwidth": float(sensors.bandwidth),
+                  f"{name}.ideal": bool(sensors.ideal),
+                  f"{name}.seed": int(sensors.seed + list(COMPONENTS).index(name))})
+    return p
+
+
+def _ssv(params: dict) -> str:
+    rows = []
+    for k, v in params.items():
+        if isinstance(v, bool):
+            kind, val = "Boolean", "true" if v else "false"
+        elif isinstance(v, int):
+            kind, val = "Integer", str(v)
+        else:
+            kind, val = "Real", repr(float(v))
+        rows.append(f'    <ssv:Parameter name={quoteattr(k)}><ssv:{kind} value="{val}"/></ssv:Parameter>')
+    return ('<?xml version="1.0" encoding="UTF-8"?>\n'
+            '<ssv:ParameterSet xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" '
+            'version="1.0" name="TestBench">\n  <ssv:Parameters>\n' + "\n".join(rows)
+            + "\n  </ssv:Parameters>\n</ssv:ParameterSet>\n")
+
+
+def _ssd(stop_time: float, bound: set) -> str:
+    comps = []
+    for name, (fmu, connectors) in COMPONENTS.items():
+        cons = "\n".join(f'          <ssd:Connector name="{c}" kind="{k}"><ssc:Real/></ssd:Connector>'
+                         for c, k in connectors)
+        binding = (f'        <ssd:ParameterBindings>\n          <ssd:ParameterBinding '
+                   f'source="resources/{name}.ssv"/>\n        </ssd:ParameterBindings>\n'
+                   if name in bound else "")
+        comps.append(f'      <ssd:Component name="{name}" type="application/x-fmu-sharedlibrary" '
+                     f'source="resources/{fmu}.fmu">\n        <ssd:Connectors>\n{cons}\n'
+                     f'        </ssd:Connectors>\n{binding}      </ssd:Component>')
+    conns = "\n".join(f'      <ssd:Connection startElement="{a}" startConnector="{b}" '
+                      f'endElement="{c}" endConnector="{d}"/>' for a, b, c, d in CONNECTIONS)
+    return ('<?xml version="1.0" encoding="UTF-8"?>\n'
+            '<ssd:SystemStructureDescription '
+            'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" '
+            'xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
+            'version="1.0" name="TestBench">\n'
+            '  <ssd:System name="TestBench">\n'
+            '    <ssd:Elements>\n' + "\n".join(comps) + '\n    </ssd:Elements>\n'
+            '    <ssd:Connections>\n' + conns + '\n    </ssd:Connections>\n'
+            '  </ssd:System>\n'
+            f'  <ssd:DefaultExperiment startTime="0.0" stopTime="{stop_time}"/>\n'
+            '</ssd:SystemStructureDescription>\n')
+
+
+def build_ssp(path, fmu_dir, sc: Scenario, sensors: Sensors = Sensors()) -> Path:
+    """Write TestBench.ssp with the FMUs from ``fmu_dir`` (built by build_fmu)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    params = bench_parameters(sc, sensors)
+    per_component = {}
+    for key, value in params.items():
+        comp, var = key.split(".", 1)
+        per_component.setdefault(comp, {})[var] = value
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("SystemStructure.ssd", _ssd(sc.stop_time, set(per_component)))
+        # one parameter set for fmpy (names 'component.variable', passed as parameter_set;
+        # fmpy does not apply ParameterBindings) and one per component, bound in the .ssd,
+        # for SSP importers that apply bindings (libcosim)
+        z.writestr("resources/TestBench.ssv", _ssv(params))
+        for comp, values in per_component.items():
+            z.writestr(f"resources/{comp}.ssv", _ssv(values))
+        for fmu in sorted({f for f, _ in COMPONENTS.values()}):
+            z.write(Path(fmu_dir) / f"{fmu}.fmu", f"resources/{fmu}.fmu")
+    return path
+
+
+def run_ssp(ssp_path, stop_time: float, step: float = 1e-3):
+    """Simulate the bench with fmpy's SSP master; returns fmpy's structured result."""
+    from fmpy.ssp.simulation import simulate_ssp
+    from fmpy.ssp.ssd import read_ssv
+    params = read_ssv(str(ssp_path), "resources/TestBench.ssv")
+    for prm in params.parameters:
+        # fmpy sets Booleans as value != 0.0, so the string "false" would read as true
+        if prm.type == "Boolean":
+            prm.value = str(prm.value).strip().lower() in ("true", "1")
+    return simulate_ssp(str(ssp_path), stop_time=stop_time, step_size=step, parameter_set=params)
+
+
+def recording_from_result(result) -> dict:
+    """The bench's recording (the schema a real bench writes) from the SSP result."""
+    return {
+        "time_s": np.asarray(result["time"]) + (result["time"][1] - result["time"][0]),
+        "speed_in_rpm": np.asarray(result["n_in.y"]),
+        "torque_in_Nm": np.asarray(result["t_in.y"]),
+        "speed_out_rpm": np.asarray(result["n_out.y"]),
+        "torque_out_Nm": np.asarray(result["t_out.y"]),
+    }
+
+
+def write_recording(path, rec: dict) -> Path:
+    path = Path(path)
+    with path.open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(RECORDING_COLUMNS)
+        cols = [rec[c] for c in RECORDING_COLUMNS]
+        for row in zip(*cols):
+            w.writerow([f"{row[0]:.6f}"] + [f"{v:.6g}" for v in row[1:]])
+    return path
+
+
+def steady_windows(rec: dict, sc: Scenario, design: DriveDesign = None):
+    """Efficiency per steady window (means over the window, like the paper) next to the core's
+    efficiency at the window's mean input speed and torque."""
+    t = rec["time_s"]
+    slots = int(round(sc.stop_time / sc.hold))
+    rows = []
+    for k in range(slots):
+        sel = (t > k * sc.hold + sc.settle) & (t <= (k + 1) * sc.hold)
+        if sel.sum() < 10:
+            continue
+        n_in, T_in = rec["speed_in_rpm"][sel].mean(), rec["torque_in_Nm"][sel].mean()
+        n_out = rec["speed_out_rpm"][sel].mean()
+        p_in = np.mean(rec["torque_in_Nm"][sel] * rec["speed_in_rpm"][sel]) / RPM_PER_RAD_S
+        p_out = np.mean(rec["torque_out_Nm"][sel] * rec["speed_out_rpm"][sel]) / RPM_PER_RAD_S
+        row = {"t_start_s": k * sc.hold + sc.settle, "t_end_s": (k + 1) * sc.hold,
+               "speed_in_rpm": n_in, "torque_in_Nm": T_in, "speed_out_rpm": n_out,
+               "input_power_W": p_in, "output_power_W": p_out,
+               "eta": p_out / p_in if p_in > 0 else float("nan")}
+        if design is not None and p_in > 0:
+            op = operating_point(design, sc.mode, n_in / RPM_PER_RAD_S, T_in)
+            row["eta_core"] = float(op.eta)
+        rows.append(row)
+    return rows
+
+
+@dataclass
+class BenchRun:
+    scenario: Scenario
+    recording: dict
+    windows: list
+    result: object = field(repr=False)
+
+
+def run_bench(sc: Scenario, fmu_dir, out_dir=None, sensors: Sensors = Sensors(),
+              step: float = 1e-3) -> BenchRun:
+    """Build the SSP, simulate it, and (with ``out_dir``) write recording, windows and plots."""
+    parse_mode(sc.mode)
+    out = Path(out_dir) if out_dir else None
+    ssp = build_ssp((out or Path(fmu_dir)) / "TestBench.ssp", fmu_dir, sc, sensors)
+    result = run_ssp(ssp, sc.stop_time, step)
+    rec = recording_from_result(result)
+    windows = steady_windows(rec, sc, DriveDesign())
+    run = BenchRun(sc, rec, windows, result)
+    if out is not None:
+        write_recording(out / f"recording_{sc.mode}_{sc.name}.csv", rec)
+        with (out / f"efficiency_{sc.mode}_{sc.name}.csv").open("w", newline="") as f:
+            if windows:
+                w = csv.DictWriter(f, fieldnames=list(windows[0]))
+                w.writeheader()
+                w.writerows(windows)
+        plot_bench(run, out)
+    return run
+
+
+def plot_bench(run: BenchRun, out: Path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    sc, rec, win = run.scenario, run.recording, run.windows
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
+    ax = axes[0, 0]
+    ax.plot(rec["time_s"], rec["speed_in_rpm"], lw=0.6, label="input speed / (r/min)")
+    ax.plot(rec["time_s"], 100 * rec["torque_in_Nm"], lw=0.6, label="100 x input torque / N*m")
+    ax.set(xlabel="time / s", title=f"bench recording, mode {sc.mode}, scenario {sc.name}")
+    ax.legend(fontsize=7)
+    ax = axes[0, 1]
+    ax.plot(rec["time_s"], rec["speed_out_rpm"], lw=0.6, label="output speed / (r/min)")
+    ax.plot(rec["time_s"], rec["torque_out_Nm"], lw=0.6, label="output torque / N*m")
+    ax.set(xlabel="time / s")
+    ax.legend(fontsize=7)
+    if win:
+        T = np.array([w["torque_in_Nm"] for w in win])
+        n = np.array([w["speed_in_rpm"] for w in win])
+        eta = np.array([w["eta"] for w in win])
+        ax = axes[1, 0]
+        sc_ = ax.scatter(T, 100 * eta, c=n, cmap="viridis", label="bench (window means)")
+        if "eta_core" in win[0]:
+            ax.scatter(T, [100 * w["eta_core"] for w in win], marker="x", c="k", label="core")
+        fig.colorbar(sc_, ax=ax, label="input speed / (r/min)")
+        ax.set(xlabel="input torque / N*m", ylabel="efficiency / %", title="steady windows")
+        ax.legend(fontsize=7)
+        ax = axes[1, 1]
+        ax.scatter([w["input_power_W"] for w in win], [w["output_power_W"] for w in win])
+        ax.set(xlabel="input power / W", ylabel="output power / W", title="output over input power")
+    fig.tight_layout()
+    fig.savefig(out / f"bench_{sc.mode}_{sc.name}.png", dpi=100)
+    plt.close(fig)

@@ -1,0 +1,95 @@
+"""FMI slave: induction motor on a frequency regulator (Kloss curve, setpoint ramp, inertia).
+
+It owns the rotor inertia (rotor, coupling, input transducer rotor), integrates it and outputs
+the speed (no direct feedthrough). Input ``tau_shaft`` is the torque the motor delivers into
+the shaft towards the load (the reducer's ``tau_in``): J dw/dt = T_em(w, f) - tau_shaft.
+"""
+from __future__ import annotations
+
+import math
+
+from . import core
+from .base import Integer, Real, String, UnitSlave
+
+_SUBSTEP = 1e-4   # s; the rotor's mechanical time constant on the Kloss slope is ~5 ms
+
+
+class InductionMotor(UnitSlave):
+    author = "cyclo-fmu"
+    description = "Induction motor on a V/f frequency regulator: Kloss torque, ramp, inertia"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        m = core.rig.InductionMotor()
+        self.parameter("rated_power", m.rated_power, "W", "rated power")
+        self.parameter("rated_speed", m.rated_speed, "rad/s", "rated speed at rated frequency")
+        self.parameter("rated_frequency", m.rated_frequency, "Hz", "rated frequency")
+        self.parameter("pole_pairs", m.pole_pairs, None, "pole pairs", Integer)
+        self.parameter("breakdown_ratio", m.breakdown_ratio, "1", "breakdown / rated torque")
+        self.parameter("J", m.inertia, "kg.m2", "rotor, coupling and input-transducer inertia")
+        self.parameter("ramp_rate", m.ramp_rate, "Hz", "setpoint ramp of the regulator, Hz per s")
+        self.parameter("f_first", 50.0, "Hz", "first frequency setpoint of the test series")
+        self.parameter("f_last", 50.0, "Hz", "last frequency setpoint of the test series")
+        self.parameter("f_count", 1, None, "number of frequency setpoints", Integer)
+        self.parameter("hold_time", 1.0, "s", "time each setpoint pair is held")
+        self.parameter("loads_per_frequency", 1, None, "brake setpoints run at each frequency",
+                       Integer)
+        self.parameter("frequency_schedule", "", None, "instead of the series: setpoints "
+                       "'t0 f0; t1 f1; ...' (s, Hz), each held until the next", String)
+        self.parameter("w_start", 0.0, "rad/s", "initial speed")
+        self.input("tau_shaft", 0.0, "N.m", "torque the motor delivers into the shaft (reducer tau_in)")
+        self.output("w", 0.0, "rad/s", "shaft speed")
+        self.output("T_em", 0.0, "N.m", "electromagnetic torque")
+        self.output("frequency", 0.0, "Hz", "stator frequency after the ramp")
+        self.output("P_mech", 0.0, "W", "mechanical power T_em*w")
+        self._t = 0.0
+
+    def exit_initialization_mode(self):
+        try:
+            self._motor = core.rig.InductionMotor(
+                rated_power=float(self.rated_power), rated_speed=float(self.rated_speed),
+                rated_frequency=float(self.rated_frequency), pole_pairs=int(self.pole_pairs),
+                breakdown_ratio=float(self.breakdown_ratio), inertia=float(self.J),
+                ramp_rate=float(self.ramp_rate))
+            for name in ("rated_power", "rated_speed", "rated_frequency", "J", "ramp_rate"):
+                v = getattr(self, name)
+                if not (math.isfinite(v) and v > 0):
+                    raise ValueError(f"{name} = {v!r}: must be positive")
+            if not self.breakdown_ratio > 1:
+                raise ValueError(f"breakdown_ratio = {self.breakdown_ratio!r}: must exceed 1")
+            if self.pole_pairs < 1:
+                raise ValueError(f"pole_pairs = {self.pole_pairs!r}: must be at least 1")
+            self._schedule = (core.rig.parse_schedule(self.frequency_schedule, "frequency_schedule")
+                              if self.frequency_schedule.strip() else None)
+            if self.f_count < 1 or self.loads_per_frequency < 1:
+                raise ValueError("f_count and loads_per_frequency must be at least 1")
+        except ValueError as exc:
+            self.fail(f"invalid parameter: {exc}")
+        self.w = float(self.w_start)
+        self.frequency = 0.0 if self.w == 0 else self.w * self.pole_pairs / (2 * math.pi)
+        self._outputs()
+
+    def _setpoint(self, t):
+        if self._schedule is not None:
+            return core.rig.schedule_value(self._schedule, t)
+        return core.rig.series_value(t, self.f_first, self.f_last, self.f_count, self.hold_time,
+                                     self.loads_per_frequency)
+
+    def _outputs(self):
+        self.T_em = self._motor.torque(self.w, self.frequency)
+        self.P_mech = self.T_em * self.w
+
+    def do_step(self, current_time, step_size):
+        tau = self.tau_shaft
+        if not math.isfinite(tau):
+            self.require_finite(tau_shaft=tau)
+        n = max(1, int(math.ceil(step_size / _SUBSTEP - 1e-9)))
+        h = step_size / n
+        m, J = self._motor, self._motor.inertia
+        w, f = self.w, self.frequency
+        for k in range(n):
+            f = core.rig.ramp_toward(f, self._setpoint(current_time + k * h), m.ramp_rate, h)
+            w += h * (m.torque(w, f) - tau) / J
+        self.w, self.frequency = w, f
+        self._outputs()
+        return True

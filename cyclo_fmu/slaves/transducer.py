@@ -1,0 +1,59 @@
+"""FMI slave: a torque or speed transducer (gain and offset errors, bandwidth, noise,
+quantisation, unit scale), switchable to ideal with ``ideal = true``."""
+from __future__ import annotations
+
+import math
+import random
+
+from . import core
+from .base import Boolean, Integer, Real, UnitSlave
+
+
+class Transducer(UnitSlave):
+    author = "cyclo-fmu"
+    description = "Transducer: y = scale*x through first-order bandwidth, class errors, noise"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.parameter("scale", 1.0, "1", "unit scale and sign, y = scale*x (e.g. 30/pi for "
+                       "rad/s to r/min)")
+        self.parameter("gain_error", 0.0, "1", "relative gain error (accuracy class)")
+        self.parameter("offset", 0.0, "1", "zero offset, in output units")
+        self.parameter("bandwidth", 1000.0, "Hz", "first-order bandwidth (<= 0: none)")
+        self.parameter("noise", 0.0, "1", "standard deviation of white noise, output units")
+        self.parameter("resolution", 0.0, "1", "quantisation step, output units (<= 0: none)")
+        self.parameter("seed", 1, None, "noise seed", Integer)
+        self.parameter("ideal", False, None, "switch all errors off: y = scale*x", Boolean)
+        self.input("x", 0.0, "1", "true value")
+        self.output("y", 0.0, "1", "reading", depends=("x",))
+        self._filtered = None
+
+    def exit_initialization_mode(self):
+        try:
+            for name in ("scale", "gain_error", "offset", "bandwidth", "noise", "resolution"):
+                v = getattr(self, name)
+                if not math.isfinite(v):
+                    raise ValueError(f"{name} = {v!r}: must be finite")
+            if self.noise < 0:
+                raise ValueError(f"noise = {self.noise!r}: must not be negative")
+        except ValueError as exc:
+            self.fail(f"invalid parameter: {exc}")
+        self._model = core.rig.Transducer(self.gain_error, self.offset, self.bandwidth,
+                                          self.noise, self.resolution)
+        self._rng = random.Random(int(self.seed))
+        self._filtered = self.scale * self.x
+        self._read()
+
+    def _read(self):
+        if self.ideal:
+            self.y = self.scale * self.x
+        else:
+            self.y = self._model.reading(self._filtered, self._rng.gauss(0.0, 1.0))
+
+    def do_step(self, current_time, step_size):
+        x = self.x
+        if not math.isfinite(x):
+            self.require_finite(x=x)
+        self._filtered = self._model.filter_step(self._filtered, self.scale * x, step_size)
+        self._read()
+        return True

@@ -1,0 +1,134 @@
+"""The SSP test bench: steady-state efficiency against the core, energy balance in the
+recording, the recording schema, the same numbers in libcosimpy, the CLI."""
+import csv
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from cyclo_fmu.bench import (RECORDING_COLUMNS, RPM_PER_RAD_S, Scenario, Sensors, build_ssp,
+                             run_bench, run_ssp)
+from model_core import rig
+
+QUICK = Scenario("quick", mode="S1", f_first=30, f_last=50, f_count=2, T_first=3.0, T_last=8.0,
+                 T_count=2, hold=2.0, settle=1.2)
+
+
+@pytest.fixture(scope="module")
+def fmu_dir(tmp_path_factory):
+    from cyclo_fmu.fmu_build import SLAVES, build_fmu
+    d = tmp_path_factory.mktemp("fmus")
+    for name in SLAVES:
+        build_fmu(name, d)
+    return d
+
+
+@pytest.fixture(scope="module")
+def quick_run(fmu_dir, tmp_path_factory):
+    return run_bench(QUICK, fmu_dir, tmp_path_factory.mktemp("bench"))
+
+
+def test_steady_state_efficiency_matches_core(quick_run):
+    assert len(quick_run.windows) == 4
+    for w in quick_run.windows:
+        assert abs(w["eta"] - w["eta_core"]) < 0.002, w      # 0.2 percentage point
+        assert 0.6 < w["eta"] < 0.7
+
+
+def test_energy_balance_in_recording(quick_run):
+    """Measured input minus output power equals the reducer's loss in every steady window."""
+    res, sc = quick_run.result, quick_run.scenario
+    t = res["time"] + 1e-3
+    for k, w in enumerate(quick_run.windows):
+        sel = (t > w["t_start_s"]) & (t <= w["t_end_s"])
+        loss = float(np.mean(res["drive.P_loss"][sel]))
+        assert w["input_power_W"] - w["output_power_W"] == pytest.approx(loss, rel=0.02)
+
+
+def test_recording_schema_and_units(quick_run, tmp_path):
+    from cyclo_fmu.bench import write_recording
+    path = write_recording(tmp_path / "rec.csv", quick_run.recording)
+    rows = list(csv.reader(path.open()))
+    assert rows[0] == RECORDING_COLUMNS
+    data = np.array(rows[1:], float)
+    assert np.all(np.diff(data[:, 0]) > 0)
+    last = data[-100:]
+    # S1, 50 Hz, two-pole motor: input near 2800 r/min, output = input / 15 (i_S1 = +z1)
+    assert 2600 < last[:, 1].mean() < 3000
+    assert last[:, 3].mean() == pytest.approx(last[:, 1].mean() / 15, rel=2e-3)
+    assert last[:, 2].mean() > 0 and last[:, 4].mean() > 0
+
+
+def test_libcosim_runs_the_ssp_with_fmpys_numbers(fmu_dir, tmp_path):
+    pytest.importorskip("libcosimpy")
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+    sc = Scenario("short", mode="S2", f_first=30, f_last=30, f_count=1, T_first=5, T_last=5,
+                  T_count=1, hold=1.5, duration=1.5)
+    ssp = build_ssp(tmp_path / "TestBench.ssp", fmu_dir, sc, Sensors(ideal=True))
+    fm = run_ssp(ssp, 1.5)
+    log_output_level(CosimLogLevel.ERROR)
+    ex = CosimExecution.from_ssp_file(ssp_path=str(ssp), step_size=1_000_000)
+    idx = {i.name.decode(): i.index for i in ex.slave_infos()}
+    obs = CosimObserver.create_last_value()
+    ex.add_observer(obs)
+    ex.simulate_until(target_time=1_500_000_000)
+    for comp, var in (("drive", "tau_in"), ("drive", "eta"), ("motor", "w"), ("brake", "tau_out")):
+        ref = {v.name.decode(): v.reference for v in ex.slave_variables(idx[comp])}[var]
+        value = obs.last_real_values(idx[comp], [ref])[0]
+        # fmpy's row k holds the values after step k+1; libcosim stopped after 1500 steps
+        assert value == pytest.approx(fm[f"{comp}.{var}"][1499], rel=1e-9, abs=1e-12), (comp, var)
+
+
+def test_kloss_motor():
+    m = rig.InductionMotor()
+    assert m.torque(m.rated_speed, 50.0) == pytest.approx(m.rated_torque, rel=1e-12)
+    w_k = 2 * np.pi * 50 - m.breakdown_slip_speed
+    assert m.torque(w_k, 50.0) == pytest.approx(m.breakdown_ratio * m.rated_torque, rel=1e-12)
+    # constant flux: the same slip speed gives the same torque at 25 Hz
+    assert m.torque(np.pi * 50 - 10.0, 25.0) == pytest.approx(m.torque(2 * np.pi * 50 - 10.0, 50.0))
+    assert m.torque(2 * np.pi * 50, 50.0) == 0.0
+
+
+def test_schedules():
+    s = rig.parse_schedule("0 20; 3 30", "frequency_schedule")
+    assert rig.schedule_value(s, 2.9) == 20 and rig.schedule_value(s, 3.0) == 30
+    with pytest.raises(ValueError, match="frequency_schedule"):
+        rig.parse_schedule("0 20; 1", "frequency_schedule")
+    with pytest.raises(ValueError, match="increase"):
+        rig.parse_schedule("2 20; 1 30")
+    # every frequency meets every load
+    pairs = {(rig.series_value(t, 20, 50, 4, 3.0, 4), rig.series_value(t, 3, 8, 4, 3.0))
+             for t in np.arange(0.5, 48, 3.0)}
+    assert len(pairs) == 16
+
+
+def test_cli_bench_runup(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "bench", "--mode", "S2",
+                        "--scenario", "runup", "--out", str(tmp_path)], capture_output=True,
+                       text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    rec = tmp_path / "recording_S2_runup.csv"
+    assert rec.exists() and (tmp_path / "efficiency_S2_runup.csv").exists()
+    assert (tmp_path / "bench_S2_runup.png").stat().st_size > 10000
+    r = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "bench", "--scenario", "nope",
+                        "--out", str(tmp_path)], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_transducers_switchable(fmu_dir, tmp_path):
+    sc = Scenario("short", mode="S1", f_first=30, f_last=30, f_count=1, T_first=5, T_last=5,
+                  T_count=1, hold=1.5, duration=1.5)
+    spread = {}
+    for ideal in (True, False):
+        res = run_ssp(build_ssp(tmp_path / f"tb{ideal}.ssp", fmu_dir, sc, Sensors(ideal=ideal)), 1.5)
+        err = res["t_in.y"][-300:] - res["drive.tau_in"][-300:]
+        spread[ideal] = float(np.std(err))
+        if ideal:
+            # ideal: the reading is the true value (one step behind through the connection)
+            assert abs(float(np.mean(err))) < 1e-3
+    # the default transducer noise (0.003 N*m) shows, the ideal one does not
+    assert spread[False] > 0.002 and spread[True] < 0.001
