@@ -68,6 +68,7 @@ class Scenario:
     frequency_schedule: str = ""   # overrides the frequency series when given
     torque_schedule: str = ""      # overrides the torque series when given
     duration: float = 0.0          # 0: f_count * T_count * hold
+    J_out: float = 2.0e-3          # kg m^2 on the output shaft (brake drum, coupling, T30FN)
 
     @property
     def stop_time(self) -> float:
@@ -93,10 +94,11 @@ def scenario(name: str, mode: str = "S1") -> Scenario:
         return Scenario("loadstep", mode=mode, f_first=40, f_last=40, f_count=1,
                         torque_schedule="0 2; 3 7", hold=3.0, settle=1.5, duration=6.0)
     if name == "reversal":
-        # +40 Hz, then the regulator reverses to -40 Hz: while the output inertia is braked
-        # through the drive, power flows backwards for a moment (back-driving)
-        return Scenario("reversal", mode=mode, frequency_schedule="0 40; 3 -40", T_first=1.0,
-                        T_last=1.0, T_count=1, hold=3.0, settle=2.0, duration=8.0)
+        # +40 Hz, then the regulator reverses to -40 Hz. A flywheel on the output (0.05 kg m^2)
+        # and a light brake: while the regulator decelerates, the flywheel drives the reducer
+        # backwards (power flows from the output to the motor) until it has slowed down
+        return Scenario("reversal", mode=mode, frequency_schedule="0 40; 3 -40", T_first=0.05,
+                        T_last=0.05, T_count=1, hold=3.0, settle=2.0, duration=8.0, J_out=0.05)
     raise ValueError(f"scenario = {name!r}: must be one of paper, runup, loadstep, reversal")
 
 
@@ -130,6 +132,7 @@ def bench_parameters(sc: Scenario, sensors: Sensors = Sensors()) -> dict:
         "motor.loads_per_frequency": int(sc.T_count),
         "brake.T_first": float(sc.T_first), "brake.T_last": float(sc.T_last),
         "brake.T_count": int(sc.T_count), "brake.hold_time": float(sc.hold),
+        "brake.J_out": float(sc.J_out),
     }
     for name, scale, noise, res, gain, off in (
             ("t_in", 1.0, sensors.torque_noise, sensors.torque_resolution,
