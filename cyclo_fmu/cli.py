@@ -49,7 +49,8 @@ def cmd_efficiency(args) -> int:
     if not math.isfinite(args.torque):
         raise CycloidInputError("torque", args.torque, "must be a finite number of N*m")
     op = operating_point(design, a + b, rpm_to_rad_s(args.speed), args.torque)
-    losses = {k: float(v) for k, v in op.losses.as_dict().items()}
+    losses = {k: _json_num(v) for k, v in op.losses.as_dict().items()}
+    stalled = not bool(op.locked) and not math.isfinite(float(op.torques[b]))
     p_in = float(op.input_power)
     w_out = float(op.speeds[b])
     t_out = -float(op.torques[b])   # torque the output shaft delivers to the load
@@ -57,18 +58,26 @@ def cmd_efficiency(args) -> int:
     result = {
         "mode": op.mode, "flow_mode": flow, "held_shaft": h,
         "eta": None if bool(op.locked) else _json_num(op.eta),
-        "eta0": _json_num(op.eta0), "locked": bool(op.locked),
+        "eta0": _json_num(op.eta0), "locked": bool(op.locked), "stalled": stalled,
         "losses_W": losses,
-        "loss_share": {k: (v / p_in if p_in > 0 else None) for k, v in losses.items()},
-        "loss_power_W": float(op.loss_power),
-        "input_speed_rpm": args.speed, "input_torque_Nm": float(op.torques[a]),
-        "input_power_W": float(op.torques[a] * op.speeds[a]),
-        "output_speed_rpm": float(rad_s_to_rpm(w_out)), "output_torque_Nm": t_out,
-        "output_power_W": t_out * w_out,
-        "reaction_torque_Nm": float(op.torques[h]),
+        "loss_share": {k: (v / p_in if (v is not None and p_in > 0) else None)
+                       for k, v in losses.items()},
+        "loss_power_W": _json_num(op.loss_power),
+        "input_speed_rpm": args.speed, "input_torque_Nm": _json_num(op.torques[a]),
+        "input_power_W": _json_num(op.torques[a] * op.speeds[a]),
+        "output_speed_rpm": float(rad_s_to_rpm(w_out)), "output_torque_Nm": _json_num(t_out),
+        "output_power_W": _json_num(t_out * w_out),
+        "reaction_torque_Nm": _json_num(op.torques[h]),
     }
     if args.json:
         print(json.dumps(result, indent=2))
+        return 0
+    if stalled or (bool(op.locked) and not math.isfinite(t_out)):
+        why = ("self-locking: the drive cannot be back-driven into S, it holds"
+               if op.locked else "at this light load the load-dependent losses exceed the "
+               "power the drive would transmit: no steady motion (stall)")
+        print(f"cycloid drive, mode {op.mode}: no steady state at {args.speed} r/min, "
+              f"{args.torque} N*m: {why}")
         return 0
     print(f"cycloid drive, mode {op.mode} (shaft {a} drives, {b} driven, {h} held), "
           f"power flows {flow[0]} -> {flow[1]}")
@@ -161,7 +170,26 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _join_signed_numbers(argv):
+    """argparse takes '-1e-6' for an option; join it to its flag: --torque=-1e-6."""
+    out, i = [], 0
+    while i < len(argv):
+        a = argv[i]
+        if a in ("--speed", "--torque") and i + 1 < len(argv) and argv[i + 1].startswith("-"):
+            try:
+                float(argv[i + 1])
+                out.append(f"{a}={argv[i + 1]}")
+                i += 2
+                continue
+            except ValueError:
+                pass
+        out.append(a)
+        i += 1
+    return out
+
+
 def main(argv=None) -> int:
+    argv = _join_signed_numbers(list(sys.argv[1:] if argv is None else argv))
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)

@@ -151,8 +151,6 @@ class DriveDesign:
                                "paper's published efficiencies rest on Eq. (24); 'kinematic' gives "
                                "D_CZ/(2e) = 4.5 times less disc-pin sliding (README, Known "
                                "deviations).")
-    youngs_modulus: float = _f(206e9, "Pa", "Young's modulus of the steel parts (C45). Used by "
-                               "the linear law only through its documented stiffness.", "GPa", 1e9)
     contact_law: str = _f("hertz", "-", "Contact force law: 'hertz' (Palmgren line contact, "
                           "delta = 3.84e-5 Q^0.9 / l^0.8, mm and N; Harris, Rolling Bearing "
                           "Analysis) or 'linear' (Q = linear_stiffness * delta).")
@@ -201,8 +199,14 @@ class DriveDesign:
 def _check_finite(obj, prefix=""):
     for f in dataclasses.fields(obj):
         v = getattr(obj, f.name)
-        if isinstance(v, bool):
-            raise CycloidInputError(prefix + f.name, v, "must be a number, not a boolean")
+        if isinstance(f.default, str):
+            if not isinstance(v, str):
+                raise CycloidInputError(prefix + f.name, v, "must be a string")
+            continue
+        if not isinstance(f.default, (int, float)) or isinstance(f.default, bool):
+            continue
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise CycloidInputError(prefix + f.name, v, "must be a number")
         if isinstance(v, (int, float)) and not math.isfinite(v):
             raise CycloidInputError(prefix + f.name, v, "must be a finite number")
 
@@ -216,14 +220,16 @@ def validate_design(d: DriveDesign) -> None:
         v = getattr(d, name)
         if int(v) != v:
             raise CycloidInputError(name, v, "must be a whole number")
+        object.__setattr__(d, name, int(v))   # 15.0 -> 15: counts are used as integers
     if d.z1 < 3:
         raise CycloidInputError("z1", d.z1, "a cycloid drive needs at least 3 ring rollers")
-    if d.n_disc_rollers < 2:
-        raise CycloidInputError("n_disc_rollers", d.n_disc_rollers, "needs at least 2 disc rollers")
+    if d.n_disc_rollers < 3:
+        raise CycloidInputError("n_disc_rollers", d.n_disc_rollers, "needs at least 3 disc rollers "
+                                "(with 2, both can lie on the line of centres and carry nothing)")
     if d.n_positions < 2:
         raise CycloidInputError("n_positions", d.n_positions, "needs at least 2 mesh positions")
     for name in ("e", "lam", "d_v1", "d_o1", "b1", "d_v2", "d_o2", "b2", "d_m2", "D_cz", "D_p",
-                 "d_p", "youngs_modulus", "linear_stiffness", "torque_share"):
+                 "d_p", "linear_stiffness", "torque_share"):
         v = getattr(d, name)
         if not v > 0:
             raise CycloidInputError(name, v, "must be positive")

@@ -33,7 +33,7 @@ import numpy as np
 
 from . import kinematics
 from .errors import CycloidInputError
-from .losses import PartialLosses, partial_losses
+from .losses import LOSS_NAMES, PartialLosses, partial_losses
 
 _FIXED_POINT_TOL = 1e-9   # on eta0: the known torque is then reproduced to ~1e-8
 _FIXED_POINT_MAX = 30
@@ -70,7 +70,9 @@ class OperatingPoint:
     """Steady operating point of the drive (arrays broadcast over the inputs).
 
     speeds and torques: dicts keyed "1", "2", "S" (rad/s; N*m applied by the outside on the
-    shaft). ``eta`` is the efficiency of the actual power flow (NaN where locked or unloaded);
+    shaft). ``eta`` is the efficiency of the actual power flow (NaN where locked, unloaded, or
+    where the load-dependent losses exceed the power at a vanishing load: then torques and
+    losses are NaN too, as they are for a locked drive whose torque is given on S);
     ``flow_mode`` the mode the power actually flows in ("S1", or "1S" when back-driven).
     """
 
@@ -172,20 +174,47 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> Operat
         x1 = x2
         f1, L, T1 = eta0_from(x1)
         g1 = f1 - x1
+    # the secant can fail where the losses rival the power (very light load) or run into the
+    # locking pole; such points are solved again by bisection on the bracket (lo, 1], where
+    # g(1) <= 0. No root above lo: self-locking (known torque on S, w = -1) or a stall.
+    lo = np.where((wdir < 0) & (known == "S"), i0 * (1 + 1e-9), 1e-3)
+
+    def reproduced(eta0, T1):
+        c_k = torque_coefficients(guarded(eta0), wdir, i0)[idx[known]]
+        return np.abs(T1 * c_k - T_known) <= 1e-7 * np.abs(T_known) + 1e-300
+
+    ok = (np.abs(g1) <= 10 * _FIXED_POINT_TOL) & (f1 > lo) & (f1 <= 1) & reproduced(f1, T1)
+    solvable = np.ones_like(ok)
+    if not np.all(ok):
+        g_lo = eta0_from(lo)[0] - lo
+        solvable = g_lo >= 0
+        a_, b_ = lo.copy(), np.ones_like(lo)
+        for _ in range(60):
+            mid = 0.5 * (a_ + b_)
+            gm = eta0_from(np.where(ok, x1, mid))[0] - mid
+            a_, b_ = np.where(gm >= 0, mid, a_), np.where(gm >= 0, b_, mid)
+        x1 = np.where(ok, x1, 0.5 * (a_ + b_))
+        f1, L, T1 = eta0_from(x1)
     eta0 = f1   # consistent with the losses L evaluated at T1
     c = torque_coefficients(guarded(eta0), wdir, i0)
     # all torques from T1 and eta0, so that Kreines' rule and the energy balance hold exactly;
     # the known torque is reproduced to the fixed-point tolerance (about 1e-9 relative)
     torques = {"1": T1 * c[0], "2": T1 * c[1], "S": T1 * c[2]}
-    p_a, p_b = torques[a] * w[a], torques[b] * w[b]
     forward = (T_known * w[a] >= 0) if known == a else (T_known * w[b] <= 0)
+    flow_into_S = np.where(forward, b == "S", a == "S")
+    # self-locking: power flowing into S from 1 or 2 with eta0 <= i0 (Kreines formula <= 0)
+    locked = flow_into_S & ((eta0 <= i0) | ~solvable)
+    # no steady solution at all (locked with the torque given on S, or losses above the power)
+    undefined = ~solvable | (locked & (known == "S"))
+    nan = np.full_like(eta0, np.nan)
+    torques = {k: np.where(undefined, nan, v) for k, v in torques.items()}
+    L = PartialLosses(*(np.where(undefined, nan, getattr(L, n)) for n in LOSS_NAMES))
+    p_a, p_b = torques[a] * w[a], torques[b] * w[b]
     p_in = np.where(forward, p_a, p_b)
     p_out = -np.where(forward, p_b, p_a)
-    k_fwd = kreines_efficiency(mode, eta0, i0)
-    k_rev = kreines_efficiency(kinematics.reverse_mode(mode), eta0, i0)
-    locked = np.where(forward, k_fwd, k_rev) <= 0
     with np.errstate(divide="ignore", invalid="ignore"):
-        eta = np.where(locked | (p_in <= 0), np.nan, 1.0 - L.total / p_in)
+        eta = np.where(locked | undefined | ~(p_in > 0), np.nan, 1.0 - L.total / p_in)
+        eta = np.where(eta > 0, eta, np.nan)
     return OperatingPoint(mode=a + b, flow_forward=forward, speeds=w, torques=torques, eta=eta,
                           eta0=eta0, locked=locked, losses=L, input_power=p_in,
                           output_power=p_out, i0=i0)

@@ -51,6 +51,17 @@ class ModeMap:
             shares = np.stack([getattr(op.losses, n) for n in LOSS_NAMES], -1)
             shares = shares / np.maximum(shares.sum(-1, keepdims=True), 1e-300)
             table = np.concatenate([op.eta0[..., None], shares], -1)
+            # below the lightest load that runs (losses above the power, or locked with the
+            # torque on S) hold the values of the lightest running load along the torque axis
+            valid = np.isfinite(table).all(-1) & (table[..., 0] > 0)
+            if not valid.any():
+                raise ValueError(f"mode {self.mode}: no operating point of the map runs")
+            for j in range(table.shape[0]):
+                good = np.flatnonzero(valid[j])
+                src = good if good.size else np.flatnonzero(valid.any(0))
+                ref = table[j] if good.size else table[valid.any(1)][0]
+                idx = np.clip(np.searchsorted(src, np.arange(table.shape[1])), 0, src.size - 1)
+                table[j] = np.where(valid[j][:, None], table[j], ref[src[idx]])
             self._tables[forward] = table.tolist()          # [j_speed][i_torque][0: eta0, 1..: shares]
             w1p = (self.ratio[0] - self.ratio[2]) * WW
             self._wdir[forward] = 1 if float((op.torques["1"] * w1p).flat[0]) >= 0 else -1

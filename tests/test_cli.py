@@ -64,3 +64,15 @@ def test_paper_json(tmp_path):
     assert 0.6425 <= out["S1"]["mean"] <= 0.6625
     assert (tmp_path / "efficiency_S1_S2.png").stat().st_size > 10000
     assert (tmp_path / "partial_losses.png").stat().st_size > 10000
+
+
+def test_negative_scientific_torque_and_stall_message():
+    r = run("efficiency", "--mode", "S1", "--speed", "1000", "--torque", "-1e-6", "--json")
+    assert r.returncode == 0, r.stderr
+    json.loads(r.stdout)   # valid JSON (no NaN literals)
+    r = run("efficiency", "--mode", "S1", "--speed", "1000", "--torque", "1e-6")
+    assert r.returncode == 0, r.stderr
+    assert "stall" in r.stdout
+    out = json.loads(run("efficiency", "--mode", "S1", "--speed", "1000", "--torque", "1e-6",
+                         "--json").stdout)
+    assert out["stalled"] is True and out["eta"] is None

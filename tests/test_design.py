@@ -29,6 +29,9 @@ def test_defaults_are_the_paper_bench(design):
     (dict(ring_rollers="ball"), "ring_rollers"),
     (dict(torque_share=1.5), "torque_share"),
     (dict(friction=Friction(mu_boundary=-0.1)), "friction.mu_boundary"),
+    (dict(n_disc_rollers=2), "n_disc_rollers"),
+    (dict(lam="1.6"), "lam"),
+    (dict(z1=15.5), "z1"),
 ])
 def test_invalid_designs_name_the_field(changes, field):
     with pytest.raises(CycloidInputError) as info:
@@ -67,3 +70,7 @@ def test_toml_partial_and_errors(tmp_path):
         design_from_toml('[geometry]\ne_mm = "two"\n')
     with pytest.raises(CycloidInputError, match="cannot be read"):
         design_from_toml(tmp_path / "missing.toml")
+
+
+def test_whole_number_floats_become_ints():
+    assert DriveDesign(z1=15.0).z1 == 15 and isinstance(DriveDesign(z1=15.0).z1, int)

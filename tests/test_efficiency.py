@@ -61,10 +61,31 @@ def test_eq29_basic_efficiency(design):
 
 
 def test_same_relative_motion_same_losses(design):
-    """Losses depend only on the relative motion: S1 and 12 at the same w1-wS, T1 agree."""
-    op = operating_point(design, "S1", 200.0, 0.6)
-    L = partial_losses(design, abs(float(op.torques["1"])), float(op.speeds["2"] - op.speeds["S"]))
-    assert float(L.total) == pytest.approx(float(op.loss_power), rel=1e-9)
+    """Losses follow the relative motion: S1 and 12 at the same w1 - wS and T1 agree."""
+    s1 = operating_point(design, "S1", 200.0, 0.6)
+    w1_rel = float(s1.speeds["1"] - s1.speeds["S"])
+    m12 = operating_point(design, "12", w1_rel, float(s1.torques["1"]))
+    assert float(m12.speeds["2"]) == pytest.approx(float(s1.speeds["2"] - s1.speeds["S"]))
+    assert float(m12.loss_power) == pytest.approx(float(s1.loss_power), rel=1e-8)
+    assert float(m12.eta0) == pytest.approx(float(s1.eta0), rel=1e-10)
+    # and the mode efficiencies are Kreines' functions of that one eta0
+    assert float(s1.eta) == pytest.approx(float(kreines_efficiency("S1", m12.eta, I0)), rel=1e-8)
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_known_torque_reproduced_or_flagged_over_decades(design, mode):
+    """From 1e-6 to 10 N*m: the given torque is reproduced, or the point is flagged (stall)
+    with NaN torques; never a plausible-looking wrong answer."""
+    a = parse_mode(mode)[0]
+    T = np.geomspace(1e-6, 10.0, 15) * (1 if a == "S" else 12)
+    for sign in (1, -1):
+        op = operating_point(design, mode, _input_speed(mode), sign * T)
+        ok = np.isfinite(op.torques[a])
+        np.testing.assert_allclose(op.torques[a][ok], sign * T[ok], rtol=1e-6)
+        assert np.all(np.isnan(op.eta[~ok]))
+        assert ok[-5:].all()                       # the bench's torques always run
+        p_ext = sum(op.torques[s] * op.speeds[s] for s in "12S")
+        np.testing.assert_allclose(p_ext[ok], op.loss_power[ok], rtol=1e-8)
 
 
 def test_self_locking_back_drive_is_reported_locked():
@@ -72,6 +93,9 @@ def test_self_locking_back_drive_is_reported_locked():
     op = operating_point(sticky, "1S", rpm_to_rad_s(100), 8.0)
     assert float(op.eta0) < I0
     assert bool(op.locked) and np.isnan(op.eta)
+    # back-driven with the torque given on S: no finite torque can do it
+    held = operating_point(sticky, "S1", rpm_to_rad_s(1500), -0.6)
+    assert bool(held.locked) and np.isnan(held.torques["1"]) and np.isnan(held.eta)
     # the forward direction of the same drive still runs
     fwd = operating_point(sticky, "S1", rpm_to_rad_s(1500), 0.6)
     assert not bool(fwd.locked) and 0 < float(fwd.eta) < 1

@@ -9,7 +9,10 @@ from model_core.friction import benedict_kelley_mu, skf_frictional_moment
 def test_benedict_kelley_reference_value():
     # 200 N on 12 mm, eta = 0.18 Pa*s, V_s = 0.1, V_r = 0.5 m/s, smooth surfaces (C_R = 1)
     mu = benedict_kelley_mu(200 / 0.012, 0.18, 0.1, 0.5, 0.0, 1.0, 0.0)
-    assert mu == pytest.approx(0.0127 * np.log10(0.02966 * 200 / 0.012 / (0.18 * 0.1 * 0.25)), rel=1e-12)
+    # the original's US units: W' in lb/in, eta in cP, speeds in in/s, constant 3.17e8
+    w_lb_in = 200 / 4.4482216 / (12 / 25.4)
+    arg_us = 3.17e8 * w_lb_in / (180.0 * (0.1 / 0.0254) * (0.5 / 0.0254) ** 2)
+    assert mu == pytest.approx(0.0127 * np.log10(arg_us), rel=1e-4)
     assert mu == pytest.approx(0.064, abs=1e-3)
 
 
@@ -35,4 +38,9 @@ def test_skf_moment_scaling():
         skf_frictional_moment(100.0, 100.0, 0.025, 0.032, 200e-6, fr0)
     assert r == pytest.approx(2 ** 0.31, rel=1e-12)
     assert skf_frictional_moment(0.0, 100.0, 0.025, 0.032, 200e-6, fr) == 0.0
+    # absolute value, by hand in the catalogue's units: F_r = 100 N, n = 1000 r/min,
+    # d = 25, D = 32 mm, nu = 200 mm^2/s: M_rr = 0.9732 * 0.6617 * 0.014551 * 1516 N*mm,
+    # M_sl = 0.0015 * 28.5 * 100 * 0.02 N*mm  ->  about 14.29 N*mm
+    M = skf_frictional_moment(100.0, 1000 * np.pi / 30, 0.025, 0.032, 200e-6, fr)
+    assert M * 1e3 == pytest.approx(14.29, rel=5e-3)
     assert skf_frictional_moment(100.0, 0.0, 0.025, 0.032, 200e-6, fr) > 0  # M_sl at rest

@@ -18,6 +18,28 @@ def test_delta_prime_is_rate_of_contact_round_roller():
                                np.abs(velocities.delta_prime(phi, z1, lam)), rtol=1e-6)
 
 
+def test_sliding_speed_against_mesh_finite_differences():
+    """Move the ring and the gear a little (carrier held) and difference the material points at
+    the contact: their relative speed is the fixed-pin sliding speed (|DP| - r_c) omega_r."""
+    z1, e, lam, r_c = 15, 2e-3, 1.6, 6e-3
+    r_p, i0 = lam * e * z1, (z1 - 1) / z1
+    w2 = 10.0                      # gear speed relative to the carrier; ring: w1 = i0 * w2
+    w1 = i0 * w2
+    for phi in (0.6, 0.9, 1.2, 1.8):
+        D = r_p * np.array([np.cos(phi), np.sin(phi)])
+        P = np.array([e * z1, 0.0])
+        C = D + r_c * (P - D) / np.linalg.norm(P - D)      # contact point
+        h = 1e-7
+        rot = lambda a: np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+        O_c = np.array([e, 0.0])
+        v_ring = (rot(w1 * h) @ C - C) / h                  # ring turns about O_a = 0
+        v_gear = (rot(w2 * h) @ (C - O_c) + O_c - C) / h     # gear turns about O_c
+        slide = np.linalg.norm(v_ring - v_gear)
+        expected = velocities.ring_contact_sliding(phi, e, z1, lam, r_c,
+                                                   velocities.relative_ring_speed(w2, z1))
+        assert slide == pytest.approx(expected, rel=1e-5)
+
+
 def test_sliding_is_difference_of_surface_speeds():
     z1, e, lam, r_c, w = 15, 2e-3, 1.6, 6e-3, 10.0
     phi = np.linspace(0.9, 1.4, 5)   # around the most loaded roller, where v_rt, v_ra > 0
