@@ -138,6 +138,77 @@ def cmd_bench(args) -> int:
     return 0
 
 
+def cmd_synth(args) -> int:
+    from .synth import SIZES, synthesize, write_synth
+    from model_core.effects import EFFECTS
+    if args.effect not in EFFECTS:
+        raise CycloidInputError("effect", args.effect, f"must be one of {', '.join(EFFECTS)}")
+    if args.size not in SIZES:
+        raise CycloidInputError("size", args.size, f"must be one of {', '.join(SIZES)}")
+    mode = "".join(parse_mode(args.mode)[:2])
+    if mode not in ("S1", "S2"):
+        raise CycloidInputError("mode", mode, "the bench drives the eccentric shaft: S1 or S2")
+    rec = synthesize(args.effect, args.seed, mode, args.size)
+    path = write_synth(args.out, rec)
+    if args.truth:
+        from pathlib import Path
+        Path(args.truth).write_text(json.dumps(rec["truth"], indent=2))
+    print(f"wrote {path}: {len(rec['time_s'])} samples, {rec['time_s'][-1]:.0f} s, mode {mode}")
+    return 0
+
+
+def cmd_diagnose(args) -> int:
+    from pathlib import Path
+    from .diagnosis import Diagnoser, plot_diagnosis
+    from .recordings import RecordingError, parse_column_map, read_recording
+    design = _load_design(args.design)
+    mode = "".join(parse_mode(args.mode)[:2])
+    try:
+        columns = parse_column_map(args.columns) if args.columns else None
+        rec = read_recording(args.recording, columns)
+    except RecordingError as exc:
+        raise CycloidInputError("recording", args.recording, str(exc))
+    d = Diagnoser(design, mode).fit(rec)
+    result = d.to_json()
+    result["exclusions"] = [{"reason": e.reason, "count": e.count, "first_time_s": e.first_time}
+                            for e in rec.exclusions]
+    if args.out:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        plot_diagnosis(d, out)
+        (out / "diagnosis.json").write_text(json.dumps(result, indent=2))
+        err = d.parameters.get("mu_boundary_rel_error")
+        if err is not None:
+            from dataclasses import replace
+            from model_core import design_to_toml
+            fixed = replace(design, friction=replace(
+                design.friction, mu_boundary=design.friction.mu_boundary * (1 + err["value"])))
+            text = design_to_toml(fixed)
+            extra = {k: v for k, v in d.parameters.items() if k != "mu_boundary_rel_error"}
+            if extra:
+                text += (f"\n# diagnosed effect: {d.effect} ({d.effect_description})\n"
+                         + "".join(f"# {k} = {v['value']:.6g} {v['unit']}\n" for k, v in extra.items()))
+            (out / "design_updated.toml").write_text(text)
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return 0
+    for e in rec.exclusions:
+        print(f"excluded: {e.count} samples ({e.reason}) from t = {e.first_time:.3f} s")
+    print(f"located: {d.located['statement']}")
+    print(f"effect: {d.effect} - {d.effect_description}")
+    for k, v in d.parameters.items():
+        ci = f" [{v['ci95'][0]:.4g}, {v['ci95'][1]:.4g}]" if v["ci95"] else ""
+        print(f"  {k} = {v['value']:.5g} {v['unit']}{ci}")
+    if d.indistinguishable_from:
+        print(f"  cannot be told apart from: {', '.join(d.indistinguishable_from)}; "
+              f"a run that would: {d.suggested_test}")
+    print(f"held-out RMSE of input torque: {1e3 * d.rmse_before_Nm:.2f} -> "
+          f"{1e3 * d.rmse_after_Nm:.2f} mN*m; zeta_d (Eq. 31): {100 * d.zeta_d_before:.2f} -> "
+          f"{100 * d.zeta_d_after:.2f} %; residual whiteness p: {d.whiteness_before:.2g} -> "
+          f"{d.whiteness_after:.2g}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="cyclo-fmu", description="Cycloid-drive losses, efficiency and FMI tools.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -167,6 +238,22 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--ideal-sensors", action="store_true", help="switch transducer errors off")
     bench.add_argument("--seed", type=int, default=1, help="noise seed of the transducers")
     bench.set_defaults(func=cmd_bench)
+    sy = sub.add_parser("synth", help="write a bench recording with one hidden effect")
+    sy.add_argument("--effect", required=True, help="hidden effect id (see model_core.effects)")
+    sy.add_argument("--seed", type=int, default=1)
+    sy.add_argument("--mode", default="S1")
+    sy.add_argument("--size", default="small", help="small (2 min), medium (5), large (10)")
+    sy.add_argument("--out", required=True, help="recording CSV to write")
+    sy.add_argument("--truth", help="also write the hidden truth as JSON here")
+    sy.set_defaults(func=cmd_synth)
+    dg = sub.add_parser("diagnose", help="locate, explain and model the mismatch of a recording")
+    dg.add_argument("recording", help="recording CSV")
+    dg.add_argument("--mode", required=True)
+    dg.add_argument("--design", help="design file (TOML)")
+    dg.add_argument("--out", help="folder for plots, diagnosis.json, design_updated.toml")
+    dg.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
+    dg.add_argument("--json", action="store_true")
+    dg.set_defaults(func=cmd_diagnose)
     return p
 
 

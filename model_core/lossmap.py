@@ -63,6 +63,8 @@ class ModeMap:
                 idx = np.clip(np.searchsorted(src, np.arange(table.shape[1])), 0, src.size - 1)
                 table[j] = np.where(valid[j][:, None], table[j], ref[src[idx]])
             self._tables[forward] = table.tolist()          # [j_speed][i_torque][0: eta0, 1..: shares]
+            self._arrays = getattr(self, "_arrays", {})
+            self._arrays[forward] = table
             w1p = (self.ratio[0] - self.ratio[2]) * WW
             self._wdir[forward] = 1 if float((op.torques["1"] * w1p).flat[0]) >= 0 else -1
         self._lt = [math.log(t) for t in T]
@@ -124,3 +126,42 @@ class ModeMap:
         locked = flow[1] == "S" and eta0 <= self.i0
         eta = p_out / p_in if (p_in > 0 and not locked) else 0.0
         return speeds, torques, losses, eta, eta0, locked, forward
+
+    def solve_arrays(self, w_in, tau_out):
+        """Vectorised ``solve`` for recordings: arrays of driving speed (rad/s) and load torque
+        (N*m). Returns dict with speeds ``w_out``, torques ``tau_in``, ``tau_housing``,
+        ``P_loss`` (W), ``eta0`` and ``forward`` (bool)."""
+        w_in = np.asarray(w_in, float)
+        tau_out = np.asarray(tau_out, float)
+        r = self.ratio
+        k = self._k
+        speeds = [ri * w_in for ri in r]
+        forward = tau_out * speeds[k] <= 0
+        gt, gw = np.asarray(self._lt), np.asarray(self._lw)
+        with np.errstate(divide="ignore"):
+            lt = np.clip(np.log(np.abs(tau_out)), gt[0], gt[-1])
+            lw = np.clip(np.log(np.abs(w_in)), gw[0], gw[-1])
+        i = np.clip(np.searchsorted(gt, lt, side="right") - 1, 0, len(gt) - 2)
+        j = np.clip(np.searchsorted(gw, lw, side="right") - 1, 0, len(gw) - 2)
+        ft = (lt - gt[i]) / (gt[i + 1] - gt[i])
+        fw = (lw - gw[j]) / (gw[j + 1] - gw[j])
+        eta0 = np.empty_like(w_in)
+        for fwd in (True, False):
+            tab = self._arrays[fwd][..., 0]
+            sel = forward == fwd
+            a, b = tab[j, i], tab[j, i + 1]
+            c, d = tab[j + 1, i], tab[j + 1, i + 1]
+            val = (1 - fw) * ((1 - ft) * a + ft * b) + fw * ((1 - ft) * c + ft * d)
+            eta0 = np.where(sel, val, eta0)
+        wdir = np.where(forward, self._wdir[True], self._wdir[False])
+        e = np.where(wdir > 0, eta0, 1.0 / np.maximum(eta0, self.i0 * (1 + 1e-9))
+                     if k == 2 else 1.0 / eta0)
+        c2 = -self.i0 * e
+        c = (np.ones_like(c2), c2, -(1.0 + c2))
+        T1 = tau_out / c[k]
+        torques = [T1 * ci for ci in c]
+        p_loss = sum(t * w for t, w in zip(torques, speeds))
+        a_ = _SHAFT_INDEX[self.a]
+        h_ = _SHAFT_INDEX[self.h]
+        return {"w_out": speeds[k], "tau_in": torques[a_], "tau_housing": torques[h_],
+                "P_loss": p_loss, "eta0": eta0, "forward": forward}
