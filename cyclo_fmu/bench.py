@@ -120,7 +120,28 @@ class Sensors:
     seed: int = 1
 
 
-def bench_parameters(sc: Scenario, sensors: Sensors = Sensors()) -> dict:
+def drive_parameters(design: DriveDesign) -> dict:
+    """The reducer FMU's design parameters ('drive.<name>') for a design, where they differ from
+    the FMU's defaults (the paper's drive)."""
+    from .slaves.cycloid_drive import DESIGN_PARAMETERS
+    default = DriveDesign()
+    out = {}
+    for name, section, fld, unit, desc, kind in DESIGN_PARAMETERS:
+        owner = design if section is None else getattr(design, section)
+        base = default if section is None else getattr(default, section)
+        v, v0 = getattr(owner, fld), getattr(base, fld)
+        if v == v0:
+            continue
+        if isinstance(v, str):
+            raise ValueError(f"{fld} = {v!r}: fmpy's SSP master cannot set String parameters; "
+                             "run this design through the FMU directly")
+        out[f"drive.{name}"] = int(v) if kind.__name__ == "Integer" else float(v)
+    if design.friction.rolling_disc != design.friction.rolling_ring:
+        raise ValueError("friction.rolling_disc: the FMU has one rolling coefficient (mu_rolling)")
+    return out
+
+
+def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDesign = None) -> dict:
     """Parameter values 'component.variable' -> value for the SSV."""
     if sc.mode not in MODES:
         raise ValueError(f"mode = {sc.mode!r}: must be one of {', '.join(MODES)}")
@@ -134,6 +155,8 @@ def bench_parameters(sc: Scenario, sensors: Sensors = Sensors()) -> dict:
         "brake.T_count": int(sc.T_count), "brake.hold_time": float(sc.hold),
         "brake.J_out": float(sc.J_out),
     }
+    if design is not None:
+        p.update(drive_parameters(design))
     for name, scale, noise, res, gain, off in (
             ("t_in", 1.0, sensors.torque_noise, sensors.torque_resolution,
              sensors.torque_in_gain_error, sensors.torque_in_offset),
@@ -191,11 +214,13 @@ def _ssd(stop_time: float, bound: set) -> str:
             '</ssd:SystemStructureDescription>\n')
 
 
-def build_ssp(path, fmu_dir, sc: Scenario, sensors: Sensors = Sensors()) -> Path:
-    """Write TestBench.ssp with the FMUs from ``fmu_dir`` (built by build_fmu)."""
+def build_ssp(path, fmu_dir, sc: Scenario, sensors: Sensors = Sensors(),
+              design: DriveDesign = None) -> Path:
+    """Write TestBench.ssp with the FMUs from ``fmu_dir`` (built by build_fmu); ``design``
+    sets the reducer's parameters (default: the FMU's, the paper's drive)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    params = bench_parameters(sc, sensors)
+    params = bench_parameters(sc, sensors, design)
     per_component = {}
     for key, value in params.items():
         comp, var = key.split(".", 1)
@@ -281,14 +306,14 @@ class BenchRun:
 
 
 def run_bench(sc: Scenario, fmu_dir, out_dir=None, sensors: Sensors = Sensors(),
-              step: float = 1e-3) -> BenchRun:
+              step: float = 1e-3, design: DriveDesign = None) -> BenchRun:
     """Build the SSP, simulate it, and (with ``out_dir``) write recording, windows and plots."""
     parse_mode(sc.mode)
     out = Path(out_dir) if out_dir else None
-    ssp = build_ssp((out or Path(fmu_dir)) / "TestBench.ssp", fmu_dir, sc, sensors)
+    ssp = build_ssp((out or Path(fmu_dir)) / "TestBench.ssp", fmu_dir, sc, sensors, design)
     result = run_ssp(ssp, sc.stop_time, step)
     rec = recording_from_result(result)
-    windows = steady_windows(rec, sc, DriveDesign())
+    windows = steady_windows(rec, sc, design or DriveDesign())
     run = BenchRun(sc, rec, windows, result)
     if out is not None:
         write_recording(out / f"recording_{sc.mode}_{sc.name}.csv", rec)

@@ -127,7 +127,12 @@ def cmd_bench(args) -> int:
     fmu_dir = out / "fmus"
     for name in SLAVES:
         build_fmu(name, fmu_dir)
-    run = run_bench(sc, fmu_dir, out, Sensors(ideal=args.ideal_sensors, seed=args.seed))
+    design = _load_design(args.design)
+    try:
+        run = run_bench(sc, fmu_dir, out, Sensors(ideal=args.ideal_sensors, seed=args.seed),
+                        design=design)
+    except ValueError as exc:
+        raise CycloidInputError("design", args.design, str(exc))
     print(f"bench: mode {sc.mode}, scenario {sc.name}, {sc.stop_time:.0f} s simulated; "
           f"files in {out}")
     if run.windows:
@@ -177,18 +182,11 @@ def cmd_diagnose(args) -> int:
         out.mkdir(parents=True, exist_ok=True)
         plot_diagnosis(d, out)
         (out / "diagnosis.json").write_text(json.dumps(result, indent=2))
-        err = d.parameters.get("mu_boundary_rel_error")
-        if err is not None:
-            from dataclasses import replace
-            from model_core import design_to_toml
-            fixed = replace(design, friction=replace(
-                design.friction, mu_boundary=design.friction.mu_boundary * (1 + err["value"])))
-            text = design_to_toml(fixed)
-            extra = {k: v for k, v in d.parameters.items() if k != "mu_boundary_rel_error"}
-            if extra:
-                text += (f"\n# diagnosed effect: {d.effect} ({d.effect_description})\n"
-                         + "".join(f"# {k} = {v['value']:.6g} {v['unit']}\n" for k, v in extra.items()))
-            (out / "design_updated.toml").write_text(text)
+        from model_core import design_to_toml
+        from .diagnosis import updated_design
+        fixed, notes = updated_design(design, d)
+        (out / "design_updated.toml").write_text(design_to_toml(fixed) + "".join(
+            f"# {n}\n" for n in notes))
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
@@ -237,6 +235,8 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--out", default="out/bench", help="output folder (default: out/bench)")
     bench.add_argument("--ideal-sensors", action="store_true", help="switch transducer errors off")
     bench.add_argument("--seed", type=int, default=1, help="noise seed of the transducers")
+    bench.add_argument("--design", help="design file (TOML) for the reducer, e.g. the "
+                       "design_updated.toml a diagnosis wrote")
     bench.set_defaults(func=cmd_bench)
     sy = sub.add_parser("synth", help="write a bench recording with one hidden effect")
     sy.add_argument("--effect", required=True, help="hidden effect id (see model_core.effects)")

@@ -177,7 +177,6 @@ class Diagnoser:
         w_out, T_out = rec.speed_out, rec.torque_out
         dt = float(np.median(np.diff(t)))
         T_model, loss_in = self.replay(t, w_in, T_in, w_out, T_out)
-        T_model_f = _first_order(T_model, dt, self.bandwidth)
         sens_f = _first_order(self.friction_sensitivity(t, w_in, T_in, w_out, T_out, T_model),
                               dt, self.bandwidth)
         # smooth the measured speed before differentiating it (20 ms)
@@ -186,6 +185,10 @@ class Diagnoser:
         w_s = uniform_filter1d(w_in, m_s, mode="nearest")
         sig = signals_for_effects(t, w_s, loss_in, self.mode, self.design.z1,
                                   getattr(rec, "temperature", None))
+        # the design's own extra physics (after an earlier diagnosis) belongs to the model
+        from model_core.effects import extra_torque
+        T_model = T_model + extra_torque(self.design.extra, sig)
+        T_model_f = _first_order(T_model, dt, self.bandwidth)
         m = max(1, int(round(self.block / dt)))
         y = _block_means(T_in - T_model_f, m)
         tb = _block_means(t, m)
@@ -363,3 +366,33 @@ def plot_diagnosis(d: Diagnosis, out) -> list:
     fig.savefig(f, dpi=100)
     plt.close(fig)
     return [f]
+
+
+def updated_design(design: DriveDesign, d: Diagnosis):
+    """The design with the diagnosed physics switched on (design.extra) and the friction level
+    corrected; notes for what is not physics of the drive (a transducer offset)."""
+    from dataclasses import replace
+    p = {k: v["value"] for k, v in d.parameters.items()}
+    fr = design.friction
+    if "mu_boundary_rel_error" in p:
+        fr = replace(fr, mu_boundary=fr.mu_boundary * (1 + p["mu_boundary_rel_error"]))
+    ex = design.extra
+    notes = []
+    if d.effect == "load_independent_loss":
+        ex = replace(ex, drag_torque=max(p["T_drag"], 0.0))
+    elif d.effect == "low_speed_friction":
+        ex = replace(ex, stribeck_torque=max(p["T_stribeck"], 0.0), stribeck_speed=p["w_s"])
+    elif d.effect == "inertia":
+        ex = replace(ex, input_inertia=max(p["J"], 0.0))
+    elif d.effect == "mesh_ripple":
+        ex = replace(ex, ripple_1x=math.hypot(p["A1_sin"], p["A1_cos"]),
+                     ripple_1x_phase=math.atan2(p["A1_cos"], p["A1_sin"]),
+                     ripple_roller=math.hypot(p["Az_sin"], p["Az_cos"]),
+                     ripple_roller_phase=math.atan2(p["Az_cos"], p["Az_sin"]))
+    elif d.effect == "thermal_drift":
+        ex = replace(ex, thermal_loss_change=p["loss_change"], thermal_tau=p["tau"])
+    elif d.effect == "torque_sensor_offset":
+        notes.append(f"diagnosed: input torque transducer zero offset {p['offset']:.6g} N*m "
+                     "(a sensor fault, not physics of the drive: re-zero the transducer)")
+    notes.insert(0, f"updated by cyclo-fmu diagnose: effect {d.effect}")
+    return replace(design, friction=fr, extra=ex), notes

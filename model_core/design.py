@@ -101,6 +101,37 @@ class Friction:
 
 
 @dataclass(frozen=True)
+class ExtraPhysics:
+    """Physics beyond the paper's load-dependent losses, switched on by a diagnosis
+    (model_core.effects). All zero by default: the paper's model. Torques act at the driving
+    shaft (the eccentric shaft on the bench), in the sense of its motion."""
+
+    drag_torque: float = _f(0.0, "N*m", "load-independent drag at 300 rad/s of the driving "
+                            "shaft, growing as (speed)^(2/3) (churning, seals, bearing drag)")
+    stribeck_torque: float = _f(0.0, "N*m", "extra friction at standstill of the driving shaft, "
+                                "decaying as exp(-(w/w_s)^2)")
+    stribeck_speed: float = _f(40.0, "rad/s", "Stribeck speed w_s")
+    input_inertia: float = _f(0.0, "kg*m^2", "unmodelled inertia at the driving shaft "
+                              "(dynamic: FMU and bench only)")
+    ripple_1x: float = _f(0.0, "N*m", "torque ripple amplitude at 1x the driving speed (dynamic)")
+    ripple_1x_phase: float = _f(0.0, "rad", "phase of the 1x ripple (sin(theta + phase))")
+    ripple_roller: float = _f(0.0, "N*m", "torque ripple amplitude at the roller-pass order "
+                              "(dynamic)")
+    ripple_roller_phase: float = _f(0.0, "rad", "phase of the roller-pass ripple")
+    thermal_loss_change: float = _f(0.0, "1", "relative change of the losses when warm (dynamic)")
+    thermal_tau: float = _f(300.0, "s", "warm-up time constant")
+
+    def steady_torque(self, w):
+        """Drag and Stribeck torque at driving speed w (rad/s), N*m, signed with the motion."""
+        import numpy as _np
+        w = _np.asarray(w, float)
+        t = self.drag_torque * (_np.abs(w) / 300.0) ** (2.0 / 3.0)
+        if self.stribeck_torque:
+            t = t + self.stribeck_torque * _np.exp(-(w / self.stribeck_speed) ** 2)
+        return _np.sign(w) * t
+
+
+@dataclass(frozen=True)
 class DriveDesign:
     """A constrained (1-DOF) cycloid drive: central ring 1 with z1 rollers, cycloid gear(s) with
     z1-1 teeth, disc 2 with k rollers in holes of the gear, eccentric shaft S.
@@ -160,6 +191,7 @@ class DriveDesign:
                           "averaged (the efficiency changes by < 5e-5 from 8 to 64).")
     lubricant: Lubricant = field(default_factory=Lubricant)
     friction: Friction = field(default_factory=Friction)
+    extra: ExtraPhysics = field(default_factory=ExtraPhysics)
 
     def __post_init__(self):
         validate_design(self)
@@ -216,6 +248,14 @@ def validate_design(d: DriveDesign) -> None:
     _check_finite(d)
     _check_finite(d.lubricant, "lubricant.")
     _check_finite(d.friction, "friction.")
+    _check_finite(d.extra, "extra.")
+    for name in ("stribeck_speed", "thermal_tau"):
+        if not getattr(d.extra, name) > 0:
+            raise CycloidInputError("extra." + name, getattr(d.extra, name), "must be positive")
+    for name in ("drag_torque", "stribeck_torque", "input_inertia"):
+        if getattr(d.extra, name) < 0:
+            raise CycloidInputError("extra." + name, getattr(d.extra, name),
+                                    "must not be negative")
     for name in ("z1", "n_disc_rollers", "n_positions"):
         v = getattr(d, name)
         if int(v) != v:
@@ -303,7 +343,7 @@ def _toml_key(f) -> str:
 def _section_to_dict(obj) -> dict:
     out = {}
     for f in dataclasses.fields(obj):
-        if f.name in ("lubricant", "friction"):
+        if f.name in ("lubricant", "friction", "extra"):
             continue
         v = getattr(obj, f.name)
         if isinstance(v, float):
@@ -313,7 +353,8 @@ def _section_to_dict(obj) -> dict:
 
 
 def _section_from_dict(cls, data: dict, section: str) -> dict:
-    keys = {_toml_key(f): f for f in dataclasses.fields(cls) if f.name not in ("lubricant", "friction")}
+    keys = {_toml_key(f): f for f in dataclasses.fields(cls)
+            if f.name not in ("lubricant", "friction", "extra")}
     kwargs = {}
     for key, value in data.items():
         if key not in keys:
@@ -338,7 +379,8 @@ def _section_from_dict(cls, data: dict, section: str) -> dict:
 def design_to_dict(design: DriveDesign) -> dict:
     """The design as nested dict in design-file units (mm, mm^2/s, um)."""
     return {"geometry": _section_to_dict(design), "lubricant": _section_to_dict(design.lubricant),
-            "friction": _section_to_dict(design.friction)}
+            "friction": _section_to_dict(design.friction),
+            "extra": _section_to_dict(design.extra)}
 
 
 def design_from_dict(data: dict) -> DriveDesign:
@@ -346,16 +388,17 @@ def design_from_dict(data: dict) -> DriveDesign:
     if not isinstance(data, dict):
         raise CycloidInputError("design", data, "must be a table")
     for section in data:
-        if section not in ("geometry", "lubricant", "friction"):
+        if section not in ("geometry", "lubricant", "friction", "extra"):
             raise CycloidInputError(f"[{section}]", "...", "unknown section in design file "
-                                    "(known: geometry, lubricant, friction)")
-    for section in ("geometry", "lubricant", "friction"):
+                                    "(known: geometry, lubricant, friction, extra)")
+    for section in ("geometry", "lubricant", "friction", "extra"):
         if not isinstance(data.get(section, {}), dict):
             raise CycloidInputError(f"[{section}]", data[section], "must be a table")
     lub = Lubricant(**_section_from_dict(Lubricant, data.get("lubricant", {}), "lubricant"))
     fr = Friction(**_section_from_dict(Friction, data.get("friction", {}), "friction"))
     geo = _section_from_dict(DriveDesign, data.get("geometry", {}), "geometry")
-    return DriveDesign(lubricant=lub, friction=fr, **geo)
+    ex = ExtraPhysics(**_section_from_dict(ExtraPhysics, data.get("extra", {}), "extra"))
+    return DriveDesign(lubricant=lub, friction=fr, extra=ex, **geo)
 
 
 def _toml_value(v) -> str:

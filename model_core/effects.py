@@ -128,3 +128,26 @@ EFFECTS = {
         (Parameter("loss_scale_error", "1", -0.5, 0.5, "relative error of the model's losses"),)),
     "none": Effect("none", "the model explains the data within its noise", ()),
 }
+
+
+def extra_torque(extra, s: dict) -> np.ndarray:
+    """Torque (N*m) at the driving shaft of a design's ``extra`` physics (design.ExtraPhysics),
+    from the same terms the diagnosis fits; steady (drag, Stribeck) and dynamic (inertia,
+    ripple, warm-up) parts."""
+    n = len(s["t"])
+    total = np.zeros(n)
+    if extra.drag_torque:
+        total += EFFECTS["load_independent_loss"].torque(s, [extra.drag_torque])
+    if extra.stribeck_torque:
+        total += EFFECTS["low_speed_friction"].torque(s, [extra.stribeck_torque],
+                                                     extra.stribeck_speed)
+    if extra.input_inertia:
+        total += EFFECTS["inertia"].torque(s, [extra.input_inertia])
+    if extra.ripple_1x or extra.ripple_roller:
+        a1, p1 = extra.ripple_1x, extra.ripple_1x_phase
+        az, pz = extra.ripple_roller, extra.ripple_roller_phase
+        total += EFFECTS["mesh_ripple"].torque(
+            s, [a1 * np.cos(p1), a1 * np.sin(p1), az * np.cos(pz), az * np.sin(pz)])
+    if extra.thermal_loss_change:
+        total += EFFECTS["thermal_drift"].torque(s, [extra.thermal_loss_change], extra.thermal_tau)
+    return total

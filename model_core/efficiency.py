@@ -130,6 +130,11 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> Operat
         raise CycloidInputError("speed", 0.0, "zero input speed gives no direction of motion "
                                 "(the efficiency is undefined at standstill)")
     i0 = design.i0
+    # physics beyond the paper (design.extra): a drag/Stribeck torque at the driving shaft; the
+    # gear itself sees the rest
+    T_extra = design.extra.steady_torque(w_in)
+    if known == a:
+        T_known = T_known - T_extra
     w = kinematics.shaft_speeds(mode, w_in, design.z1)
     w1p, w2p = kinematics.relative_speeds(w["1"], w["2"], w["S"])
     idx = {"1": 0, "2": 1, "S": 2}
@@ -208,7 +213,9 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> Operat
     undefined = ~solvable | (locked & (known == "S"))
     nan = np.full_like(eta0, np.nan)
     torques = {k: np.where(undefined, nan, v) for k, v in torques.items()}
-    L = PartialLosses(*(np.where(undefined, nan, getattr(L, n)) for n in LOSS_NAMES))
+    torques[a] = torques[a] + T_extra
+    L = PartialLosses(*(np.where(undefined, nan, getattr(L, n)) for n in LOSS_NAMES),
+                      P_extra=np.where(undefined, nan, T_extra * w[a]))
     p_a, p_b = torques[a] * w[a], torques[b] * w[b]
     p_in = np.where(forward, p_a, p_b)
     p_out = -np.where(forward, p_b, p_a)

@@ -39,10 +39,11 @@ class PartialLosses:
     PL3: np.ndarray
     PL5: np.ndarray
     PL6: np.ndarray
+    P_extra: np.ndarray = 0.0   # W, design.extra (drag, Stribeck) at the driving shaft
 
     @property
     def total(self) -> np.ndarray:
-        return self.PL1 + self.PL2 + self.PL3 + self.PL5 + self.PL6
+        return self.PL1 + self.PL2 + self.PL3 + self.PL5 + self.PL6 + self.P_extra
 
     def as_dict(self) -> dict:
         return {name: getattr(self, name) for name in LOSS_NAMES}

@@ -50,6 +50,21 @@ DESIGN_PARAMETERS = [
     ("pin_roughness", "friction", "pin_roughness", "m", "composite roughness of pin and roller bore", Real),
     ("mu_rolling", "friction", "rolling_ring", "1",
      "rolling-resistance coefficient of the rollers (ring and disc)", Real),
+    # physics beyond the paper, switched on by a diagnosis (design [extra])
+    ("drag_torque", "extra", "drag_torque", "N.m",
+     "load-independent drag at 300 rad/s of the driving shaft, ~ speed^(2/3)", Real),
+    ("stribeck_torque", "extra", "stribeck_torque", "N.m", "extra friction at standstill", Real),
+    ("stribeck_speed", "extra", "stribeck_speed", "rad/s", "Stribeck speed", Real),
+    ("input_inertia", "extra", "input_inertia", "kg.m2", "unmodelled inertia at the driving shaft",
+     Real),
+    ("ripple_1x", "extra", "ripple_1x", "N.m", "ripple at 1x the driving speed", Real),
+    ("ripple_1x_phase", "extra", "ripple_1x_phase", "rad", "phase of the 1x ripple", Real),
+    ("ripple_roller", "extra", "ripple_roller", "N.m", "ripple at the roller-pass order", Real),
+    ("ripple_roller_phase", "extra", "ripple_roller_phase", "rad", "phase of the roller ripple",
+     Real),
+    ("thermal_loss_change", "extra", "thermal_loss_change", "1",
+     "relative change of the losses when warm", Real),
+    ("thermal_tau", "extra", "thermal_tau", "s", "warm-up time constant", Real),
 ]
 
 OUTPUT_LOSSES = ("PL1", "PL2", "PL3", "PL5", "PL6")
@@ -92,20 +107,25 @@ class CycloidDrive(UnitSlave):
         self.output("eta0", 1.0, "1", "basic efficiency (carrier held)", depends=both)
         self.output("locked", False, None, "self-locking back-drive holds: the driving shaft "
                     "must push although the load drives", depends=both, kind=Boolean)
+        self.output("P_extra", 0.0, "W", "power of the physics beyond the paper (drag, Stribeck, "
+                    "inertia, ripple, warm-up) at the driving shaft", depends=both)
+        self._theta = 0.0
+        self._w_last = None
         self._map = None
         self._design = None
         self._warned_range = False
 
     # -- life cycle ---------------------------------------------------------------------------
     def _build_design(self):
-        changes, lub, fr = {}, {}, {}
+        changes, lub, fr, ex = {}, {}, {}, {}
         for name, section, field, unit, desc, kind in DESIGN_PARAMETERS:
             v = getattr(self, name)
-            {None: changes, "lubricant": lub, "friction": fr}[section][field] = v
+            {None: changes, "lubricant": lub, "friction": fr, "extra": ex}[section][field] = v
         fr["rolling_disc"] = fr["rolling_ring"]
         base = core.DriveDesign()
         return dataclasses.replace(base, lubricant=dataclasses.replace(base.lubricant, **lub),
-                                   friction=dataclasses.replace(base.friction, **fr), **changes)
+                                   friction=dataclasses.replace(base.friction, **fr),
+                                   extra=dataclasses.replace(base.extra, **ex), **changes)
 
     def exit_initialization_mode(self):
         try:
@@ -126,16 +146,24 @@ class CycloidDrive(UnitSlave):
                     raise core.CycloidInputError(name, v, "must be a positive number")
             self._map = None if self.exact else core.lossmap.ModeMap(
                 self._design, self._mode, self.map_torque_max, self.map_speed_max)
+            ex = self._design.extra
+            self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
+            self._dynamic_extra = bool(ex.input_inertia or ex.ripple_1x or ex.ripple_roller
+                                       or ex.thermal_loss_change)
+            unit = core.shaft_speeds(self._mode, 1.0, self._design.z1)
+            self._ratio_out = float(unit[b])
+            # roller pass: z1 per turn of the ring relative to the carrier, per driving turn
+            self._order = self._design.z1 * abs(float(unit["1"] - unit["S"])) / abs(float(unit[a]))
         except (core.CycloidInputError, TypeError) as exc:
             self.fail(f"invalid parameter: {exc}")
         self._update()
 
     def do_step(self, current_time, step_size):
-        self._update()
+        self._update(current_time + step_size, step_size)
         return True
 
     # -- physics ------------------------------------------------------------------------------
-    def _update(self):
+    def _update(self, t=0.0, dt=0.0):
         w_in, tau_out = self.w_in, self.tau_out
         if not (math.isfinite(w_in) and math.isfinite(tau_out)):
             self.require_finite(w_in=w_in, tau_out=tau_out)
@@ -149,13 +177,39 @@ class CycloidDrive(UnitSlave):
                          Fmi2Status.warning, "logStatusWarning")
             ia, ib, ih = self._shaft_index
             self.w_out = speeds[ib]
-            self.tau_in = torques[ia]
+            self.tau_in = self._tau_in_gear = torques[ia]
             self.tau_housing = torques[ih]
             self.PL1, self.PL2, self.PL3, self.PL5, self.PL6 = losses
+            if self._steady_extra:
+                self.tau_in += float(self._design.extra.steady_torque(w_in))
         else:
             speeds, torques, losses, eta, eta0, locked = self._exact(w_in, tau_out)
+        if self._dynamic_extra:
+            self.tau_in += self._dynamic_torque(t, dt, w_in, tau_out)
+        self.P_extra = (self.tau_in - self._tau_in_gear) * w_in
         self.P_loss = self.tau_in * w_in + tau_out * self.w_out
+        if self._steady_extra or self._dynamic_extra:
+            p_in = max(self.tau_in * w_in, tau_out * self.w_out)
+            p_out = -min(self.tau_in * w_in, tau_out * self.w_out)
+            eta = p_out / p_in if (p_in > 0 and p_out > 0 and not locked) else 0.0
         self.eta, self.eta0, self.locked = eta, eta0, locked
+
+    def _dynamic_torque(self, t, dt, w_in, tau_out):
+        """Inertia, ripple and warm-up terms at the driving shaft (model_core.effects)."""
+        ex = self._design.extra
+        alpha = 0.0 if (self._w_last is None or dt <= 0) else (w_in - self._w_last) / dt
+        if dt > 0:
+            self._theta += w_in * dt
+            self._w_last = w_in
+        elif self._w_last is None:
+            self._w_last = w_in
+        th = self._theta
+        lossless = -tau_out * self._ratio_out
+        loss_in = self._tau_in_gear - lossless
+        return (ex.input_inertia * alpha
+                + ex.ripple_1x * math.sin(th + ex.ripple_1x_phase)
+                + ex.ripple_roller * math.sin(self._order * th + ex.ripple_roller_phase)
+                + ex.thermal_loss_change * (1.0 - math.exp(-t / ex.thermal_tau)) * loss_in)
 
     def _exact(self, w_in, tau_out):
         a, b = self._mode[0], self._mode[1]
@@ -163,12 +217,13 @@ class CycloidDrive(UnitSlave):
         w = core.shaft_speeds(self._mode, w_in, self._design.z1)
         self.w_out = float(w[b])
         if w_in == 0 or tau_out == 0:
-            self.tau_in = self.tau_housing = 0.0
+            self.tau_in = self.tau_housing = self._tau_in_gear = 0.0
             for n in OUTPUT_LOSSES:
                 setattr(self, n, 0.0)
             return None, None, None, 0.0, 1.0, False
         op = core.operating_point(self._design, self._mode, w_in, T_out=tau_out)
         self.tau_in = float(op.torques[a])
+        self._tau_in_gear = self.tau_in - float(self._design.extra.steady_torque(w_in))
         self.tau_housing = float(op.torques[h])
         for n in OUTPUT_LOSSES:
             setattr(self, n, float(getattr(op.losses, n)))
