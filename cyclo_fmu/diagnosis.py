@@ -171,8 +171,10 @@ class Diagnoser:
             se = np.full(k, np.nan)
         return coef, rss, cv, se
 
-    def fit(self, rec) -> Diagnosis:
-        """Diagnose a recording (cyclo_fmu.recordings.Recording, SI units)."""
+    def prepare(self, rec) -> dict:
+        """Replay and the regression problem in 10 ms block means: the residual ``y`` (measured -
+        model input torque), the friction-level column ``fric``, ``columns(effect_id, shape)``
+        for any candidate, and the block-mean signals (time, speed, output torque)."""
         t, w_in, T_in = rec.time, rec.speed_in, rec.torque_in
         w_out, T_out = rec.speed_out, rec.torque_out
         dt = float(np.median(np.diff(t)))
@@ -190,23 +192,36 @@ class Diagnoser:
         T_model = T_model + extra_torque(self.design.extra, sig)
         T_model_f = _first_order(T_model, dt, self.bandwidth)
         m = max(1, int(round(self.block / dt)))
-        y = _block_means(T_in - T_model_f, m)
-        tb = _block_means(t, m)
+        fric = _block_means(sens_f, m)[:, None]
+
+        def columns(eid, shape=None):
+            if eid == "none":
+                return np.zeros((len(fric), 0))
+            if eid == "friction_miscalibrated":
+                return fric
+            B = _first_order(EFFECTS[eid].basis(sig, shape), dt, self.bandwidth)
+            return np.hstack([fric, _block_means(B, m)])
+        return {"y": _block_means(T_in - T_model_f, m), "t": _block_means(t, m), "fric": fric,
+                "columns": columns, "w_in": _block_means(w_in, m),
+                "T_out": _block_means(T_out, m), "T_in": _block_means(T_in, m),
+                "alpha": _block_means(sig["alpha_in"], m), "m": m, "dt": dt, "sig": sig,
+                "sens_f": sens_f, "T_model": T_model, "T_model_f": T_model_f}
+
+    def fit(self, rec) -> Diagnosis:
+        """Diagnose a recording (cyclo_fmu.recordings.Recording, SI units)."""
+        t, w_in, T_in = rec.time, rec.speed_in, rec.torque_in
+        w_out, T_out = rec.speed_out, rec.torque_out
+        P = self.prepare(rec)
+        y, tb, fric, m, dt, sig = P["y"], P["t"], P["fric"], P["m"], P["dt"], P["sig"]
+        sens_f, T_model, T_model_f = P["sens_f"], P["T_model"], P["T_model_f"]
         n = len(y)
         folds = np.minimum((np.arange(n) * self.n_folds) // n, self.n_folds - 1)
-        fric = _block_means(sens_f, m)[:, None]
         fits = []
         for eid, eff in EFFECTS.items():
             shapes = eff.shape or (None,)
             best = None
             for shape in shapes:
-                if eid == "none":
-                    X = np.zeros((n, 0))
-                elif eid == "friction_miscalibrated":
-                    X = fric
-                else:
-                    B = _first_order(eff.basis(sig, shape), dt, self.bandwidth)
-                    X = np.hstack([fric, _block_means(B, m)])
+                X = P["columns"](eid, shape)
                 coef, rss, cv, se = self._fit_one(y, X, folds)
                 if best is None or rss < best[2]:
                     best = (shape, coef, rss, cv, se, X.shape[1])
