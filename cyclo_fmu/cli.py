@@ -144,7 +144,7 @@ def cmd_bench(args) -> int:
 
 
 def cmd_synth(args) -> int:
-    from .synth import SIZES, synthesize, write_synth
+    from .synth import PLANS, SIZES, synthesize, write_synth  # noqa: F401
     from model_core.effects import EFFECTS
     if args.effect not in EFFECTS:
         raise CycloidInputError("effect", args.effect, f"must be one of {', '.join(EFFECTS)}")
@@ -153,7 +153,10 @@ def cmd_synth(args) -> int:
     mode = "".join(parse_mode(args.mode)[:2])
     if mode not in ("S1", "S2"):
         raise CycloidInputError("mode", mode, "the bench drives the eccentric shaft: S1 or S2")
-    rec = synthesize(args.effect, args.seed, mode, args.size)
+    from .synth import PLANS
+    if args.plan not in PLANS:
+        raise CycloidInputError("plan", args.plan, f"must be one of {', '.join(PLANS)}")
+    rec = synthesize(args.effect, args.seed, mode, args.size, plan=args.plan)
     path = write_synth(args.out, rec)
     if args.truth:
         from pathlib import Path
@@ -245,6 +248,8 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--size", default="small", help="small (2 min), medium (5), large (10)")
     sy.add_argument("--out", required=True, help="recording CSV to write")
     sy.add_argument("--truth", help="also write the hidden truth as JSON here")
+    sy.add_argument("--plan", default="full", help="test plan: full (speed, load, direction "
+                    "varied) or one_speed (load steps at 2000 r/min only)")
     sy.set_defaults(func=cmd_synth)
     dg = sub.add_parser("diagnose", help="locate, explain and model the mismatch of a recording")
     dg.add_argument("recording", help="recording CSV")

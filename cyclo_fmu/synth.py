@@ -55,12 +55,22 @@ class SynthSettings:
     J_out: float = 2.0e-3           # kg m^2
 
 
-def test_plan(duration: float, rng: np.random.Generator):
-    """Setpoints [(t_start, input speed r/min, output brake torque N*m)] over ``duration``."""
-    speeds = [300.0, 600.0, 1200.0, 2000.0, 2800.0]
+PLANS = ("full", "one_speed")
+
+
+def test_plan(duration: float, rng: np.random.Generator, plan: str = "full"):
+    """Setpoints [(t_start, input speed r/min, output brake torque N*m)] over ``duration``.
+    ``full`` varies speed (both directions), load and time; ``one_speed`` only steps the load
+    at 2000 r/min forward, a poor plan under which some effects look alike."""
+    if plan not in PLANS:
+        raise ValueError(f"plan = {plan!r}: must be one of {', '.join(PLANS)}")
+    speeds = [300.0, 600.0, 1200.0, 2000.0, 2800.0] if plan == "full" else [2000.0]
     loads = [2.0, 4.5, 7.5]
     steps = [(n, T) for n in speeds for T in loads]
-    steps += [(-n, T) for n in (600.0, 1600.0, 2800.0) for T in (3.0, 7.0)]
+    if plan == "full":
+        steps += [(-n, T) for n in (600.0, 1600.0, 2800.0) for T in (3.0, 7.0)]
+    else:
+        steps = steps * 4
     hold = duration / len(steps)
     order = rng.permutation(len(steps))
     return [(k * hold, steps[i][0], steps[i][1]) for k, i in enumerate(order)], hold
@@ -89,7 +99,8 @@ def signals_for_effects(t, w_in, loss_in, mode, z1, temperature=None):
 
 def synthesize(effect: str, seed: int, mode: str = "S1", size: str = "small",
                design: DriveDesign = None, settings: SynthSettings = SynthSettings(),
-               friction_error: float = None, effect_values: dict = None, shape=None) -> dict:
+               friction_error: float = None, effect_values: dict = None, shape=None,
+               plan: str = "full") -> dict:
     """A recording dict (schema columns, SI-free edge units r/min and N*m) plus ``truth``."""
     if effect not in EFFECTS:
         raise ValueError(f"effect = {effect!r}: must be one of {', '.join(EFFECTS)}")
@@ -103,7 +114,7 @@ def synthesize(effect: str, seed: int, mode: str = "S1", size: str = "small",
     duration = SIZES[size]
     dt = 1.0 / settings.sample_rate
     t = np.arange(int(round(duration * settings.sample_rate))) * dt
-    plan, hold = test_plan(duration, rng)
+    plan, hold = test_plan(duration, rng, plan)
     # speed: ramped setpoints, then the motor's first-order response
     n_set = np.zeros_like(t)
     T_set = np.zeros_like(t)

@@ -132,3 +132,18 @@ def test_transducers_switchable(fmu_dir, tmp_path):
             assert abs(float(np.mean(err))) < 1e-3
     # the default transducer noise (0.003 N*m) shows, the ideal one does not
     assert spread[False] > 0.002 and spread[True] < 0.001
+
+
+def test_bench_runs_an_updated_design(fmu_dir, tmp_path):
+    """A design with diagnosed physics (drag) goes to the reducer FMU through the SSV, and the
+    bench's steady efficiency matches the core with that physics."""
+    from model_core import DriveDesign
+    from model_core.design import ExtraPhysics
+    d = DriveDesign(extra=ExtraPhysics(drag_torque=0.02))
+    sc = Scenario("short", mode="S1", f_first=40, f_last=40, f_count=1, T_first=5, T_last=5,
+                  T_count=1, hold=2.0, settle=1.2, duration=2.0)
+    run = run_bench(sc, fmu_dir, tmp_path, Sensors(ideal=True), design=d)
+    (w,) = run.windows
+    assert abs(w["eta"] - w["eta_core"]) < 0.002
+    plain = run_bench(sc, fmu_dir, tmp_path, Sensors(ideal=True))
+    assert plain.windows[0]["eta"] - w["eta"] > 0.01       # the drag costs efficiency

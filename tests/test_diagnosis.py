@@ -65,3 +65,18 @@ def test_whiteness_test_separates_noise_from_structure():
     noise = rng.standard_normal(5000)
     assert ljung_box_p(noise) > 0.01
     assert ljung_box_p(noise + 3 * np.sin(np.arange(5000) / 50)) < 1e-6
+
+
+def test_says_when_the_data_cannot_tell_effects_apart():
+    """One speed, one direction, no run-up: an offset, a drag and a Stribeck torque are all
+    constants. The diagnosis must say so and name the run that would separate them."""
+    r = synthesize("torque_sensor_offset", 3, "S1", "small", plan="one_speed")
+    keep = r["time_s"] > 5.0
+    rec = as_recording({k: (v[keep] if k != "truth" else v) for k, v in r.items()})
+    d = Diagnoser(mode="S1").fit(rec)
+    assert d.effect in ("torque_sensor_offset", "load_independent_loss", "low_speed_friction")
+    assert {"torque_sensor_offset", "load_independent_loss"} <= set(d.indistinguishable_from + [d.effect])
+    assert "both directions" in d.suggested_test
+    # with the full plan the same offset is named without doubt
+    full = Diagnoser(mode="S1").fit(as_recording(synthesize("torque_sensor_offset", 3, "S1", "small")))
+    assert full.effect == "torque_sensor_offset" and full.indistinguishable_from == []
