@@ -321,6 +321,18 @@ class Diagnoser:
                 if sel.sum() > 5:
                     cells[f"speed {sl}, load {tl}"] = float(np.mean(rs[sel]))
         worst = max(cells, key=lambda c: abs(cells[c])) if cells else ""
+        # at a given speed: relative mismatch at light vs heavy load (the paper's observation
+        # that theory and experiment agree worse at low input power)
+        light, heavy = [], []
+        for i in range(3):
+            sp = moving & (np.digitize(aw, qs) == i)
+            if sp.sum() > 10:
+                lo_t, hi_t = np.quantile(aT[sp], [1 / 3, 2 / 3])
+                for sel, acc in ((sp & (aT <= lo_t), light), (sp & (aT >= hi_t), heavy)):
+                    if sel.any():
+                        acc.append(np.mean(rs[sel]) / max(np.mean(np.abs(T_in[sel])), 1e-12))
+        rel_light = float(np.mean(light)) if light else float("nan")
+        rel_heavy = float(np.mean(heavy)) if heavy else float("nan")
         low_p = moving & (p < np.quantile(p[moving], 0.33))
         high_p = moving & (p > np.quantile(p[moving], 0.67))
         rel_low = float(np.mean(rs[low_p]) / max(np.mean(np.abs(T_in[low_p])), 1e-12))
@@ -331,6 +343,9 @@ class Diagnoser:
                      f"at {worst}" if worst else "no operating region stands out")
         parts.append(f"relative to the input torque the mismatch is {100 * rel_low:+.1f} % at low "
                      f"and {100 * rel_high:+.1f} % at high input power")
+        if math.isfinite(rel_light) and abs(rel_light) > 1.5 * abs(rel_heavy):
+            parts.append(f"at a given speed it is larger at light load ({100 * rel_light:+.1f} % "
+                         f"against {100 * rel_heavy:+.1f} % at heavy load)")
         parts.append(("the missing torque grows with speed" if c_speed > 0.3 else
                       "it falls with speed" if c_speed < -0.3 else "it does not follow speed")
                      + (", scales with load" if abs(c_load) > 0.3 else ", does not scale with load"))
@@ -346,7 +361,9 @@ class Diagnoser:
                 "corr_speed": c_speed, "corr_load": c_load, "corr_time": c_time,
                 "corr_acceleration": c_acc, "mean_forward_Nm": mean_fwd,
                 "mean_reverse_Nm": mean_rev, "by_region_Nm": cells,
-                "relative_low_power": rel_low, "relative_high_power": rel_high}
+                "relative_low_power": rel_low, "relative_high_power": rel_high,
+                "relative_light_load_same_speed": rel_light,
+                "relative_heavy_load_same_speed": rel_heavy}
 
 
 def plot_diagnosis(d: Diagnosis, out) -> list:
