@@ -122,13 +122,17 @@ class ExtraPhysics:
     thermal_tau: float = _f(300.0, "s", "warm-up time constant")
 
     def steady_torque(self, w):
-        """Drag and Stribeck torque at driving speed w (rad/s), N*m, signed with the motion."""
+        """Drag and Stribeck torque at driving speed w (rad/s), N*m, signed with the motion:
+        the same terms the diagnosis fits (model_core.effects)."""
         import numpy as _np
+        from .effects import EFFECTS
         w = _np.asarray(w, float)
-        t = self.drag_torque * (_np.abs(w) / 300.0) ** (2.0 / 3.0)
+        s = {"w_in": _np.atleast_1d(w).ravel()}
+        t = self.drag_torque * EFFECTS["load_independent_loss"].basis(s)[:, 0]
         if self.stribeck_torque:
-            t = t + self.stribeck_torque * _np.exp(-(w / self.stribeck_speed) ** 2)
-        return _np.sign(w) * t
+            t = t + self.stribeck_torque * EFFECTS["low_speed_friction"].basis(
+                s, self.stribeck_speed)[:, 0]
+        return t.reshape(w.shape)
 
 
 @dataclass(frozen=True)
