@@ -18,20 +18,9 @@ def main():
         rec = synthesize("thermal_drift", 1, "S1", "large")
         write_synth(path, rec)
         t_synth = time.perf_counter() - t
-        try:
-            from cyclo_fmu.recordings import read_recording
-        except ImportError:
-            read_recording = None
+        from cyclo_fmu.recordings import read_recording
         t = time.perf_counter()
-        if read_recording is not None:
-            r = read_recording(path)
-        else:   # the reader lands with the next increment
-            import numpy as np
-            from types import SimpleNamespace
-            r = SimpleNamespace(time=rec["time_s"], speed_in=rec["speed_in_rpm"] * np.pi / 30,
-                                torque_in=rec["torque_in_Nm"], temperature=None,
-                                speed_out=rec["speed_out_rpm"] * np.pi / 30,
-                                torque_out=rec["torque_out_Nm"])
+        r = read_recording(path)
         t_read = time.perf_counter() - t
         t = time.perf_counter()
         d = Diagnoser(mode="S1").fit(r)
