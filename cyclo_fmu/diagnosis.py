@@ -265,6 +265,11 @@ class Diagnoser:
         y_after = _block_means(T_in - T_model_f - fitted, m)
         located = self._locate(tb, y, _block_means(w_in, m), _block_means(T_out, m),
                                _block_means(T_in, m), _block_means(sig["alpha_in"], m))
+        located.update(self._orders(T_in - T_model_f, sig))
+        if located["orders"]:
+            located["statement"] = located["statement"][:-1] + "; it sits at " + ", ".join(
+                f"{k} of the input speed ({1e3 * v:.1f} mN*m)"
+                for k, v in located["orders"].items()) + "."
         z_before = self._zeta_d(w_in, T_in, w_out, T_out, T_model, m)
         z_after = self._zeta_d(w_in, T_in, w_out, T_out, T_model + fitted, m)
         return Diagnosis(
@@ -292,6 +297,27 @@ class Diagnoser:
         eta_model = p_out[sel].sum() / p_in_model[sel].sum()
         eta_meas = p_out[sel].sum() / p_in[sel].sum()
         return float(eta_model - eta_meas)
+
+    @staticmethod
+    def _orders(r, sig):
+        """Amplitude of the raw residual at the 1x and roller-pass orders of the input speed
+        (least-squares projection on sin/cos of the shaft angle), where it stands out."""
+        th, k = sig["theta_in"], sig["order_roller"]
+        moving = np.abs(sig["w_in"]) > 0.05 * np.max(np.abs(sig["w_in"]))
+        if moving.sum() < 100:
+            return {"orders": {}}
+        B = np.stack([np.sin(th), np.cos(th), np.sin(k * th), np.cos(k * th),
+                      np.ones_like(th)], -1)[moving]
+        rr = r[moving] - np.mean(r[moving])
+        coef, *_ = np.linalg.lstsq(B, rr, rcond=None)
+        sigma = float(np.std(rr - B @ coef))
+        se = sigma * math.sqrt(2.0 / len(rr))           # standard error of one amplitude
+        out = {}
+        for name, (a, b) in (("1x", coef[0:2]), (f"order {k:g} (roller pass)", coef[2:4])):
+            amp = math.hypot(a, b)
+            if amp > 8 * se:
+                out[name] = amp
+        return {"orders": out}
 
     @staticmethod
     def _locate(t, r, w, T_out, T_in, alpha):

@@ -82,3 +82,13 @@ def test_says_when_the_data_cannot_tell_effects_apart():
     # with the full plan the same offset is named without doubt
     full = Diagnoser(mode="S1").fit(as_recording(synthesize("torque_sensor_offset", 3, "S1", "small")))
     assert full.effect == "torque_sensor_offset" and full.indistinguishable_from == []
+
+
+def test_locates_ripple_at_shaft_orders():
+    d = Diagnoser(mode="S1").fit(as_recording(synthesize("mesh_ripple", 4, "S1", "small")))
+    true_1x = np.hypot(DEFAULT_EFFECTS["mesh_ripple"][0]["A1_sin"],
+                       DEFAULT_EFFECTS["mesh_ripple"][0]["A1_cos"])
+    assert d.located["orders"]["1x"] == pytest.approx(true_1x, rel=0.1)
+    assert "sits at 1x" in d.located["statement"]
+    clean = Diagnoser(mode="S1").fit(as_recording(synthesize("none", 4, "S1", "small")))
+    assert clean.located["orders"] == {}
