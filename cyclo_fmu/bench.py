@@ -250,6 +250,69 @@ def run_ssp(ssp_path, stop_time: float, step: float = 1e-3):
     return simulate_ssp(str(ssp_path), stop_time=stop_time, step_size=step, parameter_set=params)
 
 
+def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3):
+    """The same bench as ``run_ssp`` (components, connections, fixed-step Jacobi with all
+    connector values starting at 0, rows holding post-step values), run by a small fmpy master
+    that can also set String parameters (fmpy's SSP master cannot), e.g. a motor
+    ``frequency_schedule``. Returns a structured array with the same fields as ``run_ssp``."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+    comps = {}
+    try:
+        for name, (fmu, connectors) in COMPONENTS.items():
+            path = str(Path(fmu_dir) / f"{fmu}.fmu")
+            md = read_model_description(path)
+            var = {v.name: v for v in md.modelVariables}
+            f = FMU2Slave(guid=md.guid, unzipDirectory=extract(path),
+                          modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+            f.instantiate()
+            f.setupExperiment(startTime=0.0)
+            for key, value in params.items():
+                comp, vname = key.split(".", 1)
+                if comp != name:
+                    continue
+                v = var[vname]
+                if v.type == "Real":
+                    f.setReal([v.valueReference], [float(value)])
+                elif v.type == "Integer":
+                    f.setInteger([v.valueReference], [int(value)])
+                elif v.type == "Boolean":
+                    f.setBoolean([v.valueReference], [bool(value)])
+                else:
+                    f.setString([v.valueReference], [str(value)])
+            f.enterInitializationMode()
+            f.exitInitializationMode()
+            ins = [(c, var[c].valueReference) for c, k in connectors if k == "input"]
+            outs = [(c, var[c].valueReference) for c, k in connectors if k == "output"]
+            comps[name] = (f, ins, outs)
+        value = {(n, c): 0.0 for n, (_, cons) in COMPONENTS.items() for c, _ in cons}
+        feeds = {(c, d): (a, b) for a, b, c, d in CONNECTIONS}
+        fields = [f"{n}.{c}" for n, (_, cons) in COMPONENTS.items() for c, _ in cons]
+        n_steps = int(round(stop_time / step))
+        rows = np.empty((n_steps, len(fields) + 1))
+        for k in range(n_steps):
+            t = k * step
+            for name, (f, ins, outs) in comps.items():
+                if ins:
+                    f.setReal([vr for _, vr in ins], [value[(name, c)] for c, _ in ins])
+                f.doStep(currentCommunicationPoint=t, communicationStepSize=step)
+                for (c, _), v in zip(outs, f.getReal([vr for _, vr in outs])):
+                    value[(name, c)] = v
+            for (c, d), (a, b) in feeds.items():
+                value[(c, d)] = value[(a, b)]
+            rows[k, 0] = t
+            rows[k, 1:] = [value[tuple(fl.split(".", 1))] for fl in fields]
+    finally:
+        for f, _, _ in comps.values():
+            f.terminate()
+            f.freeInstance()
+    out = np.empty(n_steps, dtype=[("time", float)] + [(fl, float) for fl in fields])
+    out["time"] = rows[:, 0]
+    for i, fl in enumerate(fields):
+        out[fl] = rows[:, i + 1]
+    return out
+
+
 def recording_from_result(result) -> dict:
     """The bench's recording (the schema a real bench writes) from the SSP result."""
     return {

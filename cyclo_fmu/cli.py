@@ -156,7 +156,10 @@ def cmd_synth(args) -> int:
     from .synth import PLANS
     if args.plan not in PLANS:
         raise CycloidInputError("plan", args.plan, f"must be one of {', '.join(PLANS)}")
-    rec = synthesize(args.effect, args.seed, mode, args.size, plan=args.plan)
+    from .synth import ENGINES
+    if args.engine not in ENGINES:
+        raise CycloidInputError("engine", args.engine, f"must be one of {', '.join(ENGINES)}")
+    rec = synthesize(args.effect, args.seed, mode, args.size, plan=args.plan, engine=args.engine)
     path = write_synth(args.out, rec)
     if args.truth:
         from pathlib import Path
@@ -245,11 +248,14 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--effect", required=True, help="hidden effect id (see model_core.effects)")
     sy.add_argument("--seed", type=int, default=1)
     sy.add_argument("--mode", default="S1")
-    sy.add_argument("--size", default="small", help="small (2 min), medium (5), large (10)")
+    sy.add_argument("--size", default="small", help="tiny (42 s), small (2 min), medium (5), "
+                    "large (10)")
     sy.add_argument("--out", required=True, help="recording CSV to write")
     sy.add_argument("--truth", help="also write the hidden truth as JSON here")
     sy.add_argument("--plan", default="full", help="test plan: full (speed, load, direction "
                     "varied) or one_speed (load steps at 2000 r/min only)")
+    sy.add_argument("--engine", default="fast", help="fast (the bench's components replayed "
+                    "vectorised) or bench (the bench's FMUs co-simulated; slower)")
     sy.set_defaults(func=cmd_synth)
     dg = sub.add_parser("diagnose", help="locate, explain and model the mismatch of a recording")
     dg.add_argument("recording", help="recording CSV")

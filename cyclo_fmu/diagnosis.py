@@ -34,6 +34,9 @@ SEPARATING_TEST = {
     "friction_miscalibrated": "a load sweep at constant speed",
 }
 DELTA_BIC = 10.0     # 'very strong' evidence on the Kass-Raftery scale
+PRACTICAL = 0.10     # and at least 10 % less held-out RMSE: long recordings make tiny,
+#                      meaningless terms (e.g. a time skew between channels) 'significant'
+
 
 
 @dataclass
@@ -239,9 +242,12 @@ class Diagnoser:
         base = by_id["none"]
         fr = by_id["friction_miscalibrated"]
         best = ranked[0]
-        if best.id not in ("none", "friction_miscalibrated") and fr.bic - best.bic < DELTA_BIC:
+        # statistically (BIC) and practically (held-out RMSE down by PRACTICAL) better
+        if best.id not in ("none", "friction_miscalibrated") and (
+                fr.bic - best.bic < DELTA_BIC or best.cv_rmse > (1 - PRACTICAL) * fr.cv_rmse):
             best = fr
-        if best.id == "friction_miscalibrated" and base.bic - fr.bic < DELTA_BIC:
+        if best.id == "friction_miscalibrated" and (
+                base.bic - fr.bic < DELTA_BIC or fr.cv_rmse > (1 - PRACTICAL) * base.cv_rmse):
             best = base
         close = [f.id for f in ranked if f.id not in (best.id, "none", "friction_miscalibrated")
                  and f.bic - best.bic < DELTA_BIC]

@@ -26,7 +26,8 @@ from model_core.lossmap import ModeMap
 
 from .bench import RECORDING_COLUMNS, write_recording
 
-SIZES = {"small": 120.0, "medium": 300.0, "large": 600.0}
+SIZES = {"tiny": 42.0, "small": 120.0, "medium": 300.0, "large": 600.0}
+ENGINES = ("fast", "bench")
 
 #: hidden-effect sizes: comparable with the transducer noise (0.003 N*m), invisible by eye
 DEFAULT_EFFECTS = {
@@ -100,7 +101,7 @@ def signals_for_effects(t, w_in, loss_in, mode, z1, temperature=None):
 def synthesize(effect: str, seed: int, mode: str = "S1", size: str = "small",
                design: DriveDesign = None, settings: SynthSettings = SynthSettings(),
                friction_error: float = None, effect_values: dict = None, shape=None,
-               plan: str = "full") -> dict:
+               plan: str = "full", engine: str = "fast", fmu_dir=None) -> dict:
     """A recording dict (schema columns, SI-free edge units r/min and N*m) plus ``truth``."""
     if effect not in EFFECTS:
         raise ValueError(f"effect = {effect!r}: must be one of {', '.join(EFFECTS)}")
@@ -109,6 +110,8 @@ def synthesize(effect: str, seed: int, mode: str = "S1", size: str = "small",
     a, b, h = parse_mode(mode)
     if a != "S":
         raise ValueError(f"mode = {mode!r}: the bench drives the eccentric shaft (S1 or S2)")
+    if engine not in ENGINES:
+        raise ValueError(f"engine = {engine!r}: must be one of {', '.join(ENGINES)}")
     design = design or DriveDesign()
     rng = np.random.default_rng(seed)
     duration = SIZES[size]
@@ -139,6 +142,12 @@ def synthesize(effect: str, seed: int, mode: str = "S1", size: str = "small",
             friction_error = math.copysign(0.06 + abs(friction_error), friction_error or 1.0)
     true_design = replace(design, friction=replace(
         design.friction, mu_boundary=design.friction.mu_boundary * (1 + friction_error)))
+    values, eff_shape = DEFAULT_EFFECTS[effect]
+    values = dict(values, **(effect_values or {}))
+    eff_shape = shape if shape is not None else eff_shape
+    if engine == "bench":
+        return _through_the_bench(effect, values, eff_shape, true_design, plan, hold, mode,
+                                  duration, seed, settings, friction_error, fmu_dir)
     tmax = float(np.max(np.abs(tau_out))) * 1.05 + 1e-6
     wmax = float(np.max(np.abs(w_in))) * 1.05 + 1e-6
     true_map = ModeMap(true_design, mode, tmax, wmax)
@@ -147,9 +156,6 @@ def synthesize(effect: str, seed: int, mode: str = "S1", size: str = "small",
     lossless = -tau_out * w_out / np.where(w_in == 0, np.inf, w_in)
     loss_in = tau_in - lossless
     eff = EFFECTS[effect]
-    values, eff_shape = DEFAULT_EFFECTS[effect]
-    values = dict(values, **(effect_values or {}))
-    eff_shape = shape if shape is not None else eff_shape
     sig = signals_for_effects(t, w_in, loss_in, mode, design.z1)
     # friction_miscalibrated hides nothing but the friction error itself
     extra = eff.torque(sig, [values[p.name] for p in eff.parameters], eff_shape) \
@@ -204,4 +210,54 @@ def paper_like(mode: str = "S1", seed: int = 1, size: str = "small", **kw) -> di
     rec = synthesize("load_independent_loss", seed, mode, size, friction_error=friction_error,
                      effect_values={"T_drag": T_drag}, **kw)
     rec["truth"]["zeta_d_target"] = target
+    return rec
+
+
+def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, duration, seed,
+                       settings, friction_error, fmu_dir):
+    """The recording from the bench's FMUs (motor, reducer, brake, transducers): the hidden
+    effect switched on in the reducer FMU's extra physics (or the transducer's zero offset),
+    the setpoints of the plan as the motor's and brake's schedules."""
+    import tempfile
+    from .bench import COMPONENTS, Scenario, Sensors, bench_parameters, recording_from_result, run_fmus
+    from .fmu_build import build_fmu
+    ex = true_design.extra
+    sensors = Sensors(bandwidth=settings.bandwidth, torque_noise=settings.torque_noise,
+                      torque_resolution=settings.torque_resolution,
+                      speed_noise=settings.speed_noise, speed_resolution=settings.speed_resolution,
+                      seed=seed,
+                      torque_in_offset=values.get("offset", 0.0) if effect == "torque_sensor_offset" else 0.0)
+    if effect == "load_independent_loss":
+        ex = replace(ex, drag_torque=values["T_drag"])
+    elif effect == "low_speed_friction":
+        ex = replace(ex, stribeck_torque=values["T_stribeck"], stribeck_speed=shape)
+    elif effect == "inertia":
+        ex = replace(ex, input_inertia=values["J"])
+    elif effect == "mesh_ripple":
+        ex = replace(ex, ripple_1x=math.hypot(values["A1_sin"], values["A1_cos"]),
+                     ripple_1x_phase=math.atan2(values["A1_cos"], values["A1_sin"]),
+                     ripple_roller=math.hypot(values["Az_sin"], values["Az_cos"]),
+                     ripple_roller_phase=math.atan2(values["Az_cos"], values["Az_sin"]))
+    elif effect == "thermal_drift":
+        ex = replace(ex, thermal_loss_change=values["loss_change"], thermal_tau=shape)
+    design = replace(true_design, extra=ex)
+    pole_pairs = 1
+    f_sched = "; ".join(f"{t0:.6g} {n * pole_pairs / 60:.6g}" for t0, n, _ in steps)
+    T_sched = "; ".join(f"{t0:.6g} {T:.6g}" for t0, _, T in steps)
+    sc = Scenario("synth", mode=mode, frequency_schedule=f_sched, torque_schedule=T_sched,
+                  duration=duration, hold=hold, J_out=settings.J_out)
+    params = bench_parameters(sc, sensors, design)
+    params["motor.frequency_schedule"] = f_sched
+    params["brake.torque_schedule"] = T_sched
+    params["motor.ramp_rate"] = settings.ramp_rate / 60.0       # r/min per s -> Hz per s
+    with tempfile.TemporaryDirectory() as tmp:
+        d = fmu_dir or tmp
+        if fmu_dir is None:
+            for name in sorted({f for f, _ in COMPONENTS.values()}):
+                build_fmu(name, d)
+        res = run_fmus(d, params, duration, 1.0 / settings.sample_rate)
+    rec = recording_from_result(res)
+    rec["truth"] = {"effect": effect, "values": values, "shape": shape,
+                    "friction_error": friction_error, "mode": mode, "seed": seed,
+                    "engine": "bench"}
     return rec
