@@ -440,23 +440,11 @@ def updated_design(design: DriveDesign, d: Diagnosis):
     fr = design.friction
     if "mu_boundary_rel_error" in p:
         fr = replace(fr, mu_boundary=fr.mu_boundary * (1 + p["mu_boundary_rel_error"]))
-    ex = design.extra
-    notes = []
-    if d.effect == "load_independent_loss":
-        ex = replace(ex, drag_torque=max(p["T_drag"], 0.0))
-    elif d.effect == "low_speed_friction":
-        ex = replace(ex, stribeck_torque=max(p["T_stribeck"], 0.0), stribeck_speed=p["w_s"])
-    elif d.effect == "inertia":
-        ex = replace(ex, input_inertia=max(p["J"], 0.0))
-    elif d.effect == "mesh_ripple":
-        ex = replace(ex, ripple_1x=math.hypot(p["A1_sin"], p["A1_cos"]),
-                     ripple_1x_phase=math.atan2(p["A1_cos"], p["A1_sin"]),
-                     ripple_roller=math.hypot(p["Az_sin"], p["Az_cos"]),
-                     ripple_roller_phase=math.atan2(p["Az_cos"], p["Az_sin"]))
-    elif d.effect == "thermal_drift":
-        ex = replace(ex, thermal_loss_change=p["loss_change"], thermal_tau=p["tau"])
-    elif d.effect == "torque_sensor_offset":
+    from model_core.effects import switch_on
+    shape = p.get(EFFECTS[d.effect].shape_name) if EFFECTS[d.effect].shape else None
+    ex = switch_on(design.extra, d.effect, p, shape)
+    notes = [f"updated by cyclo-fmu diagnose: effect {d.effect}"]
+    if d.effect == "torque_sensor_offset":
         notes.append(f"diagnosed: input torque transducer zero offset {p['offset']:.6g} N*m "
                      "(a sensor fault, not physics of the drive: re-zero the transducer)")
-    notes.insert(0, f"updated by cyclo-fmu diagnose: effect {d.effect}")
     return replace(design, friction=fr, extra=ex), notes

@@ -20,7 +20,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from model_core import DriveDesign
-from model_core.effects import EFFECTS
+from model_core.effects import EFFECTS, switch_on
 from model_core.kinematics import parse_mode, shaft_speeds
 from model_core.lossmap import ModeMap
 
@@ -227,19 +227,7 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
                       speed_noise=settings.speed_noise, speed_resolution=settings.speed_resolution,
                       seed=seed,
                       torque_in_offset=values.get("offset", 0.0) if effect == "torque_sensor_offset" else 0.0)
-    if effect == "load_independent_loss":
-        ex = replace(ex, drag_torque=values["T_drag"])
-    elif effect == "low_speed_friction":
-        ex = replace(ex, stribeck_torque=values["T_stribeck"], stribeck_speed=shape)
-    elif effect == "inertia":
-        ex = replace(ex, input_inertia=values["J"])
-    elif effect == "mesh_ripple":
-        ex = replace(ex, ripple_1x=math.hypot(values["A1_sin"], values["A1_cos"]),
-                     ripple_1x_phase=math.atan2(values["A1_cos"], values["A1_sin"]),
-                     ripple_roller=math.hypot(values["Az_sin"], values["Az_cos"]),
-                     ripple_roller_phase=math.atan2(values["Az_cos"], values["Az_sin"]))
-    elif effect == "thermal_drift":
-        ex = replace(ex, thermal_loss_change=values["loss_change"], thermal_tau=shape)
+    ex = switch_on(ex, effect, values, shape)
     design = replace(true_design, extra=ex)
     pole_pairs = 1
     f_sched = "; ".join(f"{t0:.6g} {n * pole_pairs / 60:.6g}" for t0, n, _ in steps)

@@ -151,3 +151,26 @@ def extra_torque(extra, s: dict) -> np.ndarray:
     if extra.thermal_loss_change:
         total += EFFECTS["thermal_drift"].torque(s, [extra.thermal_loss_change], extra.thermal_tau)
     return total
+
+
+def switch_on(extra, effect: str, values: dict, shape=None):
+    """``extra`` (design.ExtraPhysics) with an effect's fitted or hidden parameter values
+    switched on; effects that are not physics of the drive (a transducer offset, a friction
+    level, none) leave it unchanged."""
+    from dataclasses import replace
+    v = values
+    if effect == "load_independent_loss":
+        return replace(extra, drag_torque=max(v["T_drag"], 0.0))
+    if effect == "low_speed_friction":
+        return replace(extra, stribeck_torque=max(v["T_stribeck"], 0.0), stribeck_speed=shape)
+    if effect == "inertia":
+        return replace(extra, input_inertia=max(v["J"], 0.0))
+    if effect == "mesh_ripple":
+        # A sin(th + phi) = A cos(phi) sin(th) + A sin(phi) cos(th)
+        return replace(extra, ripple_1x=float(np.hypot(v["A1_sin"], v["A1_cos"])),
+                       ripple_1x_phase=float(np.arctan2(v["A1_cos"], v["A1_sin"])),
+                       ripple_roller=float(np.hypot(v["Az_sin"], v["Az_cos"])),
+                       ripple_roller_phase=float(np.arctan2(v["Az_cos"], v["Az_sin"])))
+    if effect == "thermal_drift":
+        return replace(extra, thermal_loss_change=v["loss_change"], thermal_tau=shape)
+    return extra

@@ -17,15 +17,6 @@ QUICK = Scenario("quick", mode="S1", f_first=30, f_last=50, f_count=2, T_first=3
 
 
 @pytest.fixture(scope="module")
-def fmu_dir(tmp_path_factory):
-    from cyclo_fmu.fmu_build import SLAVES, build_fmu
-    d = tmp_path_factory.mktemp("fmus")
-    for name in SLAVES:
-        build_fmu(name, d)
-    return d
-
-
-@pytest.fixture(scope="module")
 def quick_run(fmu_dir, tmp_path_factory):
     return run_bench(QUICK, fmu_dir, tmp_path_factory.mktemp("bench"))
 

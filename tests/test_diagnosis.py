@@ -94,21 +94,12 @@ def test_locates_ripple_at_shaft_orders():
     assert clean.located["orders"] == {}
 
 
-@pytest.fixture(scope="module")
-def bench_fmus(tmp_path_factory):
-    from cyclo_fmu.fmu_build import SLAVES, build_fmu
-    d = tmp_path_factory.mktemp("fmus")
-    for name in SLAVES:
-        build_fmu(name, d)
-    return d
-
-
 @pytest.mark.parametrize("effect, mode", [("load_independent_loss", "S1"), ("inertia", "S2"),
                                           ("friction_miscalibrated", "S1"), ("none", "S2")])
-def test_names_the_effect_hidden_in_the_bench_fmus(bench_fmus, effect, mode):
+def test_names_the_effect_hidden_in_the_fmu_dir(fmu_dir, effect, mode):
     """The same proof through the bench's co-simulated FMUs (motor, reducer with the hidden
     physics switched on, brake, transducers), not only the vectorised replay."""
-    r = synthesize(effect, 3, mode, "tiny", engine="bench", fmu_dir=bench_fmus)
+    r = synthesize(effect, 3, mode, "tiny", engine="bench", fmu_dir=fmu_dir)
     d = Diagnoser(mode=mode).fit(as_recording(r))
     assert d.effect == effect
     if effect != "none":

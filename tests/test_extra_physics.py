@@ -58,12 +58,6 @@ def test_updated_design_explains_the_recording(effect):
     assert again.rmse_before_Nm < 1.2 * d.rmse_after_Nm
 
 
-@pytest.fixture(scope="module")
-def fmu(tmp_path_factory):
-    from cyclo_fmu.fmu_build import build_fmu
-    return str(build_fmu("CycloidDrive", tmp_path_factory.mktemp("dist")))
-
-
 def test_fmu_carries_the_extra_physics(fmu):
     from test_fmu import Instance
     for exact in (True, False):

@@ -19,12 +19,6 @@ from model_core import DriveDesign, Friction, operating_point, rpm_to_rad_s  # n
 IDX = {"1": 0, "2": 1, "S": 2}
 
 
-@pytest.fixture(scope="module")
-def fmu(tmp_path_factory):
-    from cyclo_fmu.fmu_build import build_fmu
-    return str(build_fmu("CycloidDrive", tmp_path_factory.mktemp("dist")))
-
-
 class Instance:
     """A started FMU2Slave with name-based access and a log of its messages."""
 

@@ -14,12 +14,6 @@ from libcosimpy.CosimSlave import CosimLocalSlave  # noqa: E402
 NS = 1_000_000_000   # libcosim counts time in nanoseconds
 
 
-@pytest.fixture(scope="module")
-def fmu(tmp_path_factory):
-    from cyclo_fmu.fmu_build import build_fmu
-    return str(build_fmu("CycloidDrive", tmp_path_factory.mktemp("dist")))
-
-
 def run_libcosim(fmu, mode, schedule, step=1e-3):
     """schedule: list of (w_in, tau_out), each held for one step; returns outputs per step."""
     log_output_level(CosimLogLevel.ERROR)
