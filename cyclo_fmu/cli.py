@@ -296,5 +296,22 @@ def main(argv=None) -> int:
         return 2
 
 
+def run() -> None:
+    """Console entry point. Commands that load FMUs end the process with os._exit after
+    flushing: pythonfmu's native library has been seen, rarely, to abort in its static
+    destructors at interpreter exit after many loads and unloads."""
+    import os
+    try:
+        code = main()
+        sys.stdout.flush()
+    except BrokenPipeError:          # e.g. piped into `head`: stop quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        code = 0
+    sys.stderr.flush()
+    if len(sys.argv) > 1 and sys.argv[1] in ("bench", "synth", "build"):
+        os._exit(code)
+    sys.exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()
