@@ -1,19 +1,23 @@
 """Recording reader: schema, column mapping, unit conversion, exclusions and every refusal."""
 import json
+import math
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
-from cyclo_fmu.bench import write_recording
-from cyclo_fmu.recordings import RecordingError, parse_column_map, read_recording
+from cyclo_fmu.bench import RECORDING_COLUMNS, write_recording
+from cyclo_fmu.recordings import (Exclusion, Recording, RecordingError, parse_column_map,
+                                  read_recording, recording_from_arrays)
 
 
-def sample(n=2000, rate=100.0):
+def sample(n=2000, rate=100.0, seed=0):
+    """Plausible S1 data: 2800 r/min in with a little noise, 0.8 N*m in, 8 N*m out."""
     t = np.arange(n) / rate
-    return {"time_s": t, "speed_in_rpm": 2800 + 0.5 * np.sin(t), "torque_in_Nm": 0.8 + 0 * t,
-            "speed_out_rpm": 186.7 + 0 * t, "torque_out_Nm": 8.0 + 0 * t}
+    noise = np.random.default_rng(seed).normal(0, 0.5, n)
+    return {"time_s": t, "speed_in_rpm": 2800 + noise, "torque_in_Nm": np.full(n, 0.8),
+            "speed_out_rpm": np.full(n, 186.7), "torque_out_Nm": np.full(n, 8.0)}
 
 
 def write(tmp_path, rec, name="r.csv", header=None):
@@ -25,74 +29,214 @@ def write(tmp_path, rec, name="r.csv", header=None):
     return p
 
 
-def test_round_trip_and_units(tmp_path):
-    r = read_recording(write(tmp_path, sample()))
+def edit_cell(path, line, column, text):
+    """Replace one cell; ``line`` counts file lines from 1 (the header)."""
+    lines = path.read_text().splitlines()
+    cells = lines[line - 1].split(",")
+    cells[column] = text
+    lines[line - 1] = ",".join(cells)
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+# --- what a good recording gives -----------------------------------------------------------
+
+def test_round_trip_with_bench_writer(tmp_path):
+    rec = sample()
+    r = read_recording(write(tmp_path, rec))
+    assert isinstance(r, Recording) and r.source.endswith("r.csv")
     assert r.n == 2000 and r.duration == pytest.approx(19.99)
     assert r.sample_rate == pytest.approx(100.0)
-    assert np.mean(r.speed_in) == pytest.approx(2800 * np.pi / 30, rel=1e-4)   # 293.2 rad/s
     assert r.exclusions == () and r.temperature is None
+    np.testing.assert_allclose(r.time, rec["time_s"], atol=1e-6)
+    np.testing.assert_allclose(r.speed_in, rec["speed_in_rpm"] * math.pi / 30, rtol=1e-5)
+    np.testing.assert_allclose(r.torque_out, 8.0)
 
 
-def test_column_mapping(tmp_path):
-    p = write(tmp_path, sample(), header="t,n1,T22,n2,T30")
-    cols = parse_column_map("time_s=t,speed_in_rpm=n1,torque_in_Nm=T22,speed_out_rpm=n2,torque_out_Nm=T30")
-    assert read_recording(p, cols).n == 2000
-    with pytest.raises(RecordingError, match="'t'|time_s"):
-        read_recording(p)
-    with pytest.raises(RecordingError, match="spped"):
-        parse_column_map("spped_in_rpm=n1")
-
-
-def test_missing_column_and_non_numeric(tmp_path):
+def test_rpm_converted_to_rad_s_once(tmp_path):
     rec = sample()
+    rec["speed_in_rpm"] = np.full(2000, 2800.0)
+    r = read_recording(write(tmp_path, rec))
+    assert r.speed_in[0] == pytest.approx(293.215, abs=1e-3)
+    assert r.speed_out[0] == pytest.approx(186.7 * math.pi / 30)
+    assert r.torque_in[0] == 0.8                                   # torques stay N*m
+
+
+def test_from_arrays_and_optional_temperature(tmp_path):
+    rec = sample()
+    r = recording_from_arrays(*(rec[c] for c in RECORDING_COLUMNS), temperature_C=np.full(2000, 41.5))
+    assert r.source == "<array>" and r.n == 2000 and r.temperature[0] == 41.5
+    p = tmp_path / "temp.csv"
+    p.write_text("time_s,speed_in_rpm,torque_in_Nm,speed_out_rpm,torque_out_Nm,temperature_C\n"
+                 + "".join(f"{k / 50},2800,0.8,186.7,8.0,{40 + k / 1000}\n" for k in range(300)))
+    r = read_recording(p)
+    assert r.temperature[-1] == pytest.approx(40.299) and r.sample_rate == pytest.approx(50.0)
+
+
+def test_non_uniform_sampling_uses_median(tmp_path):
+    rec = sample()
+    rec["time_s"] = rec["time_s"].copy()
+    rec["time_s"][1000:] += 0.005                                  # one longer step
+    r = read_recording(write(tmp_path, rec))
+    assert r.sample_rate == pytest.approx(100.0) and r.exclusions == ()
+
+
+def test_column_mapping_and_extra_columns(tmp_path):
+    p = tmp_path / "other.csv"
+    p.write_text("Time,n1,T22,n2,T30,comment\n"
+                 + "".join(f"{k / 100},2800,0.8,186.7,8.0,ok\n" for k in range(600)))
+    cols = parse_column_map("time_s=Time, speed_in_rpm=n1,torque_in_Nm=T22,"
+                            "speed_out_rpm=n2,torque_out_Nm=T30")
+    assert cols == {"time_s": "Time", "speed_in_rpm": "n1", "torque_in_Nm": "T22",
+                    "speed_out_rpm": "n2", "torque_out_Nm": "T30"}
+    r = read_recording(p, cols)
+    assert r.n == 600 and r.exclusions == ()                       # 'comment' is ignored
+    with pytest.raises(RecordingError, match="'time_s' is missing; found: Time, n1"):
+        read_recording(p)
+    with pytest.raises(RecordingError, match=r"'T23' \(torque_in_Nm\) is missing"):
+        read_recording(p, dict(cols, torque_in_Nm="T23"))
+    with pytest.raises(RecordingError, match="'torqe_in_Nm' is not a recording column"):
+        read_recording(p, {"torqe_in_Nm": "T22"})
+
+
+@pytest.mark.parametrize("text, word", [("spped_in_rpm=n1", "spped_in_rpm"),
+                                        ("time_s", "time_s"), ("time_s=", "time_s="),
+                                        ("time_s=t,time_s=u", "mapped twice")])
+def test_column_map_syntax(text, word):
+    with pytest.raises(RecordingError, match=word):
+        parse_column_map(text)
+
+
+# --- exclusions ------------------------------------------------------------------------------
+
+def test_isolated_nan_samples_are_excluded_and_listed(tmp_path):
+    rec = sample()
+    rec["torque_in_Nm"][[100, 101, 102, 500, 501]] = np.nan
+    rec["speed_out_rpm"][[101, 700]] = np.nan        # 101 already excluded under torque_in_Nm
+    r = read_recording(write(tmp_path, rec))
+    assert r.n == 1994
+    assert r.exclusions == (Exclusion("NaN in torque_in_Nm", 5, pytest.approx(1.0)),
+                            Exclusion("NaN in speed_out_rpm", 1, pytest.approx(7.0)))
+    assert not np.isnan(r.torque_in).any() and 1.0 not in r.time
+
+
+def test_empty_cells_and_long_nan_runs_are_excluded(tmp_path):
+    p = write(tmp_path, sample())
+    edit_cell(p, 12, 4, "")                                        # sample 10, t = 0.10 s
+    rec = sample()
+    rec["speed_in_rpm"][300:350] = np.nan                          # a run of 50 (2.5 %)
+    r = read_recording(edit_cell(write(tmp_path, rec, "b.csv"), 12, 4, ""))
+    assert r.n == 1949
+    assert [(e.reason, e.count) for e in r.exclusions] == [("NaN in speed_in_rpm", 50),
+                                                           ("NaN in torque_out_Nm", 1)]
+    assert r.exclusions[0].first_time == pytest.approx(3.0)
+    assert read_recording(p).exclusions[0].first_time == pytest.approx(0.1)
+
+
+def test_nan_in_time_is_excluded_with_unknown_first_time(tmp_path):
+    rec = sample()
+    rec["time_s"][[40, 41]] = np.nan
+    r = read_recording(write(tmp_path, rec))
+    (e,) = r.exclusions
+    assert e.reason == "NaN in time_s" and e.count == 2 and math.isnan(e.first_time)
+
+
+def test_too_many_nan_samples(tmp_path):
+    rec = sample()
+    rec["torque_in_Nm"][:401] = np.nan                             # 20.05 %
+    with pytest.raises(RecordingError, match="401 of 2000 .* 401 in torque_in_Nm"):
+        read_recording(write(tmp_path, rec))
+    rec["torque_in_Nm"][400] = 0.8                                 # exactly 20 %: allowed
+    assert read_recording(write(tmp_path, rec)).n == 1600
+
+
+# --- refusals --------------------------------------------------------------------------------
+
+def test_missing_or_unreadable_file(tmp_path):
+    with pytest.raises(RecordingError, match="nope.csv.*cannot be read"):
+        read_recording(tmp_path / "nope.csv")
+    with pytest.raises(RecordingError, match="cannot be read"):
+        read_recording(tmp_path)                                   # a folder
+
+
+def test_empty_file_header_only_and_no_header(tmp_path):
+    p = tmp_path / "e.csv"
+    p.write_text("\n\n")
+    with pytest.raises(RecordingError, match="is empty"):
+        read_recording(p)
+    p.write_text(",".join(RECORDING_COLUMNS) + "\n")
+    with pytest.raises(RecordingError, match="no samples"):
+        read_recording(p)
+    p.write_text("0.0,2800,0.8,186.7,8.0\n0.01,2800,0.8,186.7,8.0\n")
+    with pytest.raises(RecordingError, match="no header row.*time_s"):
+        read_recording(p)
+
+
+def test_missing_required_column(tmp_path):
     p = tmp_path / "bad.csv"
     p.write_text("time_s,speed_in_rpm,torque_in_Nm,speed_out_rpm\n0,1,2,3\n")
-    with pytest.raises(RecordingError, match="torque_out_Nm"):
-        read_recording(p)
-    p = write(tmp_path, rec)
-    lines = p.read_text().splitlines()
-    lines[5] = lines[5].replace(lines[5].split(",")[2], "abc", 1)
-    p.write_text("\n".join(lines))
-    with pytest.raises(RecordingError, match="row 6.*abc|abc.*"):
+    with pytest.raises(RecordingError, match="'torque_out_Nm' is missing; found: time_s, "
+                                             "speed_in_rpm, torque_in_Nm, speed_out_rpm"):
         read_recording(p)
 
 
-def test_nan_samples_are_excluded_and_listed(tmp_path):
+@pytest.mark.parametrize("text", ["abc", "1,5", "inf"])
+def test_non_numeric_cell(tmp_path, text):
+    p = edit_cell(write(tmp_path, sample()), 6, 2, '"' + text + '"' if "," in text else text)
+    with pytest.raises(RecordingError, match=f"'torque_in_Nm', row 6: '{text}' is not a number"):
+        read_recording(p)
+
+
+@pytest.mark.parametrize("step, word", [(-0.02, "goes backwards"), (-0.01, "repeats")])
+def test_time_out_of_order(tmp_path, step, word):
     rec = sample()
-    rec["torque_in_Nm"][100:105] = np.nan
-    r = read_recording(write(tmp_path, rec))
-    assert r.n == 1995
-    (e,) = r.exclusions
-    assert e.reason == "NaN in torque_in_Nm" and e.count == 5 and e.first_time == pytest.approx(1.0)
-    rec["torque_in_Nm"][:600] = np.nan
-    with pytest.raises(RecordingError, match="NaN"):
+    rec["torque_in_Nm"][10] = np.nan                    # row numbers count excluded samples too
+    rec["time_s"][50] = rec["time_s"][49] + 0.01 + step
+    with pytest.raises(RecordingError, match=f"time_s {word} at row 52: 0.49 s then "):
+        read_recording(write(tmp_path, rec))
+    with pytest.raises(RecordingError, match=f"time_s {word} at sample 50"):
+        recording_from_arrays(*(rec[c] for c in RECORDING_COLUMNS))
+
+
+def test_speed_that_looks_like_rad_s(tmp_path):
+    rec = sample()
+    rec["speed_in_rpm"] = rec["speed_in_rpm"] * math.pi / 30       # rad/s written as r/min
+    with pytest.raises(RecordingError, match=r"speed_in_rpm peaks at 29[34]\.\d+: .*rad/s, not r/min"):
+        read_recording(write(tmp_path, rec))
+    rec["speed_in_rpm"] = np.full(2000, 300.0)                     # a slow run in whole r/min
+    assert read_recording(write(tmp_path, rec)).n == 2000
+    rec["speed_in_rpm"] = np.zeros(2000)                           # standing still
+    assert read_recording(write(tmp_path, rec)).n == 2000
+
+
+def test_torque_that_looks_like_N_mm(tmp_path):
+    rec = sample()
+    rec["torque_in_Nm"] = np.full(2000, 1.25) * 1000                # 1.25 N*m written in N*mm
+    with pytest.raises(RecordingError, match=r"torque_in_Nm peaks at 1250: .*N\*mm"):
         read_recording(write(tmp_path, rec))
 
 
-def test_time_backwards_or_repeated(tmp_path):
-    rec = sample()
-    rec["time_s"][50] = rec["time_s"][49]
-    with pytest.raises(RecordingError, match="time_s"):
-        read_recording(write(tmp_path, rec))
-
-
-def test_units_that_look_wrong(tmp_path):
-    rec = sample()
-    rec["speed_in_rpm"] = rec["speed_in_rpm"] * np.pi / 30     # rad/s written as r/min
-    with pytest.raises(RecordingError, match="rad/s"):
-        read_recording(write(tmp_path, rec))
-    rec = sample()
-    rec["torque_in_Nm"] = rec["torque_in_Nm"] * 1000            # N*mm
-    with pytest.raises(RecordingError, match="torque_in_Nm.*N\\*mm"):
-        read_recording(write(tmp_path, rec))
-
-
-def test_too_short_and_unreadable(tmp_path):
-    with pytest.raises(RecordingError, match="too short"):
+def test_too_short(tmp_path):
+    with pytest.raises(RecordingError, match="too short: 300 samples over 2.99 s.*"
+                                             "at least 200 samples and 5 s"):
         read_recording(write(tmp_path, sample(n=300)))
-    with pytest.raises(RecordingError, match="cannot be read"):
-        read_recording(tmp_path / "nope.csv")
+    with pytest.raises(RecordingError, match="150 samples .*at least 200 samples"):
+        read_recording(write(tmp_path, sample(n=150, rate=20.0)))
+    rec = sample(n=600)                                     # 5.99 s, but 100 NaN at the end
+    rec["torque_out_Nm"][500:] = np.nan
+    with pytest.raises(RecordingError, match="500 samples over 4.99 s after exclusions"):
+        read_recording(write(tmp_path, rec))
+    assert read_recording(write(tmp_path, sample(n=300)), min_duration=2.0).n == 300
 
+
+def test_arrays_of_different_length():
+    rec = sample()
+    with pytest.raises(RecordingError, match="'torque_out_Nm' has 1999 samples, time_s has 2000"):
+        recording_from_arrays(rec["time_s"], rec["speed_in_rpm"], rec["torque_in_Nm"],
+                              rec["speed_out_rpm"], rec["torque_out_Nm"][1:])
+
+
+# --- the command line on top ---------------------------------------------------------------
 
 def run(*args):
     return subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", *args], capture_output=True,
@@ -122,3 +266,18 @@ def test_cli_synth_and_diagnose(tmp_path):
     assert "torque_in_Nm" in r.stderr
     r = run("synth", "--effect", "gremlins", "--out", str(tmp_path / "x.csv"))
     assert r.returncode == 2 and "effect" in r.stderr
+
+
+def test_torque_in_n_mm_caught_by_the_power_balance(tmp_path):
+    """0.8 N*m written as 800 N*mm stays below the 1000 limit; the power balance catches it,
+    and a back-driven recording (output power above input power) still passes."""
+    import numpy as np
+    from cyclo_fmu.bench import write_recording
+    from cyclo_fmu.recordings import RecordingError, read_recording
+    t = np.arange(2000) / 100.0
+    rec = {"time_s": t, "speed_in_rpm": 2800 + 0.5 * np.sin(t), "torque_in_Nm": 800.0 + 0 * t,
+           "speed_out_rpm": 186.7 + 0 * t, "torque_out_Nm": 8.0 + 0 * t}
+    with pytest.raises(RecordingError, match="torque_in_Nm.*N\\*mm"):
+        read_recording(write_recording(tmp_path / "nmm.csv", rec))
+    back = dict(rec, torque_in_Nm=-0.5 + 0 * t, torque_out_Nm=-12.0 + 0 * t)
+    assert read_recording(write_recording(tmp_path / "back.csv", back)).n == 2000
