@@ -87,7 +87,6 @@ def _first_order(x, dt, tau):
 
 def signals_for_effects(t, w_in, loss_in, mode, z1, temperature=None):
     """The signal dict model_core.effects expects, from time, input speed and model loss."""
-    dt = np.gradient(t)
     alpha = np.gradient(w_in, t)
     theta = np.concatenate([[0.0], np.cumsum(0.5 * (w_in[1:] + w_in[:-1]) * np.diff(t))])
     w = shaft_speeds(mode, 1.0, z1)
@@ -95,7 +94,7 @@ def signals_for_effects(t, w_in, loss_in, mode, z1, temperature=None):
     # roller pass: z1 per turn of the ring relative to the carrier, per turn of the input
     order = z1 * abs(float(w["1"] - w["S"])) / abs(float(w[a]))
     return {"t": t, "w_in": w_in, "alpha_in": alpha, "theta_in": theta, "loss_in": loss_in,
-            "order_roller": order, "temperature": temperature, "dt": dt}
+            "order_roller": order, "temperature": temperature}
 
 
 def synthesize(effect: str, seed: int, mode: str = "S1", size: str = "small",

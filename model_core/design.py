@@ -135,6 +135,17 @@ class ExtraPhysics:
         return t.reshape(w.shape)
 
 
+    def dynamic_torque(self, alpha, theta, order, elapsed, loss_in):
+        """Inertia, ripple and warm-up torque at the driving shaft (N*m): J*alpha +
+        A1 sin(theta + phi1) + Az sin(order*theta + phiz) + c (1 - exp(-elapsed/tau)) loss_in.
+        Scalars (the FMU's step) or arrays (a replay); the diagnosis fits the same terms."""
+        import numpy as _np
+        return (self.input_inertia * alpha
+                + self.ripple_1x * _np.sin(theta + self.ripple_1x_phase)
+                + self.ripple_roller * _np.sin(order * theta + self.ripple_roller_phase)
+                + self.thermal_loss_change * (1.0 - _np.exp(-elapsed / self.thermal_tau)) * loss_in)
+
+
 @dataclass(frozen=True)
 class DriveDesign:
     """A constrained (1-DOF) cycloid drive: central ring 1 with z1 rollers, cycloid gear(s) with

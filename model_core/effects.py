@@ -141,15 +141,10 @@ def extra_torque(extra, s: dict) -> np.ndarray:
     if extra.stribeck_torque:
         total += EFFECTS["low_speed_friction"].torque(s, [extra.stribeck_torque],
                                                      extra.stribeck_speed)
-    if extra.input_inertia:
-        total += EFFECTS["inertia"].torque(s, [extra.input_inertia])
-    if extra.ripple_1x or extra.ripple_roller:
-        a1, p1 = extra.ripple_1x, extra.ripple_1x_phase
-        az, pz = extra.ripple_roller, extra.ripple_roller_phase
-        total += EFFECTS["mesh_ripple"].torque(
-            s, [a1 * np.cos(p1), a1 * np.sin(p1), az * np.cos(pz), az * np.sin(pz)])
-    if extra.thermal_loss_change:
-        total += EFFECTS["thermal_drift"].torque(s, [extra.thermal_loss_change], extra.thermal_tau)
+    if (extra.input_inertia or extra.ripple_1x or extra.ripple_roller
+            or extra.thermal_loss_change):
+        total += extra.dynamic_torque(s["alpha_in"], s["theta_in"], s["order_roller"],
+                                      s["t"] - s["t"][0], s["loss_in"])
     return total
 
 

@@ -195,21 +195,16 @@ class CycloidDrive(UnitSlave):
         self.eta, self.eta0, self.locked = eta, eta0, locked
 
     def _dynamic_torque(self, t, dt, w_in, tau_out):
-        """Inertia, ripple and warm-up terms at the driving shaft (model_core.effects)."""
-        ex = self._design.extra
+        """Inertia, ripple and warm-up terms at the driving shaft (design.extra)."""
         alpha = 0.0 if (self._w_last is None or dt <= 0) else (w_in - self._w_last) / dt
         if dt > 0:
             self._theta += w_in * dt
             self._w_last = w_in
         elif self._w_last is None:
             self._w_last = w_in
-        th = self._theta
-        lossless = -tau_out * self._ratio_out
-        loss_in = self._tau_in_gear - lossless
-        return (ex.input_inertia * alpha
-                + ex.ripple_1x * math.sin(th + ex.ripple_1x_phase)
-                + ex.ripple_roller * math.sin(self._order * th + ex.ripple_roller_phase)
-                + ex.thermal_loss_change * (1.0 - math.exp(-t / ex.thermal_tau)) * loss_in)
+        loss_in = self._tau_in_gear + tau_out * self._ratio_out   # minus the lossless torque
+        return float(self._design.extra.dynamic_torque(alpha, self._theta, self._order, t,
+                                                       loss_in))
 
     def _exact(self, w_in, tau_out):
         a, b = self._mode[0], self._mode[1]
