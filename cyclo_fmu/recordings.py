@@ -14,9 +14,8 @@ column and the value); empty or NaN cells exclude their sample and are listed as
 """
 from __future__ import annotations
 
-import csv
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -25,9 +24,6 @@ REQUIRED = ("time_s", "speed_in_rpm", "torque_in_Nm", "speed_out_rpm", "torque_o
 OPTIONAL = ("temperature_C",)
 SCHEMA = REQUIRED + OPTIONAL
 MAX_EXCLUDED = 0.20          # share of samples that may be excluded for NaN
-RAD_S_SUSPECT_RPM = 350.0    # a non-integer input speed at most this high looks like rad/s
-N_MM_SUSPECT_NM = 1000.0     # an input torque above this looks like N*mm
-POWER_RATIO_MIN = 0.01       # output/input power outside 0.01..100: a torque unit is off
 RAD_S_PER_RPM = math.pi / 30
 
 
@@ -59,6 +55,10 @@ class Recording:
     temperature: np.ndarray | None    # degC, or None when the file has no temperature
     exclusions: tuple                 # Exclusion records: what was left out and why
     source: str                       # file name or "<array>"
+    notes: tuple = ()                 # what reading did: dialect, mapping, units, resampling
+    units: dict = field(default_factory=dict)   # column -> (unit in the file, where it came from)
+    checks: tuple = ()                # plausibility findings (cyclo_fmu.io.checks)
+    raw_samples: int = 0              # samples in the file (> n when block means were taken)
 
     @property
     def n(self) -> int:
@@ -95,62 +95,30 @@ def parse_column_map(text: str) -> dict:
     return out
 
 
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
 def read_recording(path, columns: dict | None = None, min_duration: float = 5.0,
-                   min_samples: int = 200) -> Recording:
-    """Read a recording CSV, check it and convert r/min to rad/s.
+                   min_samples: int = 200, units: dict | None = None, block: float | None = None,
+                   check: bool = True) -> Recording:
+    """Read a recording (CSV/ASCII of any common dialect, or MDF4), check it and convert to SI.
 
-    ``columns`` maps schema names to the file's names (``{"time_s": "Time"}``); unmapped
-    schema names are looked up under their own name. ``min_duration`` s and ``min_samples``
-    apply after exclusions. Row numbers in messages are file lines (the header is row 1)."""
-    path = Path(path)
-    columns = dict(columns or {})
-    for key in columns:
-        if key not in SCHEMA:
-            raise RecordingError(f"columns: {key!r} is not a recording column ({', '.join(SCHEMA)})")
-    try:
-        with path.open(newline="", encoding="utf-8-sig") as f:
-            rows = [(i, r) for i, r in enumerate(csv.reader(f), start=1)
-                    if any(c.strip() for c in r)]            # blank lines carry no samples
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise RecordingError(f"recording {str(path)!r} cannot be read ({exc})") from None
-    if not rows:
-        raise RecordingError(f"recording {str(path)!r} is empty")
-    header = [h.strip() for h in rows[0][1]]
-    if all(_is_number(h) for h in header if h):
-        raise RecordingError(f"recording {str(path)!r} has no header row; the first row is "
-                             f"{','.join(header)!r}, expected names like {','.join(REQUIRED)}")
-    body = rows[1:]
-    line = np.array([i for i, _ in body], int)
-    data = {}
-    for key in SCHEMA:
-        name = columns.get(key, key)
-        label = repr(name) if name == key else f"{name!r} ({key})"
-        if name not in header:
-            if key in OPTIONAL and key not in columns:
-                continue
-            raise RecordingError(f"column {label} is missing; found: {', '.join(header)}")
-        if header.count(name) > 1:
-            raise RecordingError(f"column {label} appears {header.count(name)} times in the header")
-        j = header.index(name)
-        vals = np.empty(len(body))
-        for k, (i, row) in enumerate(body):
-            text = row[j].strip() if j < len(row) else ""
-            try:
-                vals[k] = float(text) if text else np.nan      # empty or NaN: excluded later
-            except ValueError:
-                vals[k] = np.inf
-            if np.isinf(vals[k]):
-                raise RecordingError(f"column {label}, row {i}: {text!r} is not a number")
-        data[key] = vals
-    return _check(data, str(path), lambda k: f"row {line[k]}", min_duration, min_samples)
+    The front door of ``cyclo_fmu.io``: the format is chosen by content (MDF's identification
+    block) and extension; see ``cyclo_fmu.io.text`` and ``cyclo_fmu.io.mdf``. ``columns`` maps
+    schema names to the file's names (``{"time_s": "Time"}``); ``units`` gives a column's unit
+    (``{"torque_in_Nm": "N*mm"}``); both override anything detected. ``block`` [s] returns means
+    over blocks of that length, averaged while reading (chunked: for recordings too large for
+    memory). ``min_duration`` s and ``min_samples`` apply after exclusions. ``check`` runs the
+    mode-independent plausibility checks (``cyclo_fmu.io.checks.check_units``). Row numbers in
+    messages are file lines (the header is row 1 when there are no metadata lines)."""
+    from .io import read_table
+    from .io.checks import check_magnitudes, check_units
+    tab = read_table(path, columns=columns, units=units, block=block)
+    rec = _check(tab.data, tab.source, tab.line_of, min_duration, min_samples,
+                 pre_exclusions=tab.exclusions, notes=tuple(tab.notes),
+                 units={k: v for k, v in tab.units.items()}, raw_samples=tab.raw_samples,
+                 magnitudes=check_magnitudes)
+    if check:
+        findings = check_units(rec, units_given=tuple(units or ()))
+        rec = replace(rec, checks=tuple(findings))
+    return rec
 
 
 def recording_from_arrays(time, speed_in_rpm, torque_in_Nm, speed_out_rpm, torque_out_Nm,
@@ -172,14 +140,19 @@ def recording_from_arrays(time, speed_in_rpm, torque_in_Nm, speed_out_rpm, torqu
     return _check(data, source, lambda k: f"sample {k}", min_duration, min_samples)
 
 
-def _check(data: dict, source: str, where, min_duration: float, min_samples: int) -> Recording:
-    """Exclude NaN samples, check order, units and length; ``where(k)`` names sample k."""
+def _check(data: dict, source: str, where, min_duration: float, min_samples: int,
+           pre_exclusions=(), notes=(), units=None, raw_samples=None,
+           magnitudes=None) -> Recording:
+    """Exclude NaN samples, average duplicated timestamps, check order and length;
+    ``where(k)`` names sample k. Units and plausibility: ``cyclo_fmu.io.checks``."""
     n = len(data["time_s"])
     if n == 0:
         raise RecordingError(f"recording {source!r} has no samples")
+    if magnitudes is not None:
+        magnitudes(data, where)
     t = data["time_s"]
     keep = np.ones(n, bool)
-    exclusions = []
+    exclusions = [Exclusion(r, int(c), float("nan")) for r, c in pre_exclusions]
     for key, v in data.items():          # a sample is counted once, under its first NaN column
         bad = np.isnan(v) & keep
         if bad.any():
@@ -196,38 +169,25 @@ def _check(data: dict, source: str, where, min_duration: float, min_samples: int
     t = data["time_s"]
 
     dt = np.diff(t)
-    if np.any(dt <= 0):
-        k = int(np.flatnonzero(dt <= 0)[0])
-        how = "goes backwards" if dt[k] < 0 else "repeats"
-        raise RecordingError(f"time_s {how} at {where(idx[k + 1])}: {t[k]:.9g} s then "
+    if np.any(dt < 0):
+        k = int(np.flatnonzero(dt < 0)[0])
+        raise RecordingError(f"time_s goes backwards at {where(idx[k + 1])}: {t[k]:.9g} s then "
                              f"{t[k + 1]:.9g} s (samples must be in time order)")
-
+    if np.any(dt == 0):
+        # a repeated timestamp (loggers write one when a buffer is flushed): the samples of
+        # one time become their mean, counted as an exclusion
+        k = int(np.flatnonzero(dt == 0)[0])
+        first = float(t[k])
+        starts = np.flatnonzero(np.r_[True, dt != 0])
+        counts = np.diff(np.r_[starts, t.size])
+        data = {key: np.add.reduceat(v, starts) / counts for key, v in data.items()}
+        data["time_s"] = t[starts]
+        merged = int(t.size - starts.size)
+        exclusions.append(Exclusion(f"duplicated timestamp: {merged} samples averaged into the "
+                                    f"sample of the same time (first at {where(idx[k + 1])})",
+                                    merged, first))
+        t = data["time_s"]
     n_in = data["speed_in_rpm"]
-    n_max = float(np.max(np.abs(n_in))) if n_in.size else 0.0
-    if 0 < n_max <= RAD_S_SUSPECT_RPM and np.any(np.abs(n_in - np.round(n_in)) > 1e-6):
-        raise RecordingError(
-            f"speed_in_rpm peaks at {n_max:.6g}: that looks like rad/s, not r/min "
-            f"(multiply by 30/pi = 9.549, or map the r/min column with columns=)")
-    T_max = float(np.max(np.abs(data["torque_in_Nm"]))) if t.size else 0.0
-    if T_max > N_MM_SUSPECT_NM:
-        raise RecordingError(
-            f"torque_in_Nm peaks at {T_max:.6g}: that looks like N*mm, not N*m "
-            f"(divide by 1000, or map the N*m column with columns=)")
-
-    # a factor 1000 on either torque (N*mm) shows in the power balance: a reducer passes between
-    # a few per cent and 1/eta of the power between its shafts, driven or back-driven; the
-    # bounds 1/100..100 leave all that room. Judged on samples where both shafts carry power.
-    p_in = np.abs(data["torque_in_Nm"] * n_in)
-    p_out = np.abs(data["torque_out_Nm"] * data["speed_out_rpm"])
-    moving = ((p_in > 0.05 * float(np.max(p_in))) & (p_out > 0.05 * float(np.max(p_out)))
-              if t.size else p_in > 0)
-    if moving.sum() >= 10:
-        ratio = float(np.mean(p_out[moving]) / max(np.mean(p_in[moving]), 1e-300))
-        if not POWER_RATIO_MIN < ratio < 1 / POWER_RATIO_MIN:
-            col = "torque_in_Nm" if ratio < 1 else "torque_out_Nm"
-            raise RecordingError(
-                f"{col}: the mean output power is {ratio:.3g} times the input power; a torque "
-                "in N*mm (or a speed in the wrong unit) would do that")
 
     duration = float(t[-1] - t[0]) if t.size else 0.0
     if t.size < min_samples or duration < min_duration:
@@ -237,4 +197,5 @@ def _check(data: dict, source: str, where, min_duration: float, min_samples: int
     return Recording(time=t, speed_in=n_in * RAD_S_PER_RPM, torque_in=data["torque_in_Nm"],
                      speed_out=data["speed_out_rpm"] * RAD_S_PER_RPM,
                      torque_out=data["torque_out_Nm"], temperature=data.get("temperature_C"),
-                     exclusions=tuple(exclusions), source=source)
+                     exclusions=tuple(exclusions), source=source, notes=tuple(notes),
+                     units=dict(units or {}), raw_samples=int(raw_samples or n))

@@ -1,0 +1,230 @@
+"""Plausibility of a recording before any fit: is it what its header says?
+
+``check_plausibility(rec, mode, design)`` returns ``(mode, findings)``: each finding a one-line
+statement with its evidence (``{"id", "status": "ok"|"warning"|"error", "message"}``), and
+raises ``RecordingError`` (message: the finding, the likely cause, the override) on the first
+error, so that no fit runs on data that cannot be what the header says.
+
+What is judged, in this order: the sample interval (time in ms), standstill, the input-torque
+level (N*mm), the sign of each shaft's power, the power balance per direction of power flow
+(N*mm torque_out, a speed in the wrong unit, a wrong mode), and the measured speed ratio against
+``--mode`` (``auto``: the mode whose ratio and sign match).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..recordings import RecordingError
+
+# --- named thresholds (unit, why) -------------------------------------------------------------
+#: [r/min] a shaft below this is standing still: well below any test run, above encoder noise
+STANDSTILL_RPM = 1.0
+#: [1] driven samples needed to judge anything (and to diagnose): 100 samples
+MIN_DRIVEN = 100
+#: [N*m] an input torque above this looks like N*mm: 1000 N*m at the fast shaft of a
+#: speed reducer is 10 times the largest drives of this kind (paper drive: ~1.3 N*m in)
+N_MM_SUSPECT_NM = 1000.0
+#: [1] share of a peak power below which a sample carries no power worth judging
+POWER_SHARE = 0.05
+#: [1] output/input power above this on samples where power flows in->out is impossible for a
+#: loss-making drive; 5 % leaves room for torque-transducer gain errors of a few per cent
+#: and for inertia power during accelerations
+EFFICIENCY_MAX = 1.05
+#: [1] output/input power below this: even an idling reducer passes more than 1 % of its input
+#: power at the loads where both shafts carry > 5 % of their peak; a factor 1000 (N*mm) lands far
+#: outside
+POWER_RATIO_MIN = 0.01
+#: [1] relative tolerance of the measured speed ratio against the mode's (Table 1): the six
+#: modes' ratios of a z1 >= 8 drive differ by at least 1/(z1-1) (>= 7 %); slip-free kinematics
+#: and averaging over driven samples leave < 1 %
+RATIO_TOL = 0.03
+#: [s] a median sample interval at least this long with a duration >= MS_SUSPECT_DURATION looks
+#: like time in ms: 1 kHz written in ms gives 1 s steps
+MS_SUSPECT_DT = 0.2
+#: [s] 2 h: with >= 0.2 s steps a genuine recording would be a slow logger, not a bench run
+MS_SUSPECT_DURATION = 7200.0
+#: [r/min] peak input speed below which r/min and rad/s are both plausible (only a warning:
+#: a genuine low-speed run must pass)
+LOW_SPEED_RPM = 350.0
+#: absolute limits of a measurement at the edge units: beyond them a cell is not a reading
+ABSURD = {"time_s": 1e9, "speed_in_rpm": 1e6, "speed_out_rpm": 1e6, "torque_in_Nm": 1e7,
+          "torque_out_Nm": 1e7, "temperature_C": 1e4}
+RPM = math.pi / 30
+
+
+def check_magnitudes(data: dict, where) -> None:
+    """Refuse finite but absurd cells (e.g. 1e308) before anything computes with them."""
+    for key, lim in ABSURD.items():
+        v = data.get(key)
+        if v is None or not len(v):
+            continue
+        with np.errstate(invalid="ignore"):
+            bad = np.abs(v) > lim
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            raise RecordingError(
+                f"column {key!r}, {where(k)}: {v[k]:.6g} is not a measurement (|value| > {lim:g} "
+                f"in the schema's unit); {int(bad.sum())} such cell(s); blank them to exclude them")
+
+
+def _finding(id_, status, message):
+    return {"id": id_, "status": status, "message": message}
+
+
+def _error(f, findings):
+    findings.append(f)
+    raise RecordingError(f["message"])
+
+
+def check_units(rec, units_given=(), findings=None) -> list:
+    """The mode-independent checks (time unit, standstill, N*mm, power signs and balance).
+    Raises on the first error; returns the findings."""
+    findings = [] if findings is None else findings
+    t = rec.time
+    if rec.n > 1:
+        dt = float(np.median(np.diff(t)))
+        if dt >= MS_SUSPECT_DT and rec.duration >= MS_SUSPECT_DURATION and \
+                "time_s" not in units_given:
+            _error(_finding("time_unit", "error",
+                   f"time_s: samples every {dt:.6g} s over {rec.duration / 3600:.3g} h look like "
+                   f"time in ms ({1 / dt:.3g} Hz, {rec.duration / 3.6e6:.3g} h if ms); give "
+                   "--units time_s=ms, or --units time_s=s if it really is seconds"), findings)
+        findings.append(_finding("time_unit", "ok", f"time_s: median interval {dt:.6g} s "
+                                 f"({1 / dt:.6g} Hz) over {rec.duration:.6g} s"))
+    n_in = np.abs(rec.speed_in) / RPM
+    peak = float(n_in.max()) if rec.n else 0.0
+    driven = n_in > STANDSTILL_RPM
+    if int(driven.sum()) < MIN_DRIVEN:
+        _error(_finding("standstill", "error",
+               f"speed_in_rpm: only {int(driven.sum())} samples turn faster than "
+               f"{STANDSTILL_RPM:g} r/min (peak {peak:.3g} r/min): the input shaft stands still, "
+               f"nothing to diagnose (needs >= {MIN_DRIVEN} driven samples)"), findings)
+    if peak < LOW_SPEED_RPM and "speed_in_rpm" not in units_given:
+        findings.append(_finding("speed_unit", "warning",
+                        f"speed_in_rpm peaks at {peak:.4g} r/min: a slow run, or rad/s written "
+                        "as r/min, which torques and powers cannot tell apart; if rad/s, give "
+                        "--units speed_in_rpm=rad/s,speed_out_rpm=rad/s"))
+    T_peak = float(np.max(np.abs(rec.torque_in)))
+    if T_peak > N_MM_SUSPECT_NM and "torque_in_Nm" not in units_given:
+        _error(_finding("torque_unit", "error",
+               f"torque_in_Nm peaks at {T_peak:.6g}: that looks like N*mm, not N*m (give "
+               "--units torque_in_Nm=N*mm, or --units torque_in_Nm=N*m if it is right)"),
+               findings)
+    _power_balance(rec, units_given, findings)
+    return findings
+
+
+def _power_balance(rec, units_given, findings):
+    P_in = rec.torque_in * rec.speed_in
+    P_out = rec.torque_out * rec.speed_out
+    if not rec.n:
+        return
+    a_in, a_out = np.abs(P_in), np.abs(P_out)
+    loaded = (a_in > POWER_SHARE * a_in.max()) & (a_out > POWER_SHARE * a_out.max())
+    if loaded.sum() < 10:
+        findings.append(_finding("power_balance", "warning",
+                        f"only {int(loaded.sum())} samples where both shafts carry power: "
+                        "power balance and torque signs not judged"))
+        return
+    s_in, s_out = np.sign(P_in[loaded]), np.sign(P_out[loaded])
+    mismatch = float(np.mean(s_in != s_out))
+    if mismatch > 0.5:
+        # which one is wrong: the motor normally delivers power (input power positive)
+        col = "torque_out_Nm" if np.mean(s_in > 0) >= 0.5 else "torque_in_Nm"
+        if col not in units_given:
+            _error(_finding("torque_sign", "error",
+                   f"{col} has the opposite sign: input and output power differ in sign on "
+                   f"{100 * mismatch:.0f} % of the {int(loaded.sum())} loaded samples (convention: "
+                   "torque_in delivered into the input shaft, torque_out delivered by the output "
+                   f"shaft to the load); negate it with --units {col}=-N*m"), findings)
+    fwd = loaded & (P_in > 0) & (P_out > 0)
+    back = loaded & (P_in < 0) & (P_out < 0)
+    msgs = []
+    for sel, name, ratio_of in ((fwd, "forward", lambda i, o: o / i),
+                                (back, "back-driven", lambda i, o: i / o)):
+        if sel.sum() < 10:
+            continue
+        pi, po = float(np.sum(np.abs(P_in[sel]))), float(np.sum(np.abs(P_out[sel])))
+        r = ratio_of(pi, po)
+        msgs.append(f"{name}: {int(sel.sum())} samples, efficiency {r:.3g}")
+        if r > 1 / POWER_RATIO_MIN or r < POWER_RATIO_MIN:
+            big = (r > 1) == (name == "forward")     # torque_out too large (forward)
+            col = "torque_out_Nm" if big else "torque_in_Nm"
+            if col not in units_given:
+                _error(_finding("power_balance", "error",
+                       f"{col}: on {name} samples the power leaving is {r:.3g} times the power "
+                       f"entering; a torque in N*mm (x1000) would do that (give --units "
+                       f"{col}=N*mm, or --units {col}=N*m if it is right)"), findings)
+        if r > EFFICIENCY_MAX and not ({"torque_in_Nm", "torque_out_Nm"} & set(units_given)):
+            _error(_finding("power_balance", "error",
+                   f"power balance: on {name} samples the power leaving the reducer is {r:.3g} "
+                   f"times the power entering (a loss-making drive passes at most 1); a torque "
+                   "or speed unit or the mode is off (check --units and --mode; --units "
+                   "torque_in_Nm=N*m,torque_out_Nm=N*m accepts the data as it is)"), findings)
+    findings.append(_finding("power_balance", "ok", "power balance: " + "; ".join(msgs)))
+
+
+def check_mode(rec, mode: str, z1: int, findings=None, units_given=()):
+    """Measured speed ratio speed_in/speed_out (median over driven samples) against the mode's
+    (``model_core.kinematics.speed_ratio``); ``mode='auto'`` picks the matching mode."""
+    from model_core.kinematics import MODES, parse_mode, speed_ratio
+    findings = [] if findings is None else findings
+    n_in, n_out = rec.speed_in / RPM, rec.speed_out / RPM
+    peak = float(np.max(np.abs(n_in)))
+    sel = (np.abs(n_in) > max(STANDSTILL_RPM, POWER_SHARE * peak)) & \
+          (np.abs(n_out) > STANDSTILL_RPM * 1e-3)
+    if sel.sum() < MIN_DRIVEN:
+        _error(_finding("speed_ratio", "error",
+               f"speed_out_rpm: only {int(sel.sum())} samples where both shafts turn; the "
+               f"mode cannot be checked (is speed_out_rpm the output shaft?)"), findings)
+    ratio = float(np.median(n_in[sel] / n_out[sel]))
+    ratios = {m: speed_ratio(m, z1) for m in MODES}
+    match = [m for m, r in ratios.items() if abs(ratio / r - 1) <= RATIO_TOL]
+    table = ", ".join(f"{m} {r:.4g}" for m, r in ratios.items())
+    if str(mode).strip().lower() == "auto":
+        if not match:
+            _error(_finding("speed_ratio", "error", _no_mode(ratio, z1, ratios, None, table)),
+                   findings)
+        mode = match[0]
+        findings.append(_finding("speed_ratio", "ok",
+                        f"mode auto: measured speed ratio {ratio:.5g} (median over "
+                        f"{int(sel.sum())} driven samples) matches mode {mode} ({ratios[mode]:.5g}) "
+                        f"of a z1 = {z1} drive"))
+        return mode, findings
+    mode = "".join(parse_mode(mode)[:2])
+    if mode not in match:
+        _error(_finding("speed_ratio", "error", _no_mode(ratio, z1, ratios, mode, table, match)),
+               findings)
+    findings.append(_finding("speed_ratio", "ok",
+                    f"speed ratio {ratio:.5g} (median over {int(sel.sum())} driven samples) "
+                    f"matches mode {mode} ({ratios[mode]:.5g})"))
+    return mode, findings
+
+
+def _no_mode(ratio, z1, ratios, mode, table, match=()):
+    head = (f"speed ratio speed_in/speed_out measured {ratio:.5g}" +
+            (f" does not match mode {mode} ({ratios[mode]:.5g})" if mode else
+             " matches no mode"))
+    if match:
+        return (f"{head} but mode {match[0]} ({ratios[match[0]]:.5g}): the recording is "
+                f"{match[0]}; pass --mode {match[0]} (or --mode auto)")
+    k = 30 / math.pi
+    for m, r in ratios.items():
+        for f, col in ((k, "speed_out_rpm"), (1 / k, "speed_in_rpm")):
+            if abs(ratio / (r * f) - 1) <= RATIO_TOL:
+                return (f"{head}: {ratio:.5g} = {r:.4g} (mode {m}) x {f:.4g}, so {col} looks "
+                        f"like rad/s, not r/min; give --units {col}=rad/s")
+    return (f"{head} of a z1 = {z1} drive ({table}): is --design right, or a speed column "
+            "mapped to the wrong shaft?")
+
+
+def check_plausibility(rec, mode, design=None, units_given=()):
+    """All checks; returns ``(mode, findings)`` (mode resolved when 'auto') or raises
+    ``RecordingError`` naming the likely cause and the override."""
+    from model_core import DriveDesign
+    design = design or DriveDesign()
+    findings = check_units(rec, units_given)
+    mode, findings = check_mode(rec, mode, design.z1, findings, units_given)
+    return mode, findings
