@@ -171,16 +171,20 @@ def cmd_synth(args) -> int:
 def cmd_diagnose(args) -> int:
     from pathlib import Path
     from .diagnosis import Diagnoser, plot_diagnosis
-    from .recordings import RecordingError, parse_column_map, read_recording
+    from .io import RecordingError, load_recording
     design = _load_design(args.design)
-    mode = "".join(parse_mode(args.mode)[:2])
+    if args.mode.strip().lower() != "auto":
+        parse_mode(args.mode)
     try:
-        columns = parse_column_map(args.columns) if args.columns else None
-        rec = read_recording(args.recording, columns)
+        rec, mode, checks = load_recording(args.recording, args.mode, design,
+                                           columns=args.columns, units=args.units)
     except RecordingError as exc:
         raise CycloidInputError("recording", args.recording, str(exc))
     d = Diagnoser(design, mode).fit(rec)
     result = d.to_json()
+    result["mode"] = mode
+    result["checks"] = list(checks)
+    result["read_notes"] = list(rec.notes)
     result["exclusions"] = [{"reason": e.reason, "count": e.count, "first_time_s": e.first_time}
                             for e in rec.exclusions]
     if args.out:
@@ -259,10 +263,13 @@ def build_parser() -> argparse.ArgumentParser:
     sy.set_defaults(func=cmd_synth)
     dg = sub.add_parser("diagnose", help="locate, explain and model the mismatch of a recording")
     dg.add_argument("recording", help="recording CSV")
-    dg.add_argument("--mode", required=True)
+    dg.add_argument("--mode", required=True, help=f"operating mode ({', '.join(MODES)}) or "
+                    "auto (inferred from the measured speed ratio and its sign)")
     dg.add_argument("--design", help="design file (TOML)")
     dg.add_argument("--out", help="folder for plots, diagnosis.json, design_updated.toml")
     dg.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
+    dg.add_argument("--units", help="units of columns, overriding anything detected, e.g. "
+                    "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")
     dg.add_argument("--json", action="store_true")
     dg.set_defaults(func=cmd_diagnose)
     return p

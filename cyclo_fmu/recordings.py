@@ -190,7 +190,10 @@ def _check(data: dict, source: str, where, min_duration: float, min_samples: int
     n_in = data["speed_in_rpm"]
 
     duration = float(t[-1] - t[0]) if t.size else 0.0
-    if t.size < min_samples or duration < min_duration:
+    # block means: the raw samples behind them count (minus the samples excluded)
+    n_eff = t.size if not raw_samples or raw_samples <= n else \
+        raw_samples - sum(e.count for e in exclusions)
+    if n_eff < min_samples or duration < min_duration:
         raise RecordingError(
             f"time_s: the recording is too short: {t.size} samples over {duration:.6g} s after "
             f"exclusions; needs at least {min_samples} samples and {min_duration:g} s")

@@ -42,7 +42,7 @@ def load_recording(path, mode, design=None, columns=None, units=None, block=None
     ``id``, ``status``, ``message``); a finding with status "error" raises ``RecordingError``
     (one line: what was found, the likely cause, the override) instead."""
     from dataclasses import replace
-    from .checks import check_mode
+    from .checks import check_plausibility
     if isinstance(columns, str):
         columns = parse_column_map(columns)
     if isinstance(units, str):
@@ -53,11 +53,7 @@ def load_recording(path, mode, design=None, columns=None, units=None, block=None
             parse_mode(mode)
         except ValueError as exc:
             raise RecordingError(f"mode {mode!r}: {exc}; or 'auto'") from None
-    rec = read_recording(path, columns, units=units, block=block)
-    if design is None:
-        from model_core import DriveDesign
-        design = DriveDesign()
-    findings = list(rec.checks)
-    mode, findings = check_mode(rec, mode, design.z1, findings, tuple(units or ()))
+    rec = read_recording(path, columns, units=units, block=block, check=False)
+    mode, findings = check_plausibility(rec, mode, design, tuple(units or ()))
     rec = replace(rec, checks=tuple(findings))
     return rec, mode, findings

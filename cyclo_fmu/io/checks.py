@@ -78,7 +78,7 @@ def _error(f, findings):
     raise RecordingError(f["message"])
 
 
-def check_units(rec, units_given=(), findings=None) -> list:
+def check_units(rec, units_given=(), findings=None, balance=True) -> list:
     """The mode-independent checks (time unit, standstill, N*mm, power signs and balance).
     Raises on the first error; returns the findings."""
     findings = [] if findings is None else findings
@@ -112,8 +112,28 @@ def check_units(rec, units_given=(), findings=None) -> list:
                f"torque_in_Nm peaks at {T_peak:.6g}: that looks like N*mm, not N*m (give "
                "--units torque_in_Nm=N*mm, or --units torque_in_Nm=N*m if it is right)"),
                findings)
-    _power_balance(rec, units_given, findings)
+    if balance:
+        _power_balance(rec, units_given, findings)
     return findings
+
+
+#: [Pa] contact pressure at which a hardened steel roller's line contact takes a permanent
+#: set (ISO 76's 4000 MPa static limit for roller bearings)
+P_STATIC_LIMIT = 4.0e9
+#: [Pa] effective modulus E* = E / (2 (1 - nu^2)) of steel on steel, E = 210 GPa, nu = 0.3
+E_STAR_STEEL = 210e9 / (2 * (1 - 0.3 ** 2))
+
+
+def torque_capacity_out(design) -> float:
+    """Output torque [N*m] at which the most loaded ring roller reaches the static contact
+    limit: an upper bound of any plausible reading, used to spot torques in N*mm.
+
+    Line contact (Hertz): F = pi * b1 * R * p^2 / E*, R the ring roller's radius (the conforming
+    tooth flank only enlarges the contact, so this is the small end); load sharing after
+    Blanche & Yang (1989), F_max = 4 T / (z1 r_p), r_p = lambda e z1 the pitch radius."""
+    R = design.d_v1 / 2
+    F = math.pi * design.b1 * R * P_STATIC_LIMIT ** 2 / E_STAR_STEEL
+    return F * design.z1 * design.r_p / 4
 
 
 def _power_balance(rec, units_given, findings):
@@ -203,6 +223,25 @@ def check_mode(rec, mode: str, z1: int, findings=None, units_given=()):
     return mode, findings
 
 
+def check_capacity(rec, mode, design, findings, units_given=()):
+    """Input and output torque against the drive's static contact capacity (N*mm readings)."""
+    from model_core.kinematics import speed_ratio
+    cap_out = torque_capacity_out(design)
+    cap_in = cap_out / abs(speed_ratio(mode, design.z1))
+    for col, v, cap in (("torque_in_Nm", rec.torque_in, cap_in),
+                        ("torque_out_Nm", rec.torque_out, cap_out)):
+        peak = float(np.max(np.abs(v)))
+        if peak > cap and col not in units_given:
+            _error(_finding("torque_unit", "error",
+                   f"{col} peaks at {peak:.6g} N*m, above the {cap:.3g} N*m at which this drive's "
+                   f"rollers would take a permanent set (mode {mode}): that looks like N*mm; "
+                   f"give --units {col}=N*mm, or --units {col}=N*m if it is right"), findings)
+    findings.append(_finding("torque_level", "ok",
+                    f"torques below the static contact capacity ({cap_in:.3g} N*m in, "
+                    f"{cap_out:.3g} N*m out, mode {mode})"))
+
+
+
 def _no_mode(ratio, z1, ratios, mode, table, match=()):
     head = (f"speed ratio speed_in/speed_out measured {ratio:.5g}" +
             (f" does not match mode {mode} ({ratios[mode]:.5g})" if mode else
@@ -225,6 +264,8 @@ def check_plausibility(rec, mode, design=None, units_given=()):
     ``RecordingError`` naming the likely cause and the override."""
     from model_core import DriveDesign
     design = design or DriveDesign()
-    findings = check_units(rec, units_given)
+    findings = check_units(rec, units_given, balance=False)
     mode, findings = check_mode(rec, mode, design.z1, findings, units_given)
+    check_capacity(rec, mode, design, findings, units_given)
+    _power_balance(rec, units_given, findings)
     return mode, findings

@@ -34,13 +34,15 @@ def read_mdf(path, columns=None, units=None, block=None, raster=None) -> Table:
     except Exception as exc:                       # asammdf raises many kinds
         raise RecordingError(f"recording {str(path)!r} cannot be read as MDF ({exc})") from None
     try:
-        names = [n for n in mdf.channels_db if not n.startswith("$")]
+        masters = {mdf.groups[g].channels[i].name for g, i in mdf.masters_db.items()}
+        names = [n for n in mdf.channels_db if not n.startswith("$") and n not in masters]
         # a master (time) channel is implicit in MDF; offer it under the name 'time'
         header = ["time"] + [n for n in names if n.lower() not in ("time", "t")]
         mapping, notes = map_columns(header, columns, units)
         sigs, rates = {}, {}
         for key, (j, name) in mapping.items():
-            if key == "time_s" and name in ("time",) and name not in mdf.channels_db:
+            if key == "time_s" and name == "time" and (name in masters
+                                                         or name not in mdf.channels_db):
                 continue
             try:
                 s = mdf.get(name)

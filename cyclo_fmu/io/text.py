@@ -430,7 +430,8 @@ class _BlockAverager:
                     np.flatnonzero(np.diff(np.r_[self.last_t, tg]) < 0)[0]])
             return
         self.last_t = float(tg[-1])
-        b = np.floor((tg - self.t0) / self.block).astype(np.int64)
+        # 1e-6 of a block: a time written as 0.3 lands in block 3, not 2 (0.3/0.1 = 2.9999..)
+        b = np.floor((tg - self.t0) / self.block + 1e-6).astype(np.int64)
         b0 = int(b[0])
         rel = b - b0
         nb = int(rel[-1]) + 1
