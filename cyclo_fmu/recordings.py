@@ -123,7 +123,7 @@ def read_recording(path, columns: dict | None = None, min_duration: float = 5.0,
 
 def recording_from_arrays(time, speed_in_rpm, torque_in_Nm, speed_out_rpm, torque_out_Nm,
                           temperature_C=None, min_duration=5.0, min_samples=200,
-                          source="<array>") -> Recording:
+                          source="<array>", check: bool = True) -> Recording:
     """The same checks and conversion as ``read_recording`` on arrays: time in s, speeds in
     r/min, torques in N*m, temperature in degC (or None). NaN marks a missing sample."""
     arrays = dict(zip(REQUIRED, (time, speed_in_rpm, torque_in_Nm, speed_out_rpm, torque_out_Nm)))
@@ -137,7 +137,12 @@ def recording_from_arrays(time, speed_in_rpm, torque_in_Nm, speed_out_rpm, torqu
         bad = np.flatnonzero(np.isinf(v))
         if bad.size:
             raise RecordingError(f"column {key!r}, sample {bad[0]}: {v[bad[0]]} is not a number")
-    return _check(data, source, lambda k: f"sample {k}", min_duration, min_samples)
+    from .io.checks import check_magnitudes, check_units
+    rec = _check(data, source, lambda k: f"sample {k}", min_duration, min_samples,
+                 magnitudes=check_magnitudes)
+    if check:
+        rec = replace(rec, checks=tuple(check_units(rec)))
+    return rec
 
 
 def _check(data: dict, source: str, where, min_duration: float, min_samples: int,
@@ -164,8 +169,11 @@ def _check(data: dict, source: str, where, min_duration: float, min_samples: int
         raise RecordingError(
             f"{dropped} of {n} samples have NaN cells (more than {MAX_EXCLUDED:.0%}): "
             + "; ".join(f"{e.count} in {e.reason[7:]}" for e in exclusions))
-    idx = np.flatnonzero(keep)
-    data = {k: v[keep] for k, v in data.items()}
+    if dropped:
+        idx = np.flatnonzero(keep)
+        data = {k: v[keep] for k, v in data.items()}
+    else:
+        idx = range(n)                   # no copy of a long recording when nothing is left out
     t = data["time_s"]
 
     dt = np.diff(t)

@@ -279,7 +279,7 @@ class _Locator:
         return None
 
 
-def read_text(path, columns=None, units=None, block=None, chunk_bytes=64 << 20) -> Table:
+def read_text(path, columns=None, units=None, block=None, chunk_bytes=8 << 20) -> Table:
     """Read a CSV/ASCII recording into edge units; see the module docstring."""
     path = Path(path)
     source = str(path)
@@ -346,8 +346,12 @@ def _read_arrow(path, d, keys, idx, unit_map, block, loc, chunk_bytes):
     try:
         if not block:
             t = pc.read_csv(path, read_options=ro, parse_options=po, convert_options=co)
-            arrs = [t.column(names[j]).to_numpy(zero_copy_only=False).astype(float, copy=False)
-                    for j in idx]
+            arrs = []
+            for j in idx:                      # column by column, freeing the table's as we go
+                arrs.append(t.column(names[j]).to_numpy(zero_copy_only=False)
+                            .astype(float, copy=False))
+                t = t.drop_columns([names[j]])
+            del t
             _check_inf(arrs, keys, loc)
             data = _convert(dict(zip(keys, arrs)), unit_map)
             return data, len(arrs[0]), []
