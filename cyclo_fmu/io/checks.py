@@ -52,6 +52,23 @@ LOW_SPEED_RPM = 350.0
 ABSURD = {"time_s": 1e9, "speed_in_rpm": 1e6, "speed_out_rpm": 1e6, "torque_in_Nm": 1e7,
           "torque_out_Nm": 1e7, "temperature_C": 1e4}
 RPM = math.pi / 30
+#: samples per chunk: long recordings are judged chunk by chunk (few temporaries in memory)
+CHUNK = 1 << 20
+#: samples a median is taken over (an evenly strided subsample of longer recordings)
+MEDIAN_SAMPLES = 1 << 20
+
+
+def _slices(n):
+    for a in range(0, n, CHUNK):
+        yield slice(a, min(n, a + CHUNK))
+
+
+def _peak(x) -> float:
+    return max((float(np.max(np.abs(x[s]))) for s in _slices(len(x))), default=0.0)
+
+
+def _stride(n) -> int:
+    return max(1, -(-n // MEDIAN_SAMPLES))
 
 
 def check_magnitudes(data: dict, where) -> None:
@@ -60,13 +77,17 @@ def check_magnitudes(data: dict, where) -> None:
         v = data.get(key)
         if v is None or not len(v):
             continue
-        with np.errstate(invalid="ignore"):
-            bad = np.abs(v) > lim
-        if bad.any():
-            k = int(np.flatnonzero(bad)[0])
+        count, first = 0, None
+        for s in _slices(len(v)):
+            with np.errstate(invalid="ignore"):
+                bad = np.abs(v[s]) > lim
+            if bad.any():
+                count += int(bad.sum())
+                first = s.start + int(np.flatnonzero(bad)[0]) if first is None else first
+        if count:
             raise RecordingError(
-                f"column {key!r}, {where(k)}: {v[k]:.6g} is not a measurement (|value| > {lim:g} "
-                f"in the schema's unit); {int(bad.sum())} such cell(s); blank them to exclude them")
+                f"column {key!r}, {where(first)}: {v[first]:.6g} is not a measurement (|value| > "
+                f"{lim:g} in the schema's unit); {count} such cell(s); blank them to exclude them")
 
 
 def _finding(id_, status, message):
@@ -84,7 +105,8 @@ def check_units(rec, units_given=(), findings=None, balance=True) -> list:
     findings = [] if findings is None else findings
     t = rec.time
     if rec.n > 1:
-        dt = float(np.median(np.diff(t)))
+        st = _stride(rec.n)                    # consecutive pairs, every st-th one
+        dt = float(np.median(t[1::st] - t[0:-1:st]))
         if dt >= MS_SUSPECT_DT and rec.duration >= MS_SUSPECT_DURATION and \
                 "time_s" not in units_given:
             _error(_finding("time_unit", "error",
@@ -93,12 +115,13 @@ def check_units(rec, units_given=(), findings=None, balance=True) -> list:
                    "--units time_s=ms, or --units time_s=s if it really is seconds"), findings)
         findings.append(_finding("time_unit", "ok", f"time_s: median interval {dt:.6g} s "
                                  f"({1 / dt:.6g} Hz) over {rec.duration:.6g} s"))
-    n_in = np.abs(rec.speed_in) / RPM
-    peak = float(n_in.max()) if rec.n else 0.0
-    driven = n_in > STANDSTILL_RPM
-    if int(driven.sum()) < MIN_DRIVEN:
+    w = rec.speed_in
+    peak = _peak(w) / RPM
+    n_driven = sum(int(np.count_nonzero(np.abs(w[s]) > STANDSTILL_RPM * RPM))
+                   for s in _slices(rec.n))
+    if n_driven < MIN_DRIVEN:
         _error(_finding("standstill", "error",
-               f"speed_in_rpm: only {int(driven.sum())} samples turn faster than "
+               f"speed_in_rpm: only {n_driven} samples turn faster than "
                f"{STANDSTILL_RPM:g} r/min (peak {peak:.3g} r/min): the input shaft stands still, "
                f"nothing to diagnose (needs >= {MIN_DRIVEN} driven samples)"), findings)
     if peak < LOW_SPEED_RPM and "speed_in_rpm" not in units_given:
@@ -106,7 +129,7 @@ def check_units(rec, units_given=(), findings=None, balance=True) -> list:
                         f"speed_in_rpm peaks at {peak:.4g} r/min: a slow run, or rad/s written "
                         "as r/min, which torques and powers cannot tell apart; if rad/s, give "
                         "--units speed_in_rpm=rad/s,speed_out_rpm=rad/s"))
-    T_peak = float(np.max(np.abs(rec.torque_in)))
+    T_peak = _peak(rec.torque_in)
     if T_peak > N_MM_SUSPECT_NM and "torque_in_Nm" not in units_given:
         _error(_finding("torque_unit", "error",
                f"torque_in_Nm peaks at {T_peak:.6g}: that looks like N*mm, not N*m (give "
@@ -137,38 +160,48 @@ def torque_capacity_out(design) -> float:
 
 
 def _power_balance(rec, units_given, findings):
-    P_in = rec.torque_in * rec.speed_in
-    P_out = rec.torque_out * rec.speed_out
     if not rec.n:
         return
-    a_in, a_out = np.abs(P_in), np.abs(P_out)
-    loaded = (a_in > POWER_SHARE * a_in.max()) & (a_out > POWER_SHARE * a_out.max())
-    if loaded.sum() < 10:
+    sl = list(_slices(rec.n))
+    P_in = lambda s: rec.torque_in[s] * rec.speed_in[s]           # noqa: E731
+    P_out = lambda s: rec.torque_out[s] * rec.speed_out[s]        # noqa: E731
+    max_in = max(float(np.max(np.abs(P_in(s)))) for s in sl)
+    max_out = max(float(np.max(np.abs(P_out(s)))) for s in sl)
+    n_loaded = n_mismatch = n_in_pos = 0
+    sums = {"forward": [0, 0.0, 0.0], "back-driven": [0, 0.0, 0.0]}   # count, |P_in|, |P_out|
+    for s in sl:
+        pi, po = P_in(s), P_out(s)
+        loaded = (np.abs(pi) > POWER_SHARE * max_in) & (np.abs(po) > POWER_SHARE * max_out)
+        pi, po = pi[loaded], po[loaded]
+        n_loaded += pi.size
+        n_mismatch += int(np.count_nonzero(np.sign(pi) != np.sign(po)))
+        n_in_pos += int(np.count_nonzero(pi > 0))
+        for name, sel in (("forward", (pi > 0) & (po > 0)), ("back-driven", (pi < 0) & (po < 0))):
+            acc = sums[name]
+            acc[0] += int(np.count_nonzero(sel))
+            acc[1] += float(np.sum(np.abs(pi[sel])))
+            acc[2] += float(np.sum(np.abs(po[sel])))
+    if n_loaded < 10:
         findings.append(_finding("power_balance", "warning",
-                        f"only {int(loaded.sum())} samples where both shafts carry power: "
+                        f"only {n_loaded} samples where both shafts carry power: "
                         "power balance and torque signs not judged"))
         return
-    s_in, s_out = np.sign(P_in[loaded]), np.sign(P_out[loaded])
-    mismatch = float(np.mean(s_in != s_out))
+    mismatch = n_mismatch / n_loaded
     if mismatch > 0.5:
         # which one is wrong: the motor normally delivers power (input power positive)
-        col = "torque_out_Nm" if np.mean(s_in > 0) >= 0.5 else "torque_in_Nm"
+        col = "torque_out_Nm" if n_in_pos >= 0.5 * n_loaded else "torque_in_Nm"
         if col not in units_given:
             _error(_finding("torque_sign", "error",
                    f"{col} has the opposite sign: input and output power differ in sign on "
-                   f"{100 * mismatch:.0f} % of the {int(loaded.sum())} loaded samples (convention: "
+                   f"{100 * mismatch:.0f} % of the {n_loaded} loaded samples (convention: "
                    "torque_in delivered into the input shaft, torque_out delivered by the output "
                    f"shaft to the load); negate it with --units {col}=-N*m"), findings)
-    fwd = loaded & (P_in > 0) & (P_out > 0)
-    back = loaded & (P_in < 0) & (P_out < 0)
     msgs = []
-    for sel, name, ratio_of in ((fwd, "forward", lambda i, o: o / i),
-                                (back, "back-driven", lambda i, o: i / o)):
-        if sel.sum() < 10:
+    for name, (count, pi, po) in sums.items():
+        if count < 10:
             continue
-        pi, po = float(np.sum(np.abs(P_in[sel]))), float(np.sum(np.abs(P_out[sel])))
-        r = ratio_of(pi, po)
-        msgs.append(f"{name}: {int(sel.sum())} samples, efficiency {r:.3g}")
+        r = po / pi if name == "forward" else pi / po     # power leaving / power entering
+        msgs.append(f"{name}: {count} samples, efficiency {r:.3g}")
         if r > 1 / POWER_RATIO_MIN or r < POWER_RATIO_MIN:
             big = (r > 1) == (name == "forward")     # torque_out too large (forward)
             col = "torque_out_Nm" if big else "torque_in_Nm"
@@ -191,13 +224,14 @@ def check_mode(rec, mode: str, z1: int, findings=None, units_given=()):
     (``model_core.kinematics.speed_ratio``); ``mode='auto'`` picks the matching mode."""
     from model_core.kinematics import MODES, parse_mode, speed_ratio
     findings = [] if findings is None else findings
-    n_in, n_out = rec.speed_in / RPM, rec.speed_out / RPM
+    st = _stride(rec.n)                       # an evenly strided subsample of long recordings
+    n_in, n_out = rec.speed_in[::st] / RPM, rec.speed_out[::st] / RPM
     peak = float(np.max(np.abs(n_in)))
     sel = (np.abs(n_in) > max(STANDSTILL_RPM, POWER_SHARE * peak)) & \
           (np.abs(n_out) > STANDSTILL_RPM * 1e-3)
-    if sel.sum() < MIN_DRIVEN:
+    if sel.sum() < MIN_DRIVEN / st:
         _error(_finding("speed_ratio", "error",
-               f"speed_out_rpm: only {int(sel.sum())} samples where both shafts turn; the "
+               f"speed_out_rpm: only {int(sel.sum()) * st} samples where both shafts turn; the "
                f"mode cannot be checked (is speed_out_rpm the output shaft?)"), findings)
     ratio = float(np.median(n_in[sel] / n_out[sel]))
     ratios = {m: speed_ratio(m, z1) for m in MODES}
@@ -210,7 +244,7 @@ def check_mode(rec, mode: str, z1: int, findings=None, units_given=()):
         mode = match[0]
         findings.append(_finding("speed_ratio", "ok",
                         f"mode auto: measured speed ratio {ratio:.5g} (median over "
-                        f"{int(sel.sum())} driven samples) matches mode {mode} ({ratios[mode]:.5g}) "
+                        f"{int(sel.sum()) * st} driven samples) matches mode {mode} ({ratios[mode]:.5g}) "
                         f"of a z1 = {z1} drive"))
         return mode, findings
     mode = "".join(parse_mode(mode)[:2])
@@ -218,7 +252,7 @@ def check_mode(rec, mode: str, z1: int, findings=None, units_given=()):
         _error(_finding("speed_ratio", "error", _no_mode(ratio, z1, ratios, mode, table, match)),
                findings)
     findings.append(_finding("speed_ratio", "ok",
-                    f"speed ratio {ratio:.5g} (median over {int(sel.sum())} driven samples) "
+                    f"speed ratio {ratio:.5g} (median over {int(sel.sum()) * st} driven samples) "
                     f"matches mode {mode} ({ratios[mode]:.5g})"))
     return mode, findings
 
@@ -230,7 +264,7 @@ def check_capacity(rec, mode, design, findings, units_given=()):
     cap_in = cap_out / abs(speed_ratio(mode, design.z1))
     for col, v, cap in (("torque_in_Nm", rec.torque_in, cap_in),
                         ("torque_out_Nm", rec.torque_out, cap_out)):
-        peak = float(np.max(np.abs(v)))
+        peak = _peak(v)
         if peak > cap and col not in units_given:
             _error(_finding("torque_unit", "error",
                    f"{col} peaks at {peak:.6g} N*m, above the {cap:.3g} N*m at which this drive's "
