@@ -307,6 +307,9 @@ def read_text(path, columns=None, units=None, block=None, chunk_bytes=8 << 20) -
                      f"{', '.join(u for u in d.units_row if u)})")
     notes += unit_notes
     loc = _Locator(path, d, mapping)
+    data_text = text.splitlines()[d.first_data_line:]
+    loc.bytes_per_row = (len(raw) * sum(map(len, data_text)) / max(1, len(text))
+                         / max(1, len(data_text)))
     keys = list(mapping)
     idx = [mapping[k][0] for k in keys]
     if d.delimiter == " ":
@@ -357,16 +360,33 @@ def _read_arrow(path, d, keys, idx, unit_map, block, loc, chunk_bytes):
             return data, len(arrs[0]), []
         reader = pc.open_csv(path, read_options=ro, parse_options=po, convert_options=co)
         acc = _BlockAverager(keys, block)
+        bar = _progress(path, loc)
         for batch in reader:
+            bar.update(batch.num_rows)
             arrs = [batch.column(names[j]).to_numpy(zero_copy_only=False).astype(float)
                     for j in idx]
             _check_inf(arrs, keys, loc)
             acc.add(_convert(dict(zip(keys, arrs)), unit_map))
+        bar.close()
         return acc.result()
     except (pa.ArrowInvalid, UnicodeDecodeError, ValueError) as exc:
         if isinstance(exc, RecordingError):
             raise
         raise _fail(loc, exc) from None
+
+
+#: [bytes] a progress bar (stderr, terminals only) for block reads of files larger than this
+PROGRESS_BYTES = 200 << 20
+
+
+def _progress(path, loc):
+    """tqdm bar over the estimated row count (file size / mean line length of the sample)."""
+    import sys
+    from tqdm import tqdm
+    size = Path(path).stat().st_size
+    per_row = max(1.0, loc.bytes_per_row)
+    return tqdm(total=int(size / per_row), unit=" rows", unit_scale=True, leave=False,
+                desc="reading", disable=size < PROGRESS_BYTES or not sys.stderr.isatty())
 
 
 def _read_whitespace(path, d, keys, idx, unit_map, block, loc):
