@@ -97,7 +97,7 @@ def parse_column_map(text: str) -> dict:
 
 def read_recording(path, columns: dict | None = None, min_duration: float = 5.0,
                    min_samples: int = 200, units: dict | None = None, block: float | None = None,
-                   check: bool = True) -> Recording:
+                   check: bool = True, raster: float | None = None) -> Recording:
     """Read a recording (CSV/ASCII of any common dialect, or MDF4), check it and convert to SI.
 
     The front door of ``cyclo_fmu.io``: the format is chosen by content (MDF's identification
@@ -106,11 +106,12 @@ def read_recording(path, columns: dict | None = None, min_duration: float = 5.0,
     (``{"torque_in_Nm": "N*mm"}``); both override anything detected. ``block`` [s] returns means
     over blocks of that length, averaged while reading (chunked: for recordings too large for
     memory). ``min_duration`` s and ``min_samples`` apply after exclusions. ``check`` runs the
-    mode-independent plausibility checks (``cyclo_fmu.io.checks.check_units``). Row numbers in
+    mode-independent plausibility checks (``cyclo_fmu.io.checks.check_units``). ``raster`` [s]:
+    the time step MDF channels are resampled onto (default: the fastest channel's). Row numbers in
     messages are file lines (the header is row 1 when there are no metadata lines)."""
     from .io import read_table
     from .io.checks import check_magnitudes, check_units
-    tab = read_table(path, columns=columns, units=units, block=block)
+    tab = read_table(path, columns=columns, units=units, block=block, raster=raster)
     rec = _check(tab.data, tab.source, tab.line_of, min_duration, min_samples,
                  pre_exclusions=tab.exclusions, notes=tuple(tab.notes),
                  units={k: v for k, v in tab.units.items()}, raw_samples=tab.raw_samples,

@@ -227,3 +227,44 @@ def test_dialect_round_trip_property(tmp_path_factory, delim, decimal, meta, uni
     p.write_bytes(("\r\n" if crlf else "\n").join(lines).encode(enc))
     r = read_recording(p, min_duration=1.0)
     assert_same(r, ref)
+
+
+@pytest.mark.parametrize("delim, edit, words", [
+    (",", lambda c: c[:2] + c[3:], "row 42 has 5 fields, the header has 6"),    # a lost field
+    ("\t", lambda c: c + ["1.5"], "row 42 has 7 fields, the header has 6"),
+    (" ", lambda c: c[:-1], "row 42 has 5 fields, the header has 6"),
+    (";", lambda c: c[:2] + ["abc"] + c[3:], "'torque_in_Nm', row 42: 'abc' is not a number"),
+])
+def test_row_width_and_bad_cells_name_the_row(tmp_path, delim, edit, words):
+    lines = table(REF, COLS, delim)
+    sep = delim if delim != " " else " "
+    lines[41] = sep.join(edit(lines[41].split(sep)))
+    p = tmp_path / "bad.txt"
+    p.write_text("\n".join(lines) + "\n")
+    with pytest.raises(RecordingError, match=words.replace("(", r"\(")):
+        read_recording(p)
+
+
+def test_block_read_refuses_time_going_backwards(tmp_path):
+    lines = table(REF, COLS)
+    lines[800], lines[801] = lines[801], lines[800]
+    p = tmp_path / "back.csv"
+    p.write_text("\n".join(lines) + "\n")
+    with pytest.raises(RecordingError, match="time_s goes backwards at data row 801"):
+        read_recording(p, block=0.1)
+    with pytest.raises(RecordingError, match="time_s goes backwards at row 802"):
+        read_recording(p)
+
+
+@settings(max_examples=60, deadline=None)
+@given(quantity=st.sampled_from(["time", "speed", "torque", "temperature"]), data=st.data())
+def test_unit_conversion_round_trip(quantity, data):
+    """Writing a value in any accepted unit and reading it back gives the edge-unit value."""
+    from cyclo_fmu.io.units import _FACTORS, unit_conversion
+    unit = data.draw(st.sampled_from(sorted(_FACTORS[quantity])))
+    x = data.draw(st.floats(-1e4, 1e4, allow_nan=False))
+    f, off, sign = unit_conversion(quantity, unit)
+    written = (x - off) / f                    # what a file in that unit holds
+    assert sign == 1.0 and f * written + off == pytest.approx(x, rel=1e-12, abs=1e-9)
+    f2, off2, sign2 = unit_conversion(quantity, "-" + unit)
+    assert sign2 == -1.0 and (f2, off2) == (f, off)
