@@ -268,3 +268,12 @@ def test_unit_conversion_round_trip(quantity, data):
     assert sign == 1.0 and f * written + off == pytest.approx(x, rel=1e-12, abs=1e-9)
     f2, off2, sign2 = unit_conversion(quantity, "-" + unit)
     assert sign2 == -1.0 and (f2, off2) == (f, off)
+
+
+def test_trailing_delimiter_on_data_rows(tmp_path):
+    """Some exports end every data row with the delimiter but not the header."""
+    lines = table(REF, COLS, ";")
+    lines = lines[:1] + [l + ";" for l in lines[1:]]
+    p = tmp_path / "trail.csv"
+    p.write_text("\n".join(lines) + "\n")
+    assert_same(read_recording(p))

@@ -181,6 +181,10 @@ def _header_cells(line, delim, width):
     c = _split(line, delim)
     if len(c) == width:
         return c
+    if len(c) == width - 1:                    # data rows end with a delimiter, the header not
+        return c + [""]
+    if len(c) == width + 1 and not c[-1].strip():
+        return c[:-1]
     if delim == " ":                           # names with spaces: 'time [s]  torque_in [N*m]'
         c = [x for x in re.split(r"\t|\s{2,}", line.strip()) if x]
         if len(c) == width:
