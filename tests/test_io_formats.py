@@ -277,3 +277,22 @@ def test_trailing_delimiter_on_data_rows(tmp_path):
     p = tmp_path / "trail.csv"
     p.write_text("\n".join(lines) + "\n")
     assert_same(read_recording(p))
+
+
+def test_mdf4_channels_by_columns_and_missing_asammdf(tmp_path, monkeypatch):
+    from asammdf import MDF, Signal
+    t = REF["time_s"]
+    mdf = MDF(version="4.10")
+    names = ["K1", "K2", "K3", "K4"]                 # nothing a name heuristic could read
+    mdf.append([Signal(REF[c], t, name=n, unit=u) for c, n, u in zip(
+        COLS[1:5], names, ["1/min", "N*m", "1/min", "N*m"])])
+    p = tmp_path / "k.mf4"
+    mdf.save(p, overwrite=True)
+    mdf.close()
+    with pytest.raises(RecordingError, match="'speed_in_rpm' is missing; found: time, K1"):
+        read_recording(p)
+    r = read_recording(p, dict(zip(COLS[1:5], names)))
+    np.testing.assert_allclose(r.torque_out, REF["torque_out_Nm"], rtol=1e-12)
+    monkeypatch.setitem(__import__("sys").modules, "asammdf", None)
+    with pytest.raises(RecordingError, match=r"reading MDF needs asammdf: pip install"):
+        read_recording(p)
