@@ -296,3 +296,16 @@ def test_mdf4_channels_by_columns_and_missing_asammdf(tmp_path, monkeypatch):
     monkeypatch.setitem(__import__("sys").modules, "asammdf", None)
     with pytest.raises(RecordingError, match=r"reading MDF needs asammdf: pip install"):
         read_recording(p)
+
+
+def test_binary_files_are_named_not_parsed(tmp_path):
+    import zipfile
+    z = tmp_path / "run.xlsx"
+    with zipfile.ZipFile(z, "w") as f:
+        f.writestr("xl/workbook.xml", "<workbook/>")
+    with pytest.raises(RecordingError, match="zip archive .*xlsx.*export it as CSV"):
+        read_recording(z)
+    b = tmp_path / "run.bin"
+    b.write_bytes(bytes(range(256)) * 40)
+    with pytest.raises(RecordingError, match="is a binary file"):
+        read_recording(b)

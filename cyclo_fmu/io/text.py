@@ -302,6 +302,7 @@ def read_text(path, columns=None, units=None, block=None, chunk_bytes=8 << 20) -
         raise RecordingError(f"recording {source!r} cannot be read ({exc})") from None
     enc = detect_encoding(raw)
     text = raw.decode(enc, errors="ignore" if enc.startswith("utf-16") else "replace")
+    _refuse_binary(raw, text, source)
     if not text.strip():
         raise RecordingError(f"recording {source!r} is empty")
     d = sniff(text, enc, source)
@@ -332,6 +333,21 @@ def read_text(path, columns=None, units=None, block=None, chunk_bytes=8 << 20) -
         notes.append(f"block means over {block:g} s while reading: {n_raw} raw samples -> "
                      f"{len(data['time_s'])} blocks")
     return Table(data, notes, unit_map, source, loc.line_of, n_raw, block, excl)
+
+
+#: share of control characters (other than tab, CR, LF) above which a file is not text
+BINARY_SHARE = 0.01
+
+
+def _refuse_binary(raw: bytes, text: str, source: str):
+    if raw.startswith(b"PK\x03\x04"):
+        raise RecordingError(f"recording {source!r} is a zip archive (an .xlsx workbook?), not "
+                             "CSV/ASCII or MDF; export it as CSV")
+    sample = text[:65536]
+    ctrl = sum(1 for ch in sample if ord(ch) < 32 and ch not in "\t\r\n")
+    if sample and ctrl > BINARY_SHARE * len(sample):
+        raise RecordingError(f"recording {source!r} is a binary file, neither CSV/ASCII nor MDF "
+                             f"(first bytes {raw[:8]!r})")
 
 
 def _fail(loc: _Locator, exc) -> RecordingError:
