@@ -349,6 +349,66 @@ def _write_diagnosis(out_dir, d, design, result):
             f"# {n}\n" for n in notes))
 
 
+def _workers(args):
+    if getattr(args, "workers", None) is not None and args.workers < 1:
+        raise CycloidInputError("workers", args.workers, "must be at least 1")
+    if not args.serial:
+        from .sweep import require_dask
+        require_dask()
+
+
+def cmd_sweep(args) -> int:
+    from .sweep import load_spec, run_sweep
+    spec = load_spec(args.spec)
+    _output_file("out", args.out)
+    if Path(args.out).suffix.lower() != ".parquet":
+        raise CycloidInputError("out", args.out, "must end in .parquet")
+    _workers(args)
+    n = len(spec.designs())
+    df = run_sweep(spec, scheduler=args.scheduler, workers=args.workers, serial=args.serial)
+    with _staged_file("out", args.out) as tmp:
+        df.to_parquet(tmp, index=False)
+    bad = int((df["error"] != "").sum())
+    print(f"sweep: {n} designs x {len(spec.modes)} modes -> {args.out} ({len(df)} rows"
+          f"{f', {bad} with an error (column error)' if bad else ''})")
+    return 0
+
+
+def cmd_diagnose_batch(args) -> int:
+    from .recordings import RecordingError, parse_column_map
+    from .sweep import diagnose_batch, find_recordings
+    folder = Path(args.folder)
+    if not folder.is_dir():
+        raise CycloidInputError("folder", args.folder, "is not a folder")
+    paths = find_recordings(folder)
+    if not paths:
+        raise CycloidInputError("folder", args.folder, "holds no recording (*.csv, *.mf4)")
+    design = _load_design(args.design)
+    mode = "".join(parse_mode(args.mode)[:2])
+    try:
+        columns = parse_column_map(args.columns) if args.columns else None
+    except RecordingError as exc:
+        raise CycloidInputError("columns", args.columns, str(exc))
+    _workers(args)
+    with _staged_dir("out", args.out) as out:
+        df = diagnose_batch(folder, out, design, mode, columns=columns,
+                            scheduler=args.scheduler, workers=args.workers, serial=args.serial)
+    bad = int((df["error"] != "").sum())
+    print(f"diagnose-batch: {len(df)} recordings -> {args.out}/summary.csv"
+          f"{f'; {bad} could not be diagnosed (column error)' if bad else ''}")
+    for _, r in df.iterrows():
+        print(f"  {r['recording']}: {r['error'] or r['effect']}")
+    return 0
+
+
+def _cluster_options(p):
+    p.add_argument("--scheduler", help="address of a running dask scheduler "
+                   "(default: a local cluster)")
+    p.add_argument("--workers", type=int, help="worker processes of the local cluster "
+                   "(default: the CPU count, at most 8)")
+    p.add_argument("--serial", action="store_true", help="run in this process, without dask")
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="cyclo-fmu", description="Cycloid-drive losses, efficiency and FMI tools.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -401,6 +461,22 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     dg.add_argument("--json", action="store_true")
     dg.set_defaults(func=cmd_diagnose)
+    sw = sub.add_parser("sweep", help="design study: many designs over the bench envelope "
+                        "(dask)")
+    sw.add_argument("spec", help="sweep spec (TOML; see examples/sweep.toml)")
+    sw.add_argument("--out", required=True, help="results file (.parquet)")
+    _cluster_options(sw)
+    sw.set_defaults(func=cmd_sweep)
+    db = sub.add_parser("diagnose-batch", help="diagnose every recording (*.csv, *.mf4) in a "
+                        "folder (dask)")
+    db.add_argument("folder", help="folder of recordings")
+    db.add_argument("--out", required=True, help="folder for one result folder per recording "
+                    "and summary.csv")
+    db.add_argument("--mode", required=True)
+    db.add_argument("--design", help="design file (TOML)")
+    db.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
+    _cluster_options(db)
+    db.set_defaults(func=cmd_diagnose_batch)
     return p
 
 
