@@ -36,6 +36,7 @@ DESIGN_COMMANDS = {
     "paper": ["paper", "--out", "{tmp}/paper_out"],
     "bench": ["bench", "--mode", "S1", "--out", "{tmp}/bench_out"],
     "diagnose": ["diagnose", "missing-recording.csv", "--mode", "S1"],
+    "diagnose-batch": ["diagnose-batch", "{recdir}", "--mode", "S1", "--out", "{tmp}/batch"],
 }
 
 SEED_COMMANDS = {
@@ -55,7 +56,7 @@ BAD_DESIGNS = {
 SPEC = """[sweep]
 method = "grid"
 [fields]
-e = [0.001, 0.0015, 2]
+lam = [1.6, 2.0, 2]
 """
 
 
@@ -88,6 +89,7 @@ def _fill(argv, tmp):
     spec.write_text(SPEC)
     recdir = tmp / "recordings"
     recdir.mkdir(exist_ok=True)
+    (recdir / "r.csv").write_text("time_s\n0\n")
     return [a.format(tmp=tmp, spec=spec, recdir=recdir) for a in argv]
 
 
