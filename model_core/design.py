@@ -11,7 +11,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: the same parser as the tomli package
+    import tomli as tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 

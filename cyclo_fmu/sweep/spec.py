@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -35,9 +34,9 @@ from model_core import CycloidInputError, DriveDesign
 from model_core.design import design_from_dict, design_from_toml, design_to_dict
 from model_core.paper import BenchEnvelope
 
-if sys.version_info >= (3, 11):
+try:
     import tomllib
-else:  # pragma: no cover
+except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
 METHODS = ("grid", "lhs", "table")
