@@ -104,9 +104,15 @@ def test_every_output_option_is_covered():
             assert name in SEED_COMMANDS, f"list {name} in SEED_COMMANDS"
 
 
+# bad-output classes per kind of option: an output folder is created with its missing parents
+# (documented), an existing output file is replaced at the end (atomically)
+OUTPUT_CASES = {"dir": ("is_file", "under_file", "unwritable"),
+                "file": ("under_file", "missing_parent", "unwritable", "is_folder")}
+
+
 def _output_cases():
-    for name in OUTPUT_COMMANDS:
-        for case in ("is_file", "under_file", "missing_parent", "unwritable", "is_folder"):
+    for name, (_, _, kind) in OUTPUT_COMMANDS.items():
+        for case in OUTPUT_CASES[kind]:
             yield name, case
 
 
@@ -118,20 +124,14 @@ def test_bad_output(tmp_path, name, case):
     argv = _fill(argv, tmp_path)
     (tmp_path / "a_file").write_text("keep me")
     if case == "is_file":
-        if kind == "file":
-            pytest.skip("an existing file is replaced (at the end, atomically)")
         target = tmp_path / "a_file"
     elif case == "under_file":
         target = tmp_path / "a_file" / "sub"
     elif case == "missing_parent":
-        if kind == "dir":
-            pytest.skip("output folders are created with their parents (documented)")
         target = tmp_path / "missing" / "out.x"
     elif case == "unwritable":
         target = Path("/proc/cyclo-fmu-test/out")        # not writable even for root
     else:   # a folder where a file is expected
-        if kind == "dir":
-            pytest.skip("a folder is what a folder option expects")
         (tmp_path / "a_folder").mkdir()
         target = tmp_path / "a_folder"
     before = _tree(tmp_path)
