@@ -3,6 +3,7 @@ results (issue 9, item 6); specs are checked with errors naming the field."""
 from __future__ import annotations
 
 import json
+import sys
 import math
 
 import numpy as np
@@ -146,4 +147,15 @@ def test_cli_sweep_bad_options(tmp_path, capsys, extra, field):
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and field in err[0]
+    assert sorted(tmp_path.iterdir()) == [p]
+
+
+def test_missing_dask_is_one_line(tmp_path, capsys, monkeypatch):
+    from cyclo_fmu.cli import main
+    monkeypatch.setitem(sys.modules, "distributed", None)     # import fails as if absent
+    p = tmp_path / "spec.toml"
+    p.write_text(SPEC.format(method="grid", lam="[1.6, 2.0, 2]", mu="[0.08, 0.1, 2]"))
+    assert main(["sweep", str(p), "--out", str(tmp_path / "r.parquet")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cyclo-fmu[sweep]" in err[0]
     assert sorted(tmp_path.iterdir()) == [p]
