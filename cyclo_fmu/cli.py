@@ -134,6 +134,42 @@ def _check_seed(seed):
         raise CycloidInputError("seed", seed, "must be a whole number from 0 to 2^63 - 1")
 
 
+_FMU_ERRORS = []       # the last error-level messages the FMUs logged (instance, message)
+
+
+def _collect_fmu_log() -> None:
+    """Route the FMUs' log through the CLI: errors are kept so that a failing FMU call ends in
+    one line with the FMU's own message; other messages stay unprinted, as with logging off
+    before. A command that runs FMUs opts in with ``set_defaults(fmus=True)``."""
+    try:
+        from ctypes import byref
+        import fmpy.fmi2 as f2
+        from fmpy.logging import addLoggerProxy
+    except Exception:          # noqa: BLE001 - no fmpy (or no native logger): fmpy's default
+        return
+
+    def logger(component, instance, status, category, message):
+        if status >= 3:        # fmi2Error, fmi2Fatal
+            _FMU_ERRORS.append(((instance or b"").decode("utf-8", "replace"),
+                                (message or b"").decode("utf-8", "replace")))
+            del _FMU_ERRORS[:-5]
+
+
+    cb = f2.fmi2CallbackFunctions()
+    cb.logger = f2.fmi2CallbackLoggerTYPE(logger)
+    cb.allocateMemory = f2.defaultCallbacks.allocateMemory
+    cb.freeMemory = f2.defaultCallbacks.freeMemory
+    addLoggerProxy(byref(cb))
+    f2.defaultCallbacks = cb
+    # pythonfmu passes messages on only with logging on; only errors are kept above
+    plain = f2._FMU2.instantiate
+
+    def instantiate(self, visible=False, callbacks=None, loggingOn=True):
+        return plain(self, visible=visible, callbacks=callbacks, loggingOn=loggingOn)
+    f2._FMU2.instantiate = instantiate
+    _collect_fmu_log.keep = (cb, logger)    # ctypes callbacks must outlive every FMU
+
+
 def _load_design(path):
     return DriveDesign() if path is None else design_from_toml(Path(path))
 
@@ -439,7 +475,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--seed", type=int, default=1, help="noise seed of the transducers")
     bench.add_argument("--design", help="design file (TOML) for the reducer, e.g. the "
                        "design_updated.toml a diagnosis wrote")
-    bench.set_defaults(func=cmd_bench)
+    bench.set_defaults(func=cmd_bench, fmus=True)
     sy = sub.add_parser("synth", help="write a bench recording with one hidden effect")
     sy.add_argument("--effect", required=True, help="hidden effect id (see model_core.effects)")
     sy.add_argument("--seed", type=int, default=1)
@@ -452,7 +488,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "varied) or one_speed (load steps at 2000 r/min only)")
     sy.add_argument("--engine", default="fast", help="fast (the bench's components replayed "
                     "vectorised) or bench (the bench's FMUs co-simulated; slower)")
-    sy.set_defaults(func=cmd_synth)
+    sy.set_defaults(func=cmd_synth, fmus=True)
     dg = sub.add_parser("diagnose", help="locate, explain and model the mismatch of a recording")
     dg.add_argument("recording", help="recording CSV")
     dg.add_argument("--mode", required=True)
@@ -501,6 +537,8 @@ def _join_signed_numbers(argv):
 def main(argv=None) -> int:
     argv = _join_signed_numbers(list(sys.argv[1:] if argv is None else argv))
     args = build_parser().parse_args(argv)
+    if getattr(args, "fmus", False):
+        _collect_fmu_log()
     try:
         return args.func(args)
     except CycloidInputError as exc:
@@ -518,8 +556,9 @@ def main(argv=None) -> int:
     except Exception as exc:        # an FMU's error: surface its message in one line
         if type(exc).__module__.split(".")[0] != "fmpy":
             raise
-        print(f"cyclo-fmu: error: {args.command}: FMU failed: {' '.join(str(exc).split())}",
-              file=sys.stderr)
+        logged = "; ".join(f"{i}: {m}" for i, m in _FMU_ERRORS[-2:])
+        text = " ".join(f"{exc}{f' ({logged})' if logged else ''}".split())
+        print(f"cyclo-fmu: error: {args.command}: FMU failed: {text}", file=sys.stderr)
         return 2
 
 

@@ -211,3 +211,35 @@ def test_staged_dir_removes_what_it_created(tmp_path):
             (d / "half.json").write_text("{")
             raise RuntimeError("mid-way")
     assert _tree(tmp_path) == ["old", "old/kept.txt"]
+
+
+FMU_FAILS = """
+import sys
+from cyclo_fmu import cli
+
+def failing(args):          # stands in for any FMU-running command
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+    md = read_model_description(sys.argv[1])
+    var = {v.name: v.valueReference for v in md.modelVariables}
+    f = FMU2Slave(guid=md.guid, unzipDirectory=extract(sys.argv[1]),
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="drive")
+    f.instantiate()
+    f.setupExperiment(startTime=0.0)
+    f.enterInitializationMode()
+    f.exitInitializationMode()
+    f.setReal([var["w_in"], var["tau_out"]], [100.0, float("inf")])
+    f.doStep(0.0, 1e-3)
+
+cli.cmd_bench = failing
+sys.exit(cli.main(["bench", "--mode", "S1", "--out", sys.argv[2]]))
+"""
+
+
+def test_fmu_error_surfaces_its_logged_message(tmp_path, fmu):
+    """An FMU that fails ends in one line carrying the FMU's own logged message."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    r = subprocess.run([sys.executable, "-c", FMU_FAILS, fmu, str(tmp_path / "o")],
+                       cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    _assert_one_line(r, "FMU failed", "tau_out = inf")
+    assert not (tmp_path / "o").exists()
