@@ -6,9 +6,14 @@ in and out. Errors: one line on stderr, exit status 2.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
+import os
+import shutil
 import sys
+import tempfile
+from pathlib import Path
 
 import numpy as np
 
@@ -32,8 +37,141 @@ def _number(name):
     return conv
 
 
+# -- shared robustness helpers: every command validates its outputs up front and writes them so
+# that a failure leaves nothing half-written --------------------------------------------------
+
+def _nearest_existing(path: Path) -> Path:
+    p = path
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    return p
+
+
+def _output_dir(field: str, path, create: bool = True) -> Path:
+    """Check an output folder before any work: it may exist (a folder, writable) or be created
+    with its missing parents; an ancestor that is a file, or an unwritable one, is an error
+    naming ``field`` and the path. Returns the folder (created when ``create``)."""
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise CycloidInputError(field, str(path), "is a file, not a folder")
+    base = _nearest_existing(p)
+    if not base.is_dir():
+        raise CycloidInputError(field, str(path), f"{base} is a file, not a folder")
+    if not os.access(base, os.W_OK | os.X_OK):
+        raise CycloidInputError(field, str(path), f"{base} is not writable")
+    missing = [q for q in [p, *p.parents] if not q.exists()]
+    try:   # a real probe: permissions alone do not tell (root, read-only or virtual file systems)
+        p.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=p):
+            pass
+    except OSError as exc:
+        raise CycloidInputError(field, str(path), f"cannot be written ({exc.strerror})") from None
+    finally:
+        if not create:
+            for q in missing:
+                with contextlib.suppress(OSError):
+                    q.rmdir()
+    return p
+
+
+def _output_file(field: str, path) -> Path:
+    """Check an output file before any work: its folder must exist and be writable, and the
+    path must not be a folder."""
+    p = Path(path)
+    if p.is_dir():
+        raise CycloidInputError(field, str(path), "is a folder, not a file")
+    parent = p.parent
+    if not parent.exists():
+        raise CycloidInputError(field, str(path), f"folder {parent} does not exist")
+    if not parent.is_dir():
+        raise CycloidInputError(field, str(path), f"{parent} is a file, not a folder")
+    if not os.access(parent, os.W_OK | os.X_OK) or (p.exists() and not os.access(p, os.W_OK)):
+        raise CycloidInputError(field, str(path), "is not writable")
+    try:
+        with tempfile.TemporaryFile(dir=parent):
+            pass
+    except OSError as exc:
+        raise CycloidInputError(field, str(path), f"cannot be written ({exc.strerror})") from None
+    return p
+
+
+@contextlib.contextmanager
+def _staged_dir(field: str, path):
+    """Yield the output folder (validated, created); if the command fails, remove what it added:
+    the folder itself (and parents) when it did not exist, else the new entries."""
+    p = Path(path)
+    created = [] if p.exists() else [q for q in [p, *p.parents] if not q.exists()]
+    before = set(p.iterdir()) if p.exists() and p.is_dir() else set()
+    _output_dir(field, p, create=True)
+    try:
+        yield p
+    except BaseException:
+        if created:
+            shutil.rmtree(created[-1], ignore_errors=True)
+        else:
+            for q in set(p.iterdir()) - before:
+                shutil.rmtree(q, ignore_errors=True) if q.is_dir() else q.unlink(missing_ok=True)
+        raise
+
+
+@contextlib.contextmanager
+def _staged_file(field: str, path):
+    """Yield a temporary path next to the output file (validated); moved onto it on success,
+    removed on failure."""
+    p = _output_file(field, path)
+    tmp = p.with_name(f".{p.name}.partial-{os.getpid()}{p.suffix}")
+    try:
+        yield tmp
+        if tmp.exists():
+            os.replace(tmp, p)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def _check_seed(seed):
+    if seed is not None and not 0 <= seed < 2 ** 63:
+        raise CycloidInputError("seed", seed, "must be a whole number from 0 to 2^63 - 1")
+
+
+_FMU_ERRORS = []       # the last error-level messages the FMUs logged (instance, message)
+
+
+def _collect_fmu_log() -> None:
+    """Route the FMUs' log through the CLI: errors are kept so that a failing FMU call ends in
+    one line with the FMU's own message; other messages stay unprinted, as with logging off
+    before. A command that runs FMUs opts in with ``set_defaults(fmus=True)``."""
+    try:
+        from ctypes import byref
+        import fmpy.fmi2 as f2
+        from fmpy.logging import addLoggerProxy
+    except Exception:          # noqa: BLE001 - no fmpy (or no native logger): fmpy's default
+        return
+
+    def logger(component, instance, status, category, message):
+        if status >= 3:        # fmi2Error, fmi2Fatal
+            _FMU_ERRORS.append(((instance or b"").decode("utf-8", "replace"),
+                                (message or b"").decode("utf-8", "replace")))
+            del _FMU_ERRORS[:-5]
+
+
+    cb = f2.fmi2CallbackFunctions()
+    cb.logger = f2.fmi2CallbackLoggerTYPE(logger)
+    cb.allocateMemory = f2.defaultCallbacks.allocateMemory
+    cb.freeMemory = f2.defaultCallbacks.freeMemory
+    addLoggerProxy(byref(cb))
+    f2.defaultCallbacks = cb
+    # pythonfmu passes messages on only with logging on; only errors are kept above
+    plain = f2._FMU2.instantiate
+
+    def instantiate(self, visible=False, callbacks=None, loggingOn=True):
+        return plain(self, visible=visible, callbacks=callbacks, loggingOn=loggingOn)
+    f2._FMU2.instantiate = instantiate
+    _collect_fmu_log.keep = (cb, logger)    # ctypes callbacks must outlive every FMU
+
+
 def _load_design(path):
-    return DriveDesign() if path is None else design_from_toml(__import__("pathlib").Path(path))
+    return DriveDesign() if path is None else design_from_toml(Path(path))
 
 
 def _json_num(x):
@@ -48,7 +186,17 @@ def cmd_efficiency(args) -> int:
         raise CycloidInputError("speed", args.speed, "must be a finite number of r/min")
     if not math.isfinite(args.torque):
         raise CycloidInputError("torque", args.torque, "must be a finite number of N*m")
+    if args.torque == 0:
+        raise CycloidInputError("torque", args.torque, "no power flows at zero torque: the "
+                                "efficiency is undefined (give the torque of the load case)")
     op = operating_point(design, a + b, rpm_to_rad_s(args.speed), args.torque)
+    from model_core.contact import ring_torque_rating
+    rating = ring_torque_rating(design)
+    T_ring = abs(float(op.torques["1"]))
+    if math.isfinite(T_ring) and T_ring > rating:
+        raise CycloidInputError("torque", args.torque, f"puts {T_ring:.4g} N*m on the ring, beyond "
+                                f"the design's static rating {rating:.4g} N*m (Hertz pressure "
+                                "4000 MPa on the ring rollers, ISO 76)")
     losses = {k: _json_num(v) for k, v in op.losses.as_dict().items()}
     stalled = not bool(op.locked) and not math.isfinite(float(op.torques[b]))
     p_in = float(op.input_power)
@@ -101,38 +249,49 @@ def cmd_efficiency(args) -> int:
 
 def cmd_paper(args) -> int:
     from .paper import run_paper_comparison
-    return run_paper_comparison(_load_design(args.design), args.out, args.json)
+    design = _load_design(args.design)
+    if not args.out:
+        return run_paper_comparison(design, args.out, args.json)
+    with _staged_dir("out", args.out) as out:
+        return run_paper_comparison(design, out, args.json)
 
 
 def cmd_build(args) -> int:
     from .fmu_build import SLAVES, build_fmu
-    for name in args.names or list(SLAVES):
+    for name in args.names:
         if name not in SLAVES:
             raise CycloidInputError("FMU name", name, f"must be one of {', '.join(SLAVES)}")
-        print(build_fmu(name, args.dest))
+    with _staged_dir("dest", args.dest) as dest:
+        for name in args.names or list(SLAVES):
+            print(build_fmu(name, dest))
     return 0
 
 
 def cmd_bench(args) -> int:
-    from pathlib import Path
     from .bench import Sensors, run_bench, scenario
     from .fmu_build import SLAVES, build_fmu
-    parse_mode(args.mode)
+    mode = "".join(parse_mode(args.mode)[:2])
+    if mode not in ("S1", "S2"):
+        raise CycloidInputError("mode", args.mode, "the bench drives the eccentric shaft S: "
+                                "S1 or S2")
+    _check_seed(args.seed)
     try:
-        sc = scenario(args.scenario, args.mode.upper())
+        sc = scenario(args.scenario, mode)
     except ValueError as exc:
         raise CycloidInputError("scenario", args.scenario, "must be one of paper, runup, "
                                 "loadstep, reversal") from exc
-    out = Path(args.out)
-    fmu_dir = out / "fmus"
-    for name in SLAVES:
-        build_fmu(name, fmu_dir)
     design = _load_design(args.design)
-    try:
-        run = run_bench(sc, fmu_dir, out, Sensors(ideal=args.ideal_sensors, seed=args.seed),
-                        design=design)
-    except ValueError as exc:
-        raise CycloidInputError("design", args.design, str(exc))
+    with _staged_dir("out", args.out) as out:
+        fmu_dir = out / "fmus"
+        for name in SLAVES:
+            build_fmu(name, fmu_dir)
+        try:
+            run = run_bench(sc, fmu_dir, out, Sensors(ideal=args.ideal_sensors, seed=args.seed),
+                            design=design)
+        except CycloidInputError:
+            raise
+        except ValueError as exc:
+            raise CycloidInputError("design", args.design, str(exc))
     print(f"bench: mode {sc.mode}, scenario {sc.name}, {sc.stop_time:.0f} s simulated; "
           f"files in {out}")
     if run.windows:
@@ -159,22 +318,30 @@ def cmd_synth(args) -> int:
     from .synth import ENGINES
     if args.engine not in ENGINES:
         raise CycloidInputError("engine", args.engine, f"must be one of {', '.join(ENGINES)}")
+    _check_seed(args.seed)
+    truth = args.truth
+    _output_file("out", args.out)
+    if truth:
+        _output_file("truth", truth)
     rec = synthesize(args.effect, args.seed, mode, args.size, plan=args.plan, engine=args.engine)
-    path = write_synth(args.out, rec)
-    if args.truth:
-        from pathlib import Path
-        Path(args.truth).write_text(json.dumps(rec["truth"], indent=2))
+    with _staged_file("out", args.out) as tmp, \
+            (_staged_file("truth", truth) if truth else contextlib.nullcontext()) as tmp_truth:
+        write_synth(tmp, rec)
+        if truth:
+            Path(tmp_truth).write_text(json.dumps(rec["truth"], indent=2))
+    path = Path(args.out)
     print(f"wrote {path}: {len(rec['time_s'])} samples, {rec['time_s'][-1]:.0f} s, mode {mode}")
     return 0
 
 
 def cmd_diagnose(args) -> int:
-    from pathlib import Path
-    from .diagnosis import Diagnoser, plot_diagnosis
+    from .diagnosis import Diagnoser
     from .io import RecordingError, load_recording
     design = _load_design(args.design)
     if args.mode.strip().lower() != "auto":
         parse_mode(args.mode)
+    if args.out:
+        _output_dir("out", args.out, create=False)
     try:
         rec, mode, checks = load_recording(args.recording, args.mode, design,
                                            columns=args.columns, units=args.units)
@@ -185,18 +352,11 @@ def cmd_diagnose(args) -> int:
     result["mode"] = mode
     result["checks"] = list(checks)
     result["read_notes"] = list(rec.notes)
-    result["exclusions"] = [{"reason": e.reason, "count": e.count, "first_time_s": e.first_time}
-                            for e in rec.exclusions]
+    result["exclusions"] = [{"reason": e.reason, "count": e.count,
+                             "first_time_s": _json_num(e.first_time)} for e in rec.exclusions]
+    result["excluded"] = result["exclusions"]
     if args.out:
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        plot_diagnosis(d, out)
-        (out / "diagnosis.json").write_text(json.dumps(result, indent=2))
-        from model_core import design_to_toml
-        from .diagnosis import updated_design
-        fixed, notes = updated_design(design, d)
-        (out / "design_updated.toml").write_text(design_to_toml(fixed) + "".join(
-            f"# {n}\n" for n in notes))
+        _write_diagnosis(args.out, d, design, result)
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
@@ -215,6 +375,79 @@ def cmd_diagnose(args) -> int:
           f"{100 * d.zeta_d_after:.2f} %; residual whiteness p: {d.whiteness_before:.2g} -> "
           f"{d.whiteness_after:.2g}")
     return 0
+
+
+def _write_diagnosis(out_dir, d, design, result):
+    """Write one diagnosis' folder (plots, diagnosis.json, design_updated.toml); removed again
+    if any of it fails."""
+    from model_core import design_to_toml
+    from .diagnosis import plot_diagnosis, updated_design
+    with _staged_dir("out", out_dir) as out:
+        plot_diagnosis(d, out)
+        (out / "diagnosis.json").write_text(json.dumps(result, indent=2))
+        fixed, notes = updated_design(design, d)
+        (out / "design_updated.toml").write_text(design_to_toml(fixed) + "".join(
+            f"# {n}\n" for n in notes))
+
+
+def _workers(args):
+    if getattr(args, "workers", None) is not None and args.workers < 1:
+        raise CycloidInputError("workers", args.workers, "must be at least 1")
+    if not args.serial:
+        from .sweep import require_dask
+        require_dask()
+
+
+def cmd_sweep(args) -> int:
+    from .sweep import load_spec, run_sweep
+    spec = load_spec(args.spec)
+    _output_file("out", args.out)
+    if Path(args.out).suffix.lower() != ".parquet":
+        raise CycloidInputError("out", args.out, "must end in .parquet")
+    _workers(args)
+    n = len(spec.designs())
+    df = run_sweep(spec, scheduler=args.scheduler, workers=args.workers, serial=args.serial)
+    with _staged_file("out", args.out) as tmp:
+        df.to_parquet(tmp, index=False)
+    bad = int((df["error"] != "").sum())
+    print(f"sweep: {n} designs x {len(spec.modes)} modes -> {args.out} ({len(df)} rows"
+          f"{f', {bad} with an error (column error)' if bad else ''})")
+    return 0
+
+
+def cmd_diagnose_batch(args) -> int:
+    from .recordings import RecordingError, parse_column_map
+    from .sweep import diagnose_batch, find_recordings
+    folder = Path(args.folder)
+    if not folder.is_dir():
+        raise CycloidInputError("folder", args.folder, "is not a folder")
+    paths = find_recordings(folder)
+    if not paths:
+        raise CycloidInputError("folder", args.folder, "holds no recording (*.csv, *.mf4)")
+    design = _load_design(args.design)
+    mode = "".join(parse_mode(args.mode)[:2])
+    try:
+        columns = parse_column_map(args.columns) if args.columns else None
+    except RecordingError as exc:
+        raise CycloidInputError("columns", args.columns, str(exc))
+    _workers(args)
+    with _staged_dir("out", args.out) as out:
+        df = diagnose_batch(folder, out, design, mode, columns=columns,
+                            scheduler=args.scheduler, workers=args.workers, serial=args.serial)
+    bad = int((df["error"] != "").sum())
+    print(f"diagnose-batch: {len(df)} recordings -> {args.out}/summary.csv"
+          f"{f'; {bad} could not be diagnosed (column error)' if bad else ''}")
+    for _, r in df.iterrows():
+        print(f"  {r['recording']}: {r['error'] or r['effect']}")
+    return 0
+
+
+def _cluster_options(p):
+    p.add_argument("--scheduler", help="address of a running dask scheduler "
+                   "(default: a local cluster)")
+    p.add_argument("--workers", type=int, help="worker processes of the local cluster "
+                   "(default: the CPU count, at most 8)")
+    p.add_argument("--serial", action="store_true", help="run in this process, without dask")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -247,7 +480,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--seed", type=int, default=1, help="noise seed of the transducers")
     bench.add_argument("--design", help="design file (TOML) for the reducer, e.g. the "
                        "design_updated.toml a diagnosis wrote")
-    bench.set_defaults(func=cmd_bench)
+    bench.set_defaults(func=cmd_bench, fmus=True)
     sy = sub.add_parser("synth", help="write a bench recording with one hidden effect")
     sy.add_argument("--effect", required=True, help="hidden effect id (see model_core.effects)")
     sy.add_argument("--seed", type=int, default=1)
@@ -260,7 +493,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "varied) or one_speed (load steps at 2000 r/min only)")
     sy.add_argument("--engine", default="fast", help="fast (the bench's components replayed "
                     "vectorised) or bench (the bench's FMUs co-simulated; slower)")
-    sy.set_defaults(func=cmd_synth)
+    sy.set_defaults(func=cmd_synth, fmus=True)
     dg = sub.add_parser("diagnose", help="locate, explain and model the mismatch of a recording")
     dg.add_argument("recording", help="recording CSV")
     dg.add_argument("--mode", required=True, help=f"operating mode ({', '.join(MODES)}) or "
@@ -272,6 +505,22 @@ def build_parser() -> argparse.ArgumentParser:
                     "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")
     dg.add_argument("--json", action="store_true")
     dg.set_defaults(func=cmd_diagnose)
+    sw = sub.add_parser("sweep", help="design study: many designs over the bench envelope "
+                        "(dask)")
+    sw.add_argument("spec", help="sweep spec (TOML; see examples/sweep.toml)")
+    sw.add_argument("--out", required=True, help="results file (.parquet)")
+    _cluster_options(sw)
+    sw.set_defaults(func=cmd_sweep)
+    db = sub.add_parser("diagnose-batch", help="diagnose every recording (*.csv, *.mf4) in a "
+                        "folder (dask)")
+    db.add_argument("folder", help="folder of recordings")
+    db.add_argument("--out", required=True, help="folder for one result folder per recording "
+                    "and summary.csv")
+    db.add_argument("--mode", required=True)
+    db.add_argument("--design", help="design file (TOML)")
+    db.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
+    _cluster_options(db)
+    db.set_defaults(func=cmd_diagnose_batch)
     return p
 
 
@@ -296,10 +545,28 @@ def _join_signed_numbers(argv):
 def main(argv=None) -> int:
     argv = _join_signed_numbers(list(sys.argv[1:] if argv is None else argv))
     args = build_parser().parse_args(argv)
+    if getattr(args, "fmus", False):
+        _collect_fmu_log()
     try:
         return args.func(args)
     except CycloidInputError as exc:
         print(f"cyclo-fmu: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:          # a path the command could not read or write
+        where = exc.filename if exc.filename is not None else ""
+        print(f"cyclo-fmu: error: {args.command}: {where!r}: {exc.strerror or exc}",
+              file=sys.stderr)
+        return 2
+    except MemoryError:
+        print(f"cyclo-fmu: error: {args.command}: out of memory (input too large)",
+              file=sys.stderr)
+        return 2
+    except Exception as exc:        # an FMU's error: surface its message in one line
+        if type(exc).__module__.split(".")[0] != "fmpy":
+            raise
+        logged = "; ".join(f"{i}: {m}" for i, m in _FMU_ERRORS[-2:])
+        text = " ".join(f"{exc}{f' ({logged})' if logged else ''}".split())
+        print(f"cyclo-fmu: error: {args.command}: FMU failed: {text}", file=sys.stderr)
         return 2
 
 

@@ -166,3 +166,35 @@ def eccentric_bearing_force(design, phi, F_ring, F_disc):
     F_EV = -np.sum(F_ring * ny, axis=-1)
     F_EH = np.sum(F_ring * nx, axis=-1) - np.sum(F_disc, axis=-1)
     return F_EV, F_EH
+
+
+#: Static limit of the Hertz contact pressure [Pa]: 4000 MPa, the basic static load rating's
+#: contact stress for roller bearings of through-hardened bearing steel (ISO 76:2006, 6.1.2);
+#: above it the rollers and teeth dent permanently.
+STATIC_CONTACT_PRESSURE_LIMIT = 4.0e9
+#: Contact modulus E* = E / (2 (1 - nu^2)) of steel on steel [Pa] (E = 210 GPa, nu = 0.3).
+STEEL_CONTACT_MODULUS = 210e9 / (2 * (1 - 0.3 ** 2))
+
+
+def ring_contact_pressure(design, gear_torque, n_positions=16):
+    """Largest Hertz line-contact pressure p0 (Pa) between a ring roller and the tooth of one
+    cycloid gear carrying ``gear_torque`` (N*m), over ``n_positions`` mesh positions of one pitch.
+
+    p0 = sqrt(F E* / (pi l R)) (Johnson, Contact Mechanics, 1985, Eq. 4.45), R the roller radius
+    d_v1/2 against a flat tooth: the tooth's convex curvature only raises p0, so this is a lower
+    bound on the pressure and the rating derived from it an upper bound."""
+    psi = np.linspace(0.0, 2 * np.pi / design.z1, n_positions, endpoint=False)
+    _, F = ring_roller_forces(design, abs(float(gear_torque)), psi)
+    F_max = float(np.nanmax(F))
+    return np.sqrt(F_max * STEEL_CONTACT_MODULUS / (np.pi * design.b1 * design.d_v1 / 2))
+
+
+def ring_torque_rating(design) -> float:
+    """Static torque rating (N*m) of the ring (shaft 1): the ring torque at which the most
+    loaded ring roller reaches :data:`STATIC_CONTACT_PRESSURE_LIMIT` (see
+    :func:`ring_contact_pressure`; p0 grows about as sqrt(torque), found by fixed-point steps)."""
+    T = 100.0
+    for _ in range(6):
+        p = ring_contact_pressure(design, T * design.torque_share)
+        T *= (STATIC_CONTACT_PRESSURE_LIMIT / p) ** 2
+    return float(T)

@@ -11,7 +11,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: the same parser as the tomli package
+    import tomli as tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -258,6 +261,19 @@ def _check_finite(obj, prefix=""):
             raise CycloidInputError(prefix + f.name, v, "must be a finite number")
 
 
+#: Upper bound on the number of ring rollers [1]: reducers have about 10-120; the contact
+#: solver's arrays grow with z1^2 (z1 = 100000 would ask for about 600 GiB).
+MAX_Z1 = 1000
+#: Upper bound on the mesh positions per pitch [1]: the mean converges by 8-64 positions.
+MAX_N_POSITIONS = 4096
+#: Upper bound on one contact array, z1^2 x n_positions float64 values [B]: 512 MiB, a quarter
+#: of a small machine's memory, so that a design can never exhaust it.
+MAX_CONTACT_ARRAY_BYTES = 512 * 2 ** 20
+#: Upper bound on a friction coefficient [1]: dry clean steel on steel reaches about 0.6-0.8;
+#: above 1 the sliding contacts would self-lock the drive in every mode.
+MAX_FRICTION_COEFFICIENT = 1.0
+
+
 def validate_design(d: DriveDesign) -> None:
     """Reject impossible designs with a :class:`CycloidInputError` naming the field."""
     _check_finite(d)
@@ -283,6 +299,19 @@ def validate_design(d: DriveDesign) -> None:
                                 "(with 2, both can lie on the line of centres and carry nothing)")
     if d.n_positions < 2:
         raise CycloidInputError("n_positions", d.n_positions, "needs at least 2 mesh positions")
+    # bounds on what would exhaust memory: the contact solver holds arrays of
+    # z1 (rollers) x z1 (load-sharing candidates) x n_positions float64 values
+    if d.z1 > MAX_Z1:
+        raise CycloidInputError("z1", d.z1, f"at most {MAX_Z1} ring rollers (cycloid reducers "
+                                "have about 10-120; the contact arrays grow with z1^2)")
+    if d.n_positions > MAX_N_POSITIONS:
+        raise CycloidInputError("n_positions", d.n_positions, f"at most {MAX_N_POSITIONS} mesh "
+                                "positions (the efficiency changes by < 5e-5 from 8 to 64; the "
+                                "contact arrays grow with n_positions)")
+    if d.z1 ** 2 * d.n_positions * 8 > MAX_CONTACT_ARRAY_BYTES:
+        raise CycloidInputError("n_positions", d.n_positions, f"with z1 = {d.z1} the contact "
+                                f"arrays (z1^2 x n_positions x 8 B) would exceed "
+                                f"{MAX_CONTACT_ARRAY_BYTES / 2**20:.0f} MiB; use fewer positions")
     for name in ("e", "lam", "d_v1", "d_o1", "b1", "d_v2", "d_o2", "b2", "d_m2", "D_cz", "D_p",
                  "d_p", "linear_stiffness", "torque_share"):
         v = getattr(d, name)
@@ -331,6 +360,12 @@ def validate_design(d: DriveDesign) -> None:
     for f in dataclasses.fields(fr):
         if getattr(fr, f.name) < 0:
             raise CycloidInputError("friction." + f.name, getattr(fr, f.name), "must not be negative")
+    for name in ("mu_boundary", "mu_full_film"):
+        if getattr(fr, name) > MAX_FRICTION_COEFFICIENT:
+            raise CycloidInputError("friction." + name, getattr(fr, name),
+                                    f"a friction coefficient above {MAX_FRICTION_COEFFICIENT} is "
+                                    "beyond even dry clean steel on steel (about 0.6-0.8); the "
+                                    "drive could not run")
     if fr.mu_full_film > fr.mu_boundary:
         raise CycloidInputError("friction.mu_full_film", fr.mu_full_film,
                                 f"must not exceed mu_boundary = {fr.mu_boundary}")
@@ -439,9 +474,12 @@ def design_from_toml(source) -> DriveDesign:
                                     and source.endswith(".toml")):
         path = Path(source)
         try:
-            text = path.read_text()
+            text = path.read_text(encoding="utf-8")
         except OSError as exc:
             raise CycloidInputError("design file", str(path), f"cannot be read ({exc.strerror})")
+        except UnicodeDecodeError as exc:
+            raise CycloidInputError("design file", str(path), f"is not UTF-8 TOML text (byte "
+                                    f"{exc.start}: {exc.reason}); a binary file?")
     else:
         text = source
     try:

@@ -1,0 +1,88 @@
+"""Evaluate one design: efficiency and partial losses over the envelope, per mode.
+
+Result layout (chosen for design studies): ONE ROW PER DESIGN x MODE with summary columns, not
+one per operating point (a 1000-design sweep then has 2000 rows instead of 128 000; the
+operating-point detail of any design is one ``cyclo-fmu efficiency`` or
+``model_core.maps.efficiency_map`` call away). Columns:
+
+- ``design_id`` (row of the spec's design list), ``mode``, the varied fields (design-file
+  units, e.g. ``geometry.e_mm``);
+- ``eta_min``, ``eta_mean``, ``eta_max`` (fractions) over the envelope points where the drive
+  runs (not locked, finite), ``n_points`` of them, ``n_locked`` self-locking points;
+- ``loss_<PLk>_W``: each partial loss averaged over the envelope [W], ``loss_share_<PLk>``: its
+  share of the summed losses;
+- ``stiffness_Nm_rad``: torsional stiffness once ``model_core.stiffness`` exists (see
+  :func:`stiffness_hook`), else NaN;
+- ``error``: empty, or the one-line reason the design could not be built or run (a row is
+  never dropped).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from model_core import LOSS_NAMES, CycloidInputError
+from model_core.maps import efficiency_map
+
+
+def stiffness_hook(design):
+    """Torsional stiffness [N*m/rad] of a design, or NaN. The hook for ``model_core.stiffness``
+    (written in parallel): adapt this one function to its API when it lands."""
+    try:
+        from model_core import stiffness as st
+    except ImportError:
+        return math.nan
+    for name in ("torsional_stiffness", "output_stiffness", "stiffness"):
+        fn = getattr(st, name, None)
+        if callable(fn):
+            try:
+                return float(fn(design))
+            except Exception:       # noqa: BLE001 - an unknown API: leave the column empty
+                return math.nan
+    return math.nan
+
+
+def evaluate_design(spec, design_id: int, values: dict) -> list:
+    """Rows (one per mode) for one design of ``spec``."""
+    rows = []
+    base = {"design_id": design_id, **values}
+    try:
+        design = spec.build(values)
+    except CycloidInputError as exc:
+        return [{**base, "mode": m, "error": str(exc)} for m in spec.modes]
+    stiff = stiffness_hook(design)
+    env = spec.envelope
+    for mode in spec.modes:
+        row = {**base, "mode": mode, "stiffness_Nm_rad": stiff}
+        try:
+            m = efficiency_map(design, mode, env.speeds(), env.torques())
+        except CycloidInputError as exc:
+            row["error"] = str(exc)
+            rows.append(row)
+            continue
+        row["error"] = ""
+        eta = np.asarray(m.eta, float)
+        locked = np.asarray(m.locked, bool)
+        ok = np.isfinite(eta) & ~locked
+        row.update(n_points=int(ok.sum()), n_locked=int(locked.sum()),
+                   eta_min=float(eta[ok].min()) if ok.any() else math.nan,
+                   eta_mean=float(eta[ok].mean()) if ok.any() else math.nan,
+                   eta_max=float(eta[ok].max()) if ok.any() else math.nan)
+        means = {k: float(np.nanmean(np.asarray(m.losses[k], float)[ok])) if ok.any()
+                 else math.nan for k in LOSS_NAMES}
+        total = sum(means.values())
+        for k in LOSS_NAMES:
+            row[f"loss_{k}_W"] = means[k]
+            row[f"loss_share_{k}"] = means[k] / total if total > 0 else math.nan
+        row["error"] = row.pop("error")     # last column
+        rows.append(row)
+    return rows
+
+
+def evaluate_chunk(spec, chunk) -> list:
+    """Rows for a list of (design_id, values): the unit of work sent to a worker."""
+    out = []
+    for i, values in chunk:
+        out.extend(evaluate_design(spec, i, values))
+    return out
