@@ -257,13 +257,14 @@ def cmd_paper(args) -> int:
 
 
 def cmd_build(args) -> int:
-    from .fmu_build import SLAVES, build_fmu
+    from .fmu_build import ALL_FMUS, build_any
     for name in args.names:
-        if name not in SLAVES:
-            raise CycloidInputError("FMU name", name, f"must be one of {', '.join(SLAVES)}")
+        if name not in ALL_FMUS:
+            raise CycloidInputError("FMU name", name, f"must be one of {', '.join(ALL_FMUS)}")
+    design = _load_design(args.design)
     with _staged_dir("dest", args.dest) as dest:
-        for name in args.names or list(SLAVES):
-            print(build_fmu(name, dest))
+        for name in args.names or list(ALL_FMUS):
+            print(build_any(name, dest, design))
     return 0
 
 
@@ -467,8 +468,11 @@ def build_parser() -> argparse.ArgumentParser:
     pp.add_argument("--design", help="design file (TOML); default: the paper's test drive")
     pp.add_argument("--json", action="store_true", help="print one JSON object")
     pp.set_defaults(func=cmd_paper)
-    bp = sub.add_parser("build", help="build the FMUs (dist/CycloidDrive.fmu)")
+    bp = sub.add_parser("build", help="build the FMUs (dist/CycloidDrive.fmu, "
+                        "dist/CycloidDriveNative.fmu, ...)")
     bp.add_argument("--dest", default="dist", help="output folder (default: dist)")
+    bp.add_argument("--design", help="design file (TOML) whose loss map CycloidDriveNative.fmu "
+                    "carries; default: the paper's test drive")
     bp.add_argument("names", nargs="*", help="FMUs to build (default: all)")
     bp.set_defaults(func=cmd_build)
     bench = sub.add_parser("bench", help="simulate the motor - reducer - brake test bench (SSP)")

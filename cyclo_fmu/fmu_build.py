@@ -22,6 +22,10 @@ BUNDLE = "cyclofmu_" + __version__.replace(".", "_") + "_slaves"
 #: model name -> module in cyclo_fmu/slaves
 SLAVES = {"CycloidDrive": "cycloid_drive", "InductionMotor": "motor", "FeltBrake": "brake",
           "Transducer": "transducer"}
+#: FMUs in C (cyclo_fmu.native), built with the machine's C compiler
+NATIVE = ("CycloidDriveNative",)
+#: everything ``build`` writes by default
+ALL_FMUS = tuple(SLAVES) + NATIVE
 
 
 #: The pythonfmu entry script. pythonfmu 0.7 empties this module's namespace when a host
@@ -80,11 +84,27 @@ def build_fmu(name: str = "CycloidDrive", dest="dist") -> Path:
     return Path(out)
 
 
+def build_any(name: str, dest="dist", design=None) -> Path:
+    """Build one FMU by name: a Python FMU (SLAVES) or the native one (for ``design``, default
+    the paper's test drive; the Python FMUs take the design as parameters instead)."""
+    if name in NATIVE:
+        from .native import build_native_fmu
+        return build_native_fmu(design, dest)
+    return build_fmu(name, dest)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="build_fmu", description="Build the cyclo-fmu FMUs.")
     p.add_argument("--dest", default="dist", help="output folder (default: dist)")
-    p.add_argument("names", nargs="*", default=list(SLAVES), help="FMUs to build")
+    p.add_argument("--design", help="design file (TOML) for CycloidDriveNative")
+    p.add_argument("names", nargs="*", default=list(ALL_FMUS), help="FMUs to build")
     args = p.parse_args(argv)
+    design = None
+    if args.design:
+        from model_core import design_from_toml
+        design = design_from_toml(Path(args.design))
     for name in args.names:
-        print(build_fmu(name, args.dest))
+        if name not in ALL_FMUS:
+            p.error(f"unknown FMU {name!r}; known: {', '.join(ALL_FMUS)}")
+        print(build_any(name, args.dest, design))
     return 0

@@ -1,0 +1,137 @@
+/* Cycloid drive, native FMU: interpolation of the loss map and the step's torques.
+ * See cd_model.h. Every function mirrors one Python function, named in its comment, operation
+ * for operation (tests/test_native_fmu.py compares them). cyclo-fmu, MIT license. */
+#include <ctype.h>
+#include <math.h>
+#include <string.h>
+
+#include "cd_model.h"
+
+static const char *const MODE_NAMES[CD_N_MODES] = {"12", "21", "1S", "S1", "2S", "S2"};
+
+int cd_mode_index(const char *mode)
+{
+    /* kinematics.parse_mode: strip, upper case, one of the six */
+    char buf[3];
+    size_t n, i0 = 0, i;
+    int m;
+    if (mode == NULL) return -1;
+    n = strlen(mode);
+    while (i0 < n && isspace((unsigned char)mode[i0])) i0++;
+    while (n > i0 && isspace((unsigned char)mode[n - 1])) n--;
+    if (n - i0 != 2) return -1;
+    for (i = 0; i < 2; i++) buf[i] = (char)toupper((unsigned char)mode[i0 + i]);
+    buf[2] = '\0';
+    for (m = 0; m < CD_N_MODES; m++)
+        if (strcmp(buf, MODE_NAMES[m]) == 0) return m;
+    return -1;
+}
+
+/* bisect.bisect_right(a, x): the number of grid values <= x */
+static int bisect_right(const double *a, int n, double x)
+{
+    int lo = 0, hi = n;
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (x < a[mid]) hi = mid; else lo = mid + 1;
+    }
+    return lo;
+}
+
+/* ModeMap._interp: bilinear in (ln|tau|, ln|w|), clamped at the edges */
+static int interp(const CDMap *map, const double *table, double t, double w, double *row)
+{
+    const double *gt = map->lt, *gw = map->lw;
+    int nt = map->n_torque, nw = map->n_speed, clamped = 0, i, j, c;
+    double lt = t > 0 ? log(t) : gt[0];
+    double lw = w > 0 ? log(w) : gw[0];
+    double ft, fw, u, v, x, y;
+    const double *r00, *r01, *r10, *r11;
+    if (lt < gt[0] || lt > gt[nt - 1] || lw < gw[0] || lw > gw[nw - 1]) {
+        if (t > 0 && w > 0) clamped = 1;
+        lt = fmin(fmax(lt, gt[0]), gt[nt - 1]);
+        lw = fmin(fmax(lw, gw[0]), gw[nw - 1]);
+    }
+    i = bisect_right(gt, nt, lt) - 1;
+    if (i > nt - 2) i = nt - 2;
+    j = bisect_right(gw, nw, lw) - 1;
+    if (j > nw - 2) j = nw - 2;
+    ft = (lt - gt[i]) / (gt[i + 1] - gt[i]);
+    fw = (lw - gw[j]) / (gw[j + 1] - gw[j]);
+    r00 = table + ((size_t)j * nt + i) * CD_N_COLS;          /* row0[i] */
+    r01 = r00 + CD_N_COLS;                                   /* row0[i + 1] */
+    r10 = table + ((size_t)(j + 1) * nt + i) * CD_N_COLS;    /* row1[i] */
+    r11 = r10 + CD_N_COLS;                                   /* row1[i + 1] */
+    u = (1 - fw) * (1 - ft);
+    v = (1 - fw) * ft;
+    x = fw * (1 - ft);
+    y = fw * ft;
+    for (c = 0; c < CD_N_COLS; c++)
+        row[c] = u * r00[c] + v * r01[c] + x * r10[c] + y * r11[c];
+    return clamped;
+}
+
+void cd_solve(const CDMap *map, int mode, double w_in, double tau_out, CDSolution *out)
+{
+    const CDMode *m = &map->modes[mode];
+    double row[CD_N_COLS], eta0, e, c2, c[3], T1, p_loss, p_a, p_b, p_in, p_out;
+    int k = m->b, forward, wdir, locked, i;
+    out->speeds[0] = m->ratio[0] * w_in;
+    out->speeds[1] = m->ratio[1] * w_in;
+    out->speeds[2] = m->ratio[2] * w_in;
+    forward = tau_out * out->speeds[k] <= 0;
+    out->out_of_range = interp(map, m->table[forward], fabs(tau_out), fabs(w_in), row);
+    eta0 = row[0];
+    wdir = m->wdir[forward];
+    if (wdir > 0)
+        e = eta0;
+    else if (k == 2)   /* the known torque is on S: keep 1 - i0/eta0 off zero (locking pole) */
+        e = 1.0 / (eta0 >= map->i0 * (1 + 1e-9) ? eta0 : map->i0 * (1 + 1e-9));
+    else
+        e = 1.0 / eta0;
+    c2 = -map->i0 * e;
+    c[0] = 1.0;
+    c[1] = c2;
+    c[2] = -(1.0 + c2);
+    T1 = tau_out / c[k];
+    out->torques[0] = T1;
+    out->torques[1] = T1 * c2;
+    out->torques[2] = T1 * c[2];
+    p_loss = out->torques[0] * out->speeds[0] + out->torques[1] * out->speeds[1]
+             + out->torques[2] * out->speeds[2];
+    for (i = 0; i < CD_N_LOSSES; i++) out->losses[i] = row[1 + i] * p_loss;
+    p_a = out->torques[m->a] * out->speeds[m->a];
+    p_b = out->torques[k] * out->speeds[k];
+    if (forward) { p_in = p_a; p_out = -p_b; }
+    else         { p_in = p_b; p_out = -p_a; }
+    /* Kreines: only power flowing into S from 1 or 2 can lock, when eta0 <= i0 */
+    locked = (forward ? m->b == 2 : m->a == 2) && eta0 <= map->i0;
+    out->eta = (p_in > 0 && !locked) ? p_out / p_in : 0.0;
+    out->eta0 = eta0;
+    out->locked = locked;
+    out->forward = forward;
+}
+
+/* effects._drag and effects._stribeck as ExtraPhysics.steady_torque combines them */
+#define CD_W_REF 300.0   /* rad/s, reference speed of the drag law (model_core.effects.W_REF) */
+
+static double sign(double w) { return w > 0 ? 1.0 : (w < 0 ? -1.0 : 0.0); }
+
+double cd_steady_torque(const CDExtra *x, double w)
+{
+    double t = x->drag_torque * (sign(w) * pow(fabs(w) / CD_W_REF, 2.0 / 3.0));
+    if (x->stribeck_torque != 0) {
+        double q = w / x->stribeck_speed;
+        t = t + x->stribeck_torque * (sign(w) * exp(-(q * q)));
+    }
+    return t;
+}
+
+double cd_dynamic_torque(const CDExtra *x, double alpha, double theta, double order,
+                         double elapsed, double loss_in)
+{
+    return x->input_inertia * alpha
+           + x->ripple_1x * sin(theta + x->ripple_1x_phase)
+           + x->ripple_roller * sin(order * theta + x->ripple_roller_phase)
+           + x->thermal_loss_change * (1.0 - exp(-elapsed / x->thermal_tau)) * loss_in;
+}

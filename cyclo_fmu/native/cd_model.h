@@ -1,0 +1,86 @@
+/* Cycloid drive, native FMU: the loss map of one design and the step arithmetic.
+ *
+ * Pure C99, no FMI types: the same arithmetic, in the same order, as the Python side
+ * (model_core.lossmap.ModeMap.solve, model_core.design.ExtraPhysics.steady_torque and
+ * dynamic_torque, cyclo_fmu.slaves.cycloid_drive.CycloidDrive._update), so that the two FMUs
+ * agree to rounding. Compile with -ffp-contract=off: a fused multiply-add would change the
+ * last bits of the bilinear interpolation.
+ *
+ * cyclo-fmu, MIT license.
+ */
+#ifndef CD_MODEL_H
+#define CD_MODEL_H
+
+#define CD_N_MODES 6
+#define CD_N_LOSSES 5          /* PL1, PL2, PL3, PL5, PL6 */
+#define CD_N_COLS (1 + CD_N_LOSSES)   /* eta0, then the shares of the partial losses */
+
+/* One operating mode (driving shaft a, driven shaft b, held shaft h; 0 = ring 1, 1 = disc 2,
+ * 2 = eccentric S). */
+typedef struct {
+    const char *name;          /* "12", "21", "1S", "S1", "2S", "S2" */
+    double ratio[3];           /* shaft speeds per unit driving speed (1, 2, S) */
+    int a, b, h;
+    int wdir[2];               /* [forward]: +1 if the known torque gives e = eta0, else -1 */
+    const double *table[2];    /* [forward]: n_speed x n_torque x CD_N_COLS, row-major */
+    double ratio_out;          /* driven speed per unit driving speed */
+    double order;              /* roller-pass order: ripple cycles per driving turn */
+} CDMode;
+
+/* The loss map of one design: all six modes, both power-flow directions. */
+typedef struct {
+    int n_torque, n_speed;
+    const double *lt;          /* ln |tau_out| grid, N*m */
+    const double *lw;          /* ln |w_in| grid, rad/s */
+    double i0;                 /* basic ratio (z1 - 1)/z1 */
+    CDMode modes[CD_N_MODES];
+} CDMap;
+
+/* Physics beyond the paper (design [extra]), run-time parameters of the FMU. */
+typedef struct {
+    double drag_torque, stribeck_torque, stribeck_speed, input_inertia;
+    double ripple_1x, ripple_1x_phase, ripple_roller, ripple_roller_phase;
+    double thermal_loss_change, thermal_tau;
+} CDExtra;
+
+#define CD_N_EXTRA 10
+
+typedef struct {
+    double speeds[3], torques[3], losses[CD_N_LOSSES];
+    double eta, eta0;
+    int locked, forward;
+    int out_of_range;          /* 1 if the look-up was clamped at the map's edge */
+} CDSolution;
+
+/* ModeMap.solve: steady state at driving speed w_in (rad/s) and load torque tau_out (N*m). */
+void cd_solve(const CDMap *map, int mode, double w_in, double tau_out, CDSolution *out);
+
+/* ExtraPhysics.steady_torque: drag and Stribeck torque at driving speed w (N*m). */
+double cd_steady_torque(const CDExtra *x, double w);
+
+/* ExtraPhysics.dynamic_torque: inertia, ripple and warm-up torque (N*m). */
+double cd_dynamic_torque(const CDExtra *x, double alpha, double theta, double order,
+                         double elapsed, double loss_in);
+
+/* Index of a mode string ("S1", " s1 " ...) or -1. */
+int cd_mode_index(const char *mode);
+
+/* The design this FMU was built for (generated at build time: cd_map_data.c): its loss map,
+ * the defaults of the extra physics, the design values shown as constants, the GUID. */
+extern const CDMap CD_MAP;
+extern const CDExtra CD_DEFAULT_EXTRA;
+extern const char CD_GUID[];
+extern const double CD_MAP_TORQUE_MAX;   /* N*m, largest |tau_out| of the map */
+extern const double CD_MAP_SPEED_MAX;    /* rad/s, largest |w_in| of the map */
+
+typedef struct { unsigned int vr; double value; } CDConstReal;
+typedef struct { unsigned int vr; int value; } CDConstInteger;
+typedef struct { unsigned int vr; const char *value; } CDConstString;
+extern const CDConstReal CD_CONST_REAL[];
+extern const int CD_N_CONST_REAL;
+extern const CDConstInteger CD_CONST_INTEGER[];
+extern const int CD_N_CONST_INTEGER;
+extern const CDConstString CD_CONST_STRING[];
+extern const int CD_N_CONST_STRING;
+
+#endif

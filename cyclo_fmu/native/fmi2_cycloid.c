@@ -1,0 +1,785 @@
+/* Cycloid drive, native FMU: the FMI 2.0 co-simulation interface.
+ *
+ * One instance holds a CDState (plain data, no pointers: it is what fmi2GetFMUstate copies and
+ * fmi2SerializeFMUstate writes) and the host's callbacks. The physics is in cd_model.c, the
+ * design's loss map in the generated cd_map_data.c. Written for cyclo-fmu (MIT license); the
+ * FMI headers are the Modelica Association's (2-clause BSD).
+ *
+ * Value references (modelDescription.xml is generated with the same numbers by
+ * cyclo_fmu/native/build.py):
+ *   Real     0 w_in, 1 tau_out (inputs)
+ *            10..21 outputs, in the order of OUT_NAMES
+ *            30..39 extra physics parameters, in the order of CDExtra
+ *            100.. constants of the design (generated table)
+ *   Integer  0 mode_number; 100.. constants
+ *   Boolean  10 locked
+ *   String   0 mode; 100.. constants
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+#include "cd_model.h"
+
+#define VR_W_IN 0
+#define VR_TAU_OUT 1
+#define VR_OUT0 10
+#define N_OUT 12
+#define VR_EXTRA0 30
+#define VR_MODE_NUMBER 0
+#define VR_LOCKED 10
+#define VR_MODE 0
+
+enum { O_W_OUT, O_TAU_IN, O_TAU_HOUSING, O_P_LOSS, O_PL1, O_PL2, O_PL3, O_PL5, O_PL6, O_ETA,
+       O_ETA0, O_P_EXTRA };
+
+static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
+    "drag_torque", "stribeck_torque", "stribeck_speed", "input_inertia", "ripple_1x",
+    "ripple_1x_phase", "ripple_roller", "ripple_roller_phase", "thermal_loss_change",
+    "thermal_tau"};
+
+enum { PH_INSTANTIATED = 1, PH_INIT, PH_STEP, PH_TERMINATED };
+
+#define STATE_MAGIC 0x43444e53u   /* "CDNS" */
+#define STATE_VERSION 1u
+
+/* Everything that defines the instance's behaviour from here on: inputs, parameters,
+ * outputs and the dynamic state. Plain data: copied and serialised as it is. */
+typedef struct {
+    unsigned int magic, version;
+    int phase;
+    double w_in, tau_out;
+    int mode;              /* index of the String parameter "mode" (0..5) */
+    int mode_number;       /* 0 = use mode, 1..6 */
+    CDExtra extra;
+    double out[N_OUT];
+    int locked;
+    int mode_eff;          /* resolved at exitInitializationMode */
+    double theta;          /* angle of the driving shaft since the start, rad */
+    double w_last;         /* driving speed at the last step, rad/s */
+    int has_w_last;
+    double t_start;
+    int warned_range;
+} CDState;
+
+typedef struct {
+    CDState s;
+    fmi2CallbackLogger logger;
+    fmi2CallbackAllocateMemory allocate;
+    fmi2CallbackFreeMemory release;
+    fmi2ComponentEnvironment env;
+    char name[128];
+    int logging_on;
+} Instance;
+
+/* -- helpers ------------------------------------------------------------------------------- */
+static void *mem_alloc(Instance *c, size_t n)
+{
+    return c->allocate ? c->allocate(1, n) : calloc(1, n);
+}
+
+static void mem_free(Instance *c, void *p)
+{
+    if (c->release) c->release(p); else free(p);
+}
+
+/* The message goes to the host's logger preformatted and without '%' (loggers differ: some
+ * format it again, fmpy's prints it as it is). */
+static void logmsg(Instance *c, fmi2Status status, const char *fmt, ...)
+{
+    char buf[512];
+    const char *category;
+    size_t i;
+    va_list ap;
+    if (c == NULL || c->logger == NULL) return;
+    if (status == fmi2OK && !c->logging_on) return;
+    va_start(ap, fmt);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    for (i = 0; buf[i]; i++)
+        if (buf[i] == '%') buf[i] = '?';
+    category = status == fmi2Error ? "logStatusError"
+             : status == fmi2Warning ? "logStatusWarning" : "logAll";
+    c->logger(c->env, c->name, status, category, buf);
+}
+
+/* A user's string, quoted for a log message: printable ASCII only, at most 40 characters. */
+static void quote(const char *s, char *out, size_t n)
+{
+    size_t i = 0, k = 0;
+    if (s == NULL) { snprintf(out, n, "NULL"); return; }
+    out[k++] = '\'';
+    for (; s[i] && k + 5 < n && i < 40; i++)
+        out[k++] = (s[i] >= 32 && s[i] < 127 && s[i] != '%') ? s[i] : '?';
+    if (s[i]) { out[k++] = '.'; out[k++] = '.'; out[k++] = '.'; }
+    out[k++] = '\'';
+    out[k] = '\0';
+}
+
+static void set_defaults(CDState *s)
+{
+    memset(s, 0, sizeof *s);
+    s->magic = STATE_MAGIC;
+    s->version = STATE_VERSION;
+    s->phase = PH_INSTANTIATED;
+    s->mode = 3;   /* "S1", the bench's mode (the Python FMU's default) */
+    s->mode_number = 0;
+    s->extra = CD_DEFAULT_EXTRA;
+    s->out[O_ETA0] = 1.0;
+}
+
+static int resolve_mode(const CDState *s)
+{
+    return s->mode_number ? s->mode_number - 1 : s->mode;
+}
+
+static double *extra_field(CDExtra *x, int i)
+{
+    double *f[CD_N_EXTRA];
+    f[0] = &x->drag_torque; f[1] = &x->stribeck_torque; f[2] = &x->stribeck_speed;
+    f[3] = &x->input_inertia; f[4] = &x->ripple_1x; f[5] = &x->ripple_1x_phase;
+    f[6] = &x->ripple_roller; f[7] = &x->ripple_roller_phase; f[8] = &x->thermal_loss_change;
+    f[9] = &x->thermal_tau;
+    return f[i];
+}
+
+/* NULL if the value is acceptable, else why not (design.validate_design's rules) */
+static const char *extra_problem(int i, double v)
+{
+    if (!isfinite(v)) return "must be a finite number";
+    switch (i) {
+    case 0: case 1: case 3:
+        return v < 0 ? "must not be negative" : NULL;
+    case 2: case 9:
+        return v > 0 ? NULL : "must be positive";
+    default:
+        return NULL;
+    }
+}
+
+/* CycloidDrive._update: outputs at time t after a step dt. commit = 0 evaluates without
+ * touching the dynamic state (Initialization Mode's outputs). */
+static void evaluate(Instance *c, double t, double dt, int commit)
+{
+    CDState *s = &c->s;
+    const CDMode *m;
+    CDSolution r;
+    double tau_in, tau_in_gear, p_in, p_out, w_in = s->w_in, tau_out = s->tau_out;
+    int mode = commit || s->phase == PH_STEP ? s->mode_eff : resolve_mode(s);
+    int steady = s->extra.drag_torque != 0 || s->extra.stribeck_torque != 0;
+    int dynamic = s->extra.input_inertia != 0 || s->extra.ripple_1x != 0
+                  || s->extra.ripple_roller != 0 || s->extra.thermal_loss_change != 0;
+    m = &CD_MAP.modes[mode];
+    cd_solve(&CD_MAP, mode, w_in, tau_out, &r);
+    if (r.out_of_range && !s->warned_range
+        && (fabs(tau_out) > CD_MAP_TORQUE_MAX || fabs(w_in) > CD_MAP_SPEED_MAX)) {
+        s->warned_range = 1;
+        logmsg(c, fmi2Warning, "operating point |tau_out| = %g N.m, |w_in| = %g rad/s beyond "
+               "the loss map this FMU was built with (|tau_out| <= %g N.m, |w_in| <= %g rad/s): "
+               "eta0 is held at the map's edge; build the FMU with a larger map for such loads "
+               "(reported once)", fabs(tau_out), fabs(w_in), CD_MAP_TORQUE_MAX,
+               CD_MAP_SPEED_MAX);
+    }
+    s->out[O_W_OUT] = r.speeds[m->b];
+    tau_in = tau_in_gear = r.torques[m->a];
+    s->out[O_TAU_HOUSING] = r.torques[m->h];
+    s->out[O_PL1] = r.losses[0];
+    s->out[O_PL2] = r.losses[1];
+    s->out[O_PL3] = r.losses[2];
+    s->out[O_PL5] = r.losses[3];
+    s->out[O_PL6] = r.losses[4];
+    if (steady) tau_in += cd_steady_torque(&s->extra, w_in);
+    if (dynamic) {
+        /* CycloidDrive._dynamic_torque */
+        double alpha = (!s->has_w_last || dt <= 0) ? 0.0 : (w_in - s->w_last) / dt;
+        double theta = s->theta, loss_in;
+        if (dt > 0) theta += w_in * dt;
+        if (commit && (dt > 0 || !s->has_w_last)) {
+            s->theta = theta;
+            s->w_last = w_in;
+            s->has_w_last = 1;
+        }
+        loss_in = tau_in_gear + tau_out * m->ratio_out;   /* minus the lossless torque */
+        tau_in += cd_dynamic_torque(&s->extra, alpha, theta, m->order, t - s->t_start, loss_in);
+    }
+    s->out[O_TAU_IN] = tau_in;
+    s->out[O_P_EXTRA] = (tau_in - tau_in_gear) * w_in;
+    s->out[O_P_LOSS] = tau_in * w_in + tau_out * s->out[O_W_OUT];
+    if (steady || dynamic) {
+        double pa = tau_in * w_in, pb = tau_out * s->out[O_W_OUT];
+        p_in = pa > pb ? pa : pb;
+        p_out = -(pa < pb ? pa : pb);
+        r.eta = (p_in > 0 && p_out > 0 && !r.locked) ? p_out / p_in : 0.0;
+    }
+    s->out[O_ETA] = r.eta;
+    s->out[O_ETA0] = r.eta0;
+    s->locked = r.locked;
+}
+
+#define CHECK_INSTANCE(fn) \
+    Instance *c = (Instance *)comp; \
+    if (c == NULL) return fmi2Error
+
+static fmi2Status not_in_phase(Instance *c, const char *fn)
+{
+    static const char *const names[] = {"?", "Instantiated", "Initialization Mode",
+                                        "Step Mode", "Terminated"};
+    int p = c->s.phase >= PH_INSTANTIATED && c->s.phase <= PH_TERMINATED ? c->s.phase : 0;
+    logmsg(c, fmi2Error, "%s is not allowed in state %s", fn, names[p]);
+    return fmi2Error;
+}
+
+/* -- common functions ----------------------------------------------------------------------- */
+FMI2_Export const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+FMI2_Export const char *fmi2GetVersion(void) { return fmi2Version; }
+
+FMI2_Export fmi2Status fmi2SetDebugLogging(fmi2Component comp, fmi2Boolean loggingOn,
+                                           size_t nCategories, const fmi2String categories[])
+{
+    size_t i;
+    CHECK_INSTANCE(fmi2SetDebugLogging);
+    for (i = 0; i < nCategories; i++) {
+        const char *k = categories ? categories[i] : NULL;
+        if (k == NULL || (strcmp(k, "logStatusError") && strcmp(k, "logStatusWarning")
+                          && strcmp(k, "logAll"))) {
+            char q[64];
+            quote(k, q, sizeof q);
+            logmsg(c, fmi2Error, "fmi2SetDebugLogging: unknown log category %s (known: "
+                   "logStatusError, logStatusWarning, logAll)", q);
+            return fmi2Error;
+        }
+    }
+    c->logging_on = loggingOn != fmi2False;
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType,
+                                          fmi2String fmuGUID, fmi2String fmuResourceLocation,
+                                          const fmi2CallbackFunctions *functions,
+                                          fmi2Boolean visible, fmi2Boolean loggingOn)
+{
+    Instance tmp, *c;
+    (void)fmuResourceLocation;
+    (void)visible;
+    memset(&tmp, 0, sizeof tmp);
+    if (functions) {
+        tmp.logger = functions->logger;
+        tmp.allocate = functions->allocateMemory;
+        tmp.release = functions->freeMemory;
+        tmp.env = functions->componentEnvironment;
+    }
+    snprintf(tmp.name, sizeof tmp.name, "%s", instanceName ? instanceName : "");
+    tmp.logging_on = loggingOn != fmi2False;
+    if (fmuType != fmi2CoSimulation) {
+        logmsg(&tmp, fmi2Error, "fmi2Instantiate: this FMU supports Co-Simulation only");
+        return NULL;
+    }
+    if (fmuGUID == NULL || strcmp(fmuGUID, CD_GUID) != 0) {
+        char q[64];
+        quote(fmuGUID, q, sizeof q);
+        logmsg(&tmp, fmi2Error, "fmi2Instantiate: GUID %s does not match this binary's %s "
+               "(modelDescription.xml of another build?)", q, CD_GUID);
+        return NULL;
+    }
+    c = (Instance *)mem_alloc(&tmp, sizeof *c);
+    if (c == NULL) {
+        logmsg(&tmp, fmi2Error, "fmi2Instantiate: out of memory");
+        return NULL;
+    }
+    *c = tmp;
+    set_defaults(&c->s);
+    return c;
+}
+
+FMI2_Export void fmi2FreeInstance(fmi2Component comp)
+{
+    Instance *c = (Instance *)comp;
+    if (c) mem_free(c, c);
+}
+
+FMI2_Export fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean toleranceDefined,
+                                           fmi2Real tolerance, fmi2Real startTime,
+                                           fmi2Boolean stopTimeDefined, fmi2Real stopTime)
+{
+    CHECK_INSTANCE(fmi2SetupExperiment);
+    (void)toleranceDefined; (void)tolerance; (void)stopTimeDefined; (void)stopTime;
+    if (c->s.phase != PH_INSTANTIATED) return not_in_phase(c, "fmi2SetupExperiment");
+    if (!isfinite(startTime)) {
+        logmsg(c, fmi2Error, "fmi2SetupExperiment: startTime = %g must be finite", startTime);
+        return fmi2Error;
+    }
+    c->s.t_start = startTime;
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2EnterInitializationMode(fmi2Component comp)
+{
+    CHECK_INSTANCE(fmi2EnterInitializationMode);
+    if (c->s.phase != PH_INSTANTIATED) return not_in_phase(c, "fmi2EnterInitializationMode");
+    c->s.phase = PH_INIT;
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
+{
+    CHECK_INSTANCE(fmi2ExitInitializationMode);
+    if (c->s.phase != PH_INIT) return not_in_phase(c, "fmi2ExitInitializationMode");
+    c->s.mode_eff = resolve_mode(&c->s);
+    c->s.phase = PH_STEP;
+    evaluate(c, c->s.t_start, 0.0, 1);
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2Terminate(fmi2Component comp)
+{
+    CHECK_INSTANCE(fmi2Terminate);
+    if (c->s.phase != PH_STEP && c->s.phase != PH_INIT)
+        return not_in_phase(c, "fmi2Terminate");
+    c->s.phase = PH_TERMINATED;
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2Reset(fmi2Component comp)
+{
+    CHECK_INSTANCE(fmi2Reset);
+    set_defaults(&c->s);
+    return fmi2OK;
+}
+
+/* -- get and set ---------------------------------------------------------------------------- */
+static int const_index_real(unsigned int vr)
+{
+    int i;
+    for (i = 0; i < CD_N_CONST_REAL; i++) if (CD_CONST_REAL[i].vr == vr) return i;
+    return -1;
+}
+
+static fmi2Status bad_vr(Instance *c, const char *fn, unsigned int vr)
+{
+    logmsg(c, fmi2Error, "%s: no variable with value reference %u", fn, vr);
+    return fmi2Error;
+}
+
+/* Initialization Mode: the outputs follow the inputs and parameters set so far (f_init). */
+static void refresh(Instance *c)
+{
+    if (c->s.phase == PH_INIT || c->s.phase == PH_INSTANTIATED) evaluate(c, c->s.t_start, 0.0, 0);
+}
+
+FMI2_Export fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference vr[],
+                                   size_t nvr, fmi2Real value[])
+{
+    size_t i;
+    int refreshed = 0;
+    CHECK_INSTANCE(fmi2GetReal);
+    if (nvr && (vr == NULL || value == NULL)) return fmi2Error;
+    for (i = 0; i < nvr; i++) {
+        unsigned int r = vr[i];
+        int k;
+        if (r == VR_W_IN) value[i] = c->s.w_in;
+        else if (r == VR_TAU_OUT) value[i] = c->s.tau_out;
+        else if (r >= VR_OUT0 && r < VR_OUT0 + N_OUT) {
+            if (!refreshed) { refresh(c); refreshed = 1; }
+            value[i] = c->s.out[r - VR_OUT0];
+        } else if (r >= VR_EXTRA0 && r < VR_EXTRA0 + CD_N_EXTRA)
+            value[i] = *extra_field(&c->s.extra, (int)(r - VR_EXTRA0));
+        else if ((k = const_index_real(r)) >= 0) value[i] = CD_CONST_REAL[k].value;
+        else return bad_vr(c, "fmi2GetReal", r);
+    }
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2GetInteger(fmi2Component comp, const fmi2ValueReference vr[],
+                                      size_t nvr, fmi2Integer value[])
+{
+    size_t i;
+    int k;
+    CHECK_INSTANCE(fmi2GetInteger);
+    if (nvr && (vr == NULL || value == NULL)) return fmi2Error;
+    for (i = 0; i < nvr; i++) {
+        if (vr[i] == VR_MODE_NUMBER) { value[i] = c->s.mode_number; continue; }
+        for (k = 0; k < CD_N_CONST_INTEGER; k++)
+            if (CD_CONST_INTEGER[k].vr == vr[i]) break;
+        if (k == CD_N_CONST_INTEGER) return bad_vr(c, "fmi2GetInteger", vr[i]);
+        value[i] = CD_CONST_INTEGER[k].value;
+    }
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2GetBoolean(fmi2Component comp, const fmi2ValueReference vr[],
+                                      size_t nvr, fmi2Boolean value[])
+{
+    size_t i;
+    CHECK_INSTANCE(fmi2GetBoolean);
+    if (nvr && (vr == NULL || value == NULL)) return fmi2Error;
+    for (i = 0; i < nvr; i++) {
+        if (vr[i] != VR_LOCKED) return bad_vr(c, "fmi2GetBoolean", vr[i]);
+        refresh(c);
+        value[i] = c->s.locked ? fmi2True : fmi2False;
+    }
+    return fmi2OK;
+}
+
+static const char *const MODE_STRINGS[CD_N_MODES] = {"12", "21", "1S", "S1", "2S", "S2"};
+
+FMI2_Export fmi2Status fmi2GetString(fmi2Component comp, const fmi2ValueReference vr[],
+                                     size_t nvr, fmi2String value[])
+{
+    size_t i;
+    int k;
+    CHECK_INSTANCE(fmi2GetString);
+    if (nvr && (vr == NULL || value == NULL)) return fmi2Error;
+    for (i = 0; i < nvr; i++) {
+        if (vr[i] == VR_MODE) { value[i] = MODE_STRINGS[c->s.mode]; continue; }
+        for (k = 0; k < CD_N_CONST_STRING; k++)
+            if (CD_CONST_STRING[k].vr == vr[i]) break;
+        if (k == CD_N_CONST_STRING) return bad_vr(c, "fmi2GetString", vr[i]);
+        value[i] = CD_CONST_STRING[k].value;
+    }
+    return fmi2OK;
+}
+
+static int parameters_settable(Instance *c)
+{
+    return c->s.phase == PH_INSTANTIATED || c->s.phase == PH_INIT;
+}
+
+FMI2_Export fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[],
+                                   size_t nvr, const fmi2Real value[])
+{
+    size_t i;
+    fmi2Status status = fmi2OK;
+    CHECK_INSTANCE(fmi2SetReal);
+    if (nvr && (vr == NULL || value == NULL)) return fmi2Error;
+    if (c->s.phase == PH_TERMINATED) return not_in_phase(c, "fmi2SetReal");
+    for (i = 0; i < nvr; i++) {
+        unsigned int r = vr[i];
+        double v = value[i];
+        if (r == VR_W_IN || r == VR_TAU_OUT) {
+            const char *name = r == VR_W_IN ? "w_in" : "tau_out";
+            if (!isfinite(v)) {
+                logmsg(c, fmi2Error, "%s = %g: input must be a finite number (kept %g)", name,
+                       v, r == VR_W_IN ? c->s.w_in : c->s.tau_out);
+                status = fmi2Error;
+                continue;
+            }
+            if (r == VR_W_IN) c->s.w_in = v; else c->s.tau_out = v;
+        } else if (r >= VR_EXTRA0 && r < VR_EXTRA0 + CD_N_EXTRA) {
+            int k = (int)(r - VR_EXTRA0);
+            const char *why = extra_problem(k, v);
+            if (!parameters_settable(c)) {
+                logmsg(c, fmi2Error, "%s is a fixed parameter: set it before "
+                       "fmi2ExitInitializationMode", EXTRA_NAMES[k]);
+                status = fmi2Error;
+            } else if (why) {
+                logmsg(c, fmi2Error, "invalid parameter: %s = %g %s (kept %g)", EXTRA_NAMES[k],
+                       v, why, *extra_field(&c->s.extra, k));
+                status = fmi2Error;
+            } else {
+                *extra_field(&c->s.extra, k) = v;
+            }
+        } else if (r >= VR_OUT0 && r < VR_OUT0 + N_OUT) {
+            logmsg(c, fmi2Error, "fmi2SetReal: value reference %u is an output", r);
+            status = fmi2Error;
+        } else if (const_index_real(r) >= 0) {
+            logmsg(c, fmi2Error, "fmi2SetReal: value reference %u is a constant of the design "
+                   "this FMU was built for (rebuild with another design file to change it)", r);
+            status = fmi2Error;
+        } else {
+            return bad_vr(c, "fmi2SetReal", r);
+        }
+    }
+    return status;
+}
+
+FMI2_Export fmi2Status fmi2SetInteger(fmi2Component comp, const fmi2ValueReference vr[],
+                                      size_t nvr, const fmi2Integer value[])
+{
+    size_t i;
+    fmi2Status status = fmi2OK;
+    CHECK_INSTANCE(fmi2SetInteger);
+    if (nvr && (vr == NULL || value == NULL)) return fmi2Error;
+    for (i = 0; i < nvr; i++) {
+        if (vr[i] != VR_MODE_NUMBER) {
+            logmsg(c, fmi2Error, "fmi2SetInteger: value reference %u is not a settable "
+                   "Integer (mode_number is %u)", vr[i], VR_MODE_NUMBER);
+            status = fmi2Error;
+        } else if (!parameters_settable(c)) {
+            logmsg(c, fmi2Error, "mode_number is a fixed parameter: set it before "
+                   "fmi2ExitInitializationMode");
+            status = fmi2Error;
+        } else if (value[i] < 0 || value[i] > CD_N_MODES) {
+            logmsg(c, fmi2Error, "invalid parameter: mode_number = %d must be 0 (use mode) or "
+                   "1..6 (12, 21, 1S, S1, 2S, S2)", (int)value[i]);
+            status = fmi2Error;
+        } else {
+            c->s.mode_number = value[i];
+        }
+    }
+    return status;
+}
+
+FMI2_Export fmi2Status fmi2SetBoolean(fmi2Component comp, const fmi2ValueReference vr[],
+                                      size_t nvr, const fmi2Boolean value[])
+{
+    CHECK_INSTANCE(fmi2SetBoolean);
+    (void)value;
+    if (nvr == 0) return fmi2OK;
+    logmsg(c, fmi2Error, "fmi2SetBoolean: value reference %u is not settable (locked is an "
+           "output)", vr ? vr[0] : 0u);
+    return fmi2Error;
+}
+
+FMI2_Export fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[],
+                                     size_t nvr, const fmi2String value[])
+{
+    size_t i;
+    fmi2Status status = fmi2OK;
+    CHECK_INSTANCE(fmi2SetString);
+    if (nvr && (vr == NULL || value == NULL)) return fmi2Error;
+    for (i = 0; i < nvr; i++) {
+        int m;
+        char q[64];
+        if (vr[i] != VR_MODE) {
+            logmsg(c, fmi2Error, "fmi2SetString: value reference %u is not a settable String "
+                   "(mode is %u)", vr[i], VR_MODE);
+            status = fmi2Error;
+            continue;
+        }
+        if (!parameters_settable(c)) {
+            logmsg(c, fmi2Error, "mode is a fixed parameter: set it before "
+                   "fmi2ExitInitializationMode");
+            status = fmi2Error;
+            continue;
+        }
+        m = cd_mode_index(value[i]);
+        if (m < 0) {
+            quote(value[i], q, sizeof q);
+            logmsg(c, fmi2Error, "invalid parameter: mode = %s must be one of 12, 21, 1S, S1, "
+                   "2S, S2 (driving shaft, driven shaft; 1 ring, 2 disc, S eccentric)", q);
+            status = fmi2Error;
+            continue;
+        }
+        c->s.mode = m;
+    }
+    return status;
+}
+
+/* -- FMU state ------------------------------------------------------------------------------ */
+static int state_valid(const CDState *s)
+{
+    int i;
+    if (s->magic != STATE_MAGIC || s->version != STATE_VERSION) return 0;
+    if (s->phase < PH_INSTANTIATED || s->phase > PH_TERMINATED) return 0;
+    if (s->mode < 0 || s->mode >= CD_N_MODES || s->mode_eff < 0 || s->mode_eff >= CD_N_MODES)
+        return 0;
+    if (s->mode_number < 0 || s->mode_number > CD_N_MODES) return 0;
+    for (i = 0; i < CD_N_EXTRA; i++)
+        if (extra_problem(i, *extra_field((CDExtra *)&s->extra, i))) return 0;
+    return isfinite(s->w_in) && isfinite(s->tau_out);
+}
+
+FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *FMUstate)
+{
+    CDState *copy;
+    CHECK_INSTANCE(fmi2GetFMUstate);
+    if (FMUstate == NULL) return fmi2Error;
+    copy = (CDState *)(*FMUstate ? *FMUstate : mem_alloc(c, sizeof *copy));
+    if (copy == NULL) {
+        logmsg(c, fmi2Error, "fmi2GetFMUstate: out of memory");
+        return fmi2Error;
+    }
+    *copy = c->s;
+    *FMUstate = copy;
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate FMUstate)
+{
+    const CDState *s = (const CDState *)FMUstate;
+    CHECK_INSTANCE(fmi2SetFMUstate);
+    if (s == NULL || !state_valid(s)) {
+        logmsg(c, fmi2Error, "fmi2SetFMUstate: not a state of this FMU");
+        return fmi2Error;
+    }
+    c->s = *s;
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2FreeFMUstate(fmi2Component comp, fmi2FMUstate *FMUstate)
+{
+    CHECK_INSTANCE(fmi2FreeFMUstate);
+    if (FMUstate == NULL) return fmi2OK;
+    if (*FMUstate) mem_free(c, *FMUstate);
+    *FMUstate = NULL;
+    return fmi2OK;
+}
+
+/* serialised: the GUID (fixed length, so a state of another design is refused), then CDState */
+#define GUID_BYTES 40
+
+FMI2_Export fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUstate FMUstate,
+                                                  size_t *size)
+{
+    CHECK_INSTANCE(fmi2SerializedFMUstateSize);
+    (void)FMUstate;
+    if (size == NULL) return fmi2Error;
+    *size = GUID_BYTES + sizeof(CDState);
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate FMUstate,
+                                             fmi2Byte serializedState[], size_t size)
+{
+    char guid[GUID_BYTES];
+    CHECK_INSTANCE(fmi2SerializeFMUstate);
+    if (FMUstate == NULL || serializedState == NULL || size < GUID_BYTES + sizeof(CDState)) {
+        logmsg(c, fmi2Error, "fmi2SerializeFMUstate: no state or buffer of %lu bytes smaller "
+               "than %lu", (unsigned long)size, (unsigned long)(GUID_BYTES + sizeof(CDState)));
+        return fmi2Error;
+    }
+    memset(guid, 0, sizeof guid);
+    strncpy(guid, CD_GUID, GUID_BYTES);
+    memcpy(serializedState, guid, GUID_BYTES);
+    memcpy(serializedState + GUID_BYTES, FMUstate, sizeof(CDState));
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp,
+                                               const fmi2Byte serializedState[], size_t size,
+                                               fmi2FMUstate *FMUstate)
+{
+    char guid[GUID_BYTES];
+    CDState s, *dst;
+    CHECK_INSTANCE(fmi2DeSerializeFMUstate);
+    if (serializedState == NULL || FMUstate == NULL || size != GUID_BYTES + sizeof(CDState)) {
+        logmsg(c, fmi2Error, "fmi2DeSerializeFMUstate: %lu bytes, expected %lu",
+               (unsigned long)size, (unsigned long)(GUID_BYTES + sizeof(CDState)));
+        return fmi2Error;
+    }
+    memset(guid, 0, sizeof guid);
+    strncpy(guid, CD_GUID, GUID_BYTES);
+    memcpy(&s, serializedState + GUID_BYTES, sizeof s);
+    if (memcmp(serializedState, guid, GUID_BYTES) != 0 || !state_valid(&s)) {
+        logmsg(c, fmi2Error, "fmi2DeSerializeFMUstate: not a state of this FMU (GUID %s)",
+               CD_GUID);
+        return fmi2Error;
+    }
+    dst = (CDState *)(*FMUstate ? *FMUstate : mem_alloc(c, sizeof *dst));
+    if (dst == NULL) {
+        logmsg(c, fmi2Error, "fmi2DeSerializeFMUstate: out of memory");
+        return fmi2Error;
+    }
+    *dst = s;
+    *FMUstate = dst;
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp,
+        const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
+        const fmi2ValueReference vKnown_ref[], size_t nKnown, const fmi2Real dvKnown[],
+        fmi2Real dvUnknown[])
+{
+    CHECK_INSTANCE(fmi2GetDirectionalDerivative);
+    (void)vUnknown_ref; (void)nUnknown; (void)vKnown_ref; (void)nKnown; (void)dvKnown;
+    (void)dvUnknown;
+    logmsg(c, fmi2Error, "fmi2GetDirectionalDerivative: not provided "
+           "(providesDirectionalDerivative = false)");
+    return fmi2Error;
+}
+
+/* -- co-simulation -------------------------------------------------------------------------- */
+FMI2_Export fmi2Status fmi2SetRealInputDerivatives(fmi2Component comp,
+        const fmi2ValueReference vr[], size_t nvr, const fmi2Integer order[],
+        const fmi2Real value[])
+{
+    CHECK_INSTANCE(fmi2SetRealInputDerivatives);
+    (void)vr; (void)nvr; (void)order; (void)value;
+    logmsg(c, fmi2Error, "fmi2SetRealInputDerivatives: not supported "
+           "(canInterpolateInputs = false)");
+    return fmi2Error;
+}
+
+FMI2_Export fmi2Status fmi2GetRealOutputDerivatives(fmi2Component comp,
+        const fmi2ValueReference vr[], size_t nvr, const fmi2Integer order[], fmi2Real value[])
+{
+    CHECK_INSTANCE(fmi2GetRealOutputDerivatives);
+    (void)vr; (void)nvr; (void)order; (void)value;
+    logmsg(c, fmi2Error, "fmi2GetRealOutputDerivatives: not supported "
+           "(maxOutputDerivativeOrder = 0)");
+    return fmi2Error;
+}
+
+FMI2_Export fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicationPoint,
+                                  fmi2Real communicationStepSize,
+                                  fmi2Boolean noSetFMUStatePriorToCurrentPoint)
+{
+    CHECK_INSTANCE(fmi2DoStep);
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (c->s.phase != PH_STEP) return not_in_phase(c, "fmi2DoStep");
+    if (!isfinite(currentCommunicationPoint) || !isfinite(communicationStepSize)
+        || communicationStepSize < 0) {
+        logmsg(c, fmi2Error, "fmi2DoStep: currentCommunicationPoint = %g, "
+               "communicationStepSize = %g: need finite values and a step >= 0",
+               currentCommunicationPoint, communicationStepSize);
+        return fmi2Error;
+    }
+    evaluate(c, currentCommunicationPoint + communicationStepSize, communicationStepSize, 1);
+    return fmi2OK;
+}
+
+FMI2_Export fmi2Status fmi2CancelStep(fmi2Component comp)
+{
+    CHECK_INSTANCE(fmi2CancelStep);
+    logmsg(c, fmi2Error, "fmi2CancelStep: steps never run asynchronously");
+    return fmi2Error;
+}
+
+static fmi2Status no_status(Instance *c)
+{
+    logmsg(c, fmi2Error, "fmi2GetXXXStatus: steps never run asynchronously; nothing to ask");
+    return fmi2Discard;
+}
+
+FMI2_Export fmi2Status fmi2GetStatus(fmi2Component comp, const fmi2StatusKind s,
+                                     fmi2Status *value)
+{
+    CHECK_INSTANCE(fmi2GetStatus);
+    (void)s; (void)value;
+    return no_status(c);
+}
+
+FMI2_Export fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s,
+                                         fmi2Real *value)
+{
+    CHECK_INSTANCE(fmi2GetRealStatus);
+    (void)s; (void)value;
+    return no_status(c);
+}
+
+FMI2_Export fmi2Status fmi2GetIntegerStatus(fmi2Component comp, const fmi2StatusKind s,
+                                            fmi2Integer *value)
+{
+    CHECK_INSTANCE(fmi2GetIntegerStatus);
+    (void)s; (void)value;
+    return no_status(c);
+}
+
+FMI2_Export fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s,
+                                            fmi2Boolean *value)
+{
+    CHECK_INSTANCE(fmi2GetBooleanStatus);
+    (void)s; (void)value;
+    return no_status(c);
+}
+
+FMI2_Export fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s,
+                                           fmi2String *value)
+{
+    CHECK_INSTANCE(fmi2GetStringStatus);
+    (void)s; (void)value;
+    return no_status(c);
+}
