@@ -37,6 +37,7 @@ DESIGN_COMMANDS = {
     "bench": ["bench", "--mode", "S1", "--out", "{tmp}/bench_out"],
     "diagnose": ["diagnose", "missing-recording.csv", "--mode", "S1"],
     "diagnose-batch": ["diagnose-batch", "{recdir}", "--mode", "S1", "--out", "{tmp}/batch"],
+    "build": ["build", "--dest", "{tmp}/build_out", "CycloidDriveNative"],
 }
 
 SEED_COMMANDS = {

@@ -621,6 +621,13 @@ FMI2_Export fmi2Status fmi2FreeFMUstate(fmi2Component comp, fmi2FMUstate *FMUsta
 /* serialised: the GUID (fixed length, so a state of another design is refused), then CDState */
 #define GUID_BYTES 40
 
+static void guid_bytes(char out[GUID_BYTES])
+{
+    size_t n = strlen(CD_GUID);
+    memset(out, 0, GUID_BYTES);
+    memcpy(out, CD_GUID, n < GUID_BYTES ? n : GUID_BYTES);
+}
+
 FMI2_Export fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUstate FMUstate,
                                                   size_t *size)
 {
@@ -641,8 +648,7 @@ FMI2_Export fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate FM
                "than %lu", (unsigned long)size, (unsigned long)(GUID_BYTES + sizeof(CDState)));
         return fmi2Error;
     }
-    memset(guid, 0, sizeof guid);
-    strncpy(guid, CD_GUID, GUID_BYTES);
+    guid_bytes(guid);
     memcpy(serializedState, guid, GUID_BYTES);
     memcpy(serializedState + GUID_BYTES, FMUstate, sizeof(CDState));
     return fmi2OK;
@@ -660,8 +666,7 @@ FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp,
                (unsigned long)size, (unsigned long)(GUID_BYTES + sizeof(CDState)));
         return fmi2Error;
     }
-    memset(guid, 0, sizeof guid);
-    strncpy(guid, CD_GUID, GUID_BYTES);
+    guid_bytes(guid);
     memcpy(&s, serializedState + GUID_BYTES, sizeof s);
     if (memcmp(serializedState, guid, GUID_BYTES) != 0 || !state_valid(&s)) {
         logmsg(c, fmi2Error, "fmi2DeSerializeFMUstate: not a state of this FMU (GUID %s)",
