@@ -523,3 +523,22 @@ def test_beyond_the_map_warns_once(native):
     warnings = [m for s, m in inst.messages if s == 1]
     assert len(warnings) == 1 and "350" in warnings[0]
     inst.close()
+
+
+@pytest.mark.skipif(shutil.which("cmake") is None, reason="no cmake")
+def test_shipped_sources_build_with_fmpys_cmake_build(native, tmp_path):
+    """What a host on another platform does: compile sources/ (buildDescription.xml) with
+    fmpy's own CMake build, here for linux64, and get the same numbers."""
+    from fmpy.build import build_platform_binary
+    d = tmp_path / "rebuilt"
+    zipfile.ZipFile(native).extractall(d)
+    shutil.rmtree(d / "binaries")
+    (tmp_path / "cmake").mkdir()
+    build_platform_binary(str(d.resolve()), build_dir=str(tmp_path / "cmake"))
+    assert (d / "binaries" / "linux64" / "CycloidDriveNative.so").is_file()
+    pts = quadrant_points("S2", 16, np.random.default_rng(4))
+    ref, new = Inst(native, mode="S2"), Inst(native, unzip=str(d), mode="S2")
+    for w, t in pts:
+        assert_same(new.step(w, t), ref.step(w, t), (w, t))
+    ref.close()
+    new.close()
