@@ -478,6 +478,10 @@ def build_native_fmu(design: DriveDesign | None = None, dest="dist", *,
         doc = stage / "documentation"
         doc.mkdir()
         (doc / "index.html").write_text(_documentation(design, torque_max, speed_max))
+        lic = doc / "licenses"
+        lic.mkdir()
+        (lic / "LICENSE.txt").write_text(MIT_LICENSE)
+        (lic / "fmi-headers-BSD-2-Clause.txt").write_text(_fmi_license(headers))
         compile_binary(src, stage / "binaries" / "linux64" / f"{NAME}.so", cc)
         out = dest / f"{name}.fmu"
         partial = dest / f".{name}.fmu.partial-{os.getpid()}"
@@ -487,6 +491,40 @@ def build_native_fmu(design: DriveDesign | None = None, dest="dist", *,
                     zf.write(p, p.relative_to(stage).as_posix())
         os.replace(partial, out)
     return out
+
+
+MIT_LICENSE = """CycloidDriveNative.fmu (cyclo-fmu): the C sources written for cyclo-fmu, the
+generated map and the binary.
+
+MIT License
+
+Copyright (c) the cyclo-fmu authors
+
+Permission is hereby granted, free of charge, to any person obtaining a copy of this software
+and associated documentation files (the "Software"), to deal in the Software without
+restriction, including without limitation the rights to use, copy, modify, merge, publish,
+distribute, sublicense, and/or sell copies of the Software, and to permit persons to whom the
+Software is furnished to do so, subject to the following conditions:
+
+The above copyright notice and this permission notice shall be included in all copies or
+substantial portions of the Software.
+
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR IMPLIED, INCLUDING
+BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY, FITNESS FOR A PARTICULAR PURPOSE AND
+NONINFRINGEMENT. IN NO EVENT SHALL THE AUTHORS OR COPYRIGHT HOLDERS BE LIABLE FOR ANY CLAIM,
+DAMAGES OR OTHER LIABILITY, WHETHER IN AN ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM,
+OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE SOFTWARE.
+"""
+
+
+def _fmi_license(headers: Path) -> str:
+    """The FMI headers' own license notice, as their header comment states it."""
+    text = (headers / "fmi2FunctionTypes.h").read_text()
+    start = text.index("Copyright (C)")
+    end = text.index("*/", start)
+    body = "\n".join(line.strip() for line in text[start:end].splitlines()).strip()
+    return ("The FMI 2.0 headers in sources/ (fmi2Functions.h, fmi2FunctionTypes.h, "
+            "fmi2TypesPlatform.h), as shipped by fmpy:\n\n" + body + "\n")
 
 
 def _documentation(design, torque_max, speed_max) -> str:
