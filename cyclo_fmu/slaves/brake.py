@@ -19,16 +19,16 @@ class FeltBrake(UnitSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.parameter("T_first", 5.0, "N.m", "first brake torque setpoint of the test series")
-        self.parameter("T_last", 5.0, "N.m", "last brake torque setpoint of the test series")
-        self.parameter("T_count", 1, None, "number of brake torque setpoints", Integer)
-        self.parameter("hold_time", 1.0, "s", "time each setpoint is held")
+        self.parameter("T_first", 5.0, "N.m", "first brake torque setpoint of the test series", min=0.0)
+        self.parameter("T_last", 5.0, "N.m", "last brake torque setpoint of the test series", min=0.0)
+        self.parameter("T_count", 1, None, "number of brake torque setpoints", Integer, min=1)
+        self.parameter("hold_time", 1.0, "s", "time each setpoint is held", min=0.0)
         self.parameter("torque_schedule", "", None, "instead of the series: setpoints "
                        "'t0 T0; t1 T1; ...' (s, N*m), each held until the next", String)
         self.parameter("w_reg", 0.5, "rad/s", "speed below which the Coulomb torque is "
-                       "regularised (tanh)")
+                       "regularised (tanh)", min=0.0)
         self.parameter("J_out", 2.0e-3, "kg.m2", "output-side inertia: brake drum, coupling, "
-                       "output transducer rotor. Assumption")
+                       "output transducer rotor. Assumption", min=0.0)
         self.input("w", 0.0, "rad/s", "speed of the output shaft")
         self.output("tau_out", 0.0, "N.m", "torque the brake applies on the reducer's output shaft",
                     depends=("w",))
@@ -38,8 +38,11 @@ class FeltBrake(UnitSlave):
         self._w_last = None
         self._time = 0.0
 
-    def exit_initialization_mode(self):
+    init_independent = ("J_out",)   # no step yet: no acceleration
+
+    def _setup(self):
         try:
+            self.check_limits()
             self._schedule = (core.rig.parse_schedule(self.torque_schedule, "torque_schedule")
                               if self.torque_schedule.strip() else None)
             if self.T_count < 1:
@@ -55,6 +58,8 @@ class FeltBrake(UnitSlave):
                                  "setpoint must not be negative")
         except ValueError as exc:
             self.fail(f"invalid parameter: {exc}")
+
+    def _evaluate_init(self):
         self._update(0.0, 0.0)
 
     def _update(self, t, dt):

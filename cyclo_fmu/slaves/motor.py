@@ -21,19 +21,19 @@ class InductionMotor(UnitSlave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         m = core.rig.InductionMotor()
-        self.parameter("rated_power", m.rated_power, "W", "rated power")
-        self.parameter("rated_speed", m.rated_speed, "rad/s", "rated speed at rated frequency")
-        self.parameter("rated_frequency", m.rated_frequency, "Hz", "rated frequency")
-        self.parameter("pole_pairs", m.pole_pairs, None, "pole pairs", Integer)
-        self.parameter("breakdown_ratio", m.breakdown_ratio, "1", "breakdown / rated torque")
-        self.parameter("J", m.inertia, "kg.m2", "rotor, coupling and input-transducer inertia")
-        self.parameter("ramp_rate", m.ramp_rate, "Hz", "setpoint ramp of the regulator, Hz per s")
+        self.parameter("rated_power", m.rated_power, "W", "rated power", min=0.0)
+        self.parameter("rated_speed", m.rated_speed, "rad/s", "rated speed at rated frequency", min=0.0)
+        self.parameter("rated_frequency", m.rated_frequency, "Hz", "rated frequency", min=0.0)
+        self.parameter("pole_pairs", m.pole_pairs, None, "pole pairs", Integer, min=1)
+        self.parameter("breakdown_ratio", m.breakdown_ratio, "1", "breakdown / rated torque", min=1.0)
+        self.parameter("J", m.inertia, "kg.m2", "rotor, coupling and input-transducer inertia", min=0.0)
+        self.parameter("ramp_rate", m.ramp_rate, "Hz", "setpoint ramp of the regulator, Hz per s", min=0.0)
         self.parameter("f_first", 50.0, "Hz", "first frequency setpoint of the test series")
         self.parameter("f_last", 50.0, "Hz", "last frequency setpoint of the test series")
-        self.parameter("f_count", 1, None, "number of frequency setpoints", Integer)
-        self.parameter("hold_time", 1.0, "s", "time each setpoint pair is held")
+        self.parameter("f_count", 1, None, "number of frequency setpoints", Integer, min=1)
+        self.parameter("hold_time", 1.0, "s", "time each setpoint pair is held", min=0.0)
         self.parameter("loads_per_frequency", 1, None, "brake setpoints run at each frequency",
-                       Integer)
+                       Integer, min=1)
         self.parameter("frequency_schedule", "", None, "instead of the series: setpoints "
                        "'t0 f0; t1 f1; ...' (s, Hz), each held until the next", String)
         self.parameter("w_start", 0.0, "rad/s", "initial speed")
@@ -44,8 +44,14 @@ class InductionMotor(UnitSlave):
         self.output("P_mech", 0.0, "W", "mechanical power T_em*w")
         self._t = 0.0
 
-    def exit_initialization_mode(self):
+    #: at the start the outputs follow w_start and the motor's curve; not the inertia, ramp or
+    #: the setpoints (the frequency starts at the synchronous value of w_start)
+    init_independent = ("J", "ramp_rate", "f_first", "f_last", "f_count", "hold_time",
+                        "loads_per_frequency", "frequency_schedule")
+
+    def _setup(self):
         try:
+            self.check_limits()
             self._motor = core.rig.InductionMotor(
                 rated_power=float(self.rated_power), rated_speed=float(self.rated_speed),
                 rated_frequency=float(self.rated_frequency), pole_pairs=int(self.pole_pairs),
@@ -65,6 +71,8 @@ class InductionMotor(UnitSlave):
                 raise ValueError("f_count and loads_per_frequency must be at least 1")
         except ValueError as exc:
             self.fail(f"invalid parameter: {exc}")
+
+    def _evaluate_init(self):
         self.w = float(self.w_start)
         self.frequency = 0.0 if self.w == 0 else self.w * self.pole_pairs / (2 * math.pi)
         self._outputs()
