@@ -128,6 +128,33 @@ def test_no_range_warning_at_start_up(fmus):
     a.close()
 
 
+@pytest.mark.parametrize("case", ["nan_input", "bad_parameter"])
+def test_error_not_fatal(fmus, case):
+    """NaN input and an invalid parameter: fmi2Error (3), not fmi2Fatal (4), with the reason in
+    the log even with debug logging off (as the native FMU)."""
+    a = Inst(fmus["CycloidDrive"], start=False)
+    a.fmu.setupExperiment(startTime=0.0)
+    a.fmu.enterInitializationMode()
+    if case == "bad_parameter":
+        a.set(mu_boundary=5.0)
+        with pytest.raises(Exception) as exc:
+            a.fmu.exitInitializationMode()
+        want = "mu_boundary = 5.0"
+    else:
+        a.fmu.exitInitializationMode()
+        a.set(w_in=float("nan"))
+        with pytest.raises(Exception) as exc:
+            a.fmu.doStep(0.0, 1e-3)
+        want = "w_in = nan"
+    assert exc.value.status == 3
+    assert any(s == 3 and want in m for s, m in a.messages), a.messages
+    a.fmu.freeInstance()
+    b = Inst(fmus["Transducer"])                    # other instances unaffected
+    b.set(x=1.0)
+    b.fmu.doStep(0.0, 1e-3)
+    b.close()
+
+
 def test_p_loss_is_a_loss_with_inertia(fmus):
     """With input_inertia a run-up stores kinetic energy: P_stored carries it, P_loss >= 0 and
     tau_in w_in + tau_out w_out = P_loss + P_stored."""

@@ -32,7 +32,7 @@ GCC = shutil.which("gcc") or shutil.which("cc")
 pytestmark = pytest.mark.skipif(GCC is None, reason="no C compiler")
 
 OUT = ("w_out", "tau_in", "tau_housing", "P_loss", "PL1", "PL2", "PL3", "PL5", "PL6", "eta",
-       "eta0", "P_extra")
+       "eta0", "P_extra", "P_stored")
 #: agreement required with the Python FMU (issue 7)
 RTOL = 1e-9
 #: absolute floor for values that are zero in one FMU and a rounding residue in the other [W,
@@ -178,7 +178,7 @@ def test_model_description_metadata(native, fmu):
     assert init["w_out"] == {"w_in", "mode", "mode_number"}
     assert {"drag_torque", "ripple_1x", "tau_out"} <= init["tau_in"]
     assert "drag_torque" not in init["tau_housing"]
-    assert len(out) == len(init) == 13
+    assert len(out) == len(init) == 14
 
 
 # -- the C host ------------------------------------------------------------------------------

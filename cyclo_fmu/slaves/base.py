@@ -15,11 +15,22 @@
 from __future__ import annotations
 
 import math
+import sys
+from pathlib import Path
 from xml.etree.ElementTree import Element, SubElement
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability
 from pythonfmu.enums import Fmi2Status
 from pythonfmu.variables import Boolean, Integer, Real, String
+
+#: Inside an FMU whose linux64 binary is our C front (fmu_build._install_status_shim, which
+#: writes this marker): a failure is reported through the variable ``_failed`` (value
+#: reference 0), which the front reads after fmi2ExitInitializationMode and fmi2DoStep and
+#: answers with fmi2Error. pythonfmu's own binary turns a raised exception into fmi2Fatal and its
+#: exception handling can corrupt the host's interpreter (a crash at a later point), so with
+#: the front no exception crosses into pythonfmu. Elsewhere (win64, source tree) we raise.
+STATUS_FRONT = (sys.platform.startswith("linux")
+                and (Path(__file__).resolve().parent / "_status_front").is_file())
 
 #: Model metadata written into every Python FMU's modelDescription.xml (as the native FMU's)
 LICENSE = "MIT"
@@ -67,6 +78,14 @@ class UnitSlave(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        self._failed = False
+        self.register_variable(Boolean("_failed", causality=Fmi2Causality.local,
+                                       variability=Fmi2Variability.discrete,
+                                       description="internal: the last fmi2ExitInitializationMode "
+                                       "or fmi2DoStep failed (read by the FMU's C front, which "
+                                       "returns fmi2Error)"))
+        step = self.do_step
+        self.do_step = lambda t, h: self._guarded(step, t, h)
         self._units = {}
         self._quantity = {}      # name -> quantity (overrides QUANTITIES)
         self._display = {}       # name -> display unit (overrides DISPLAY_UNITS' first)
@@ -114,9 +133,23 @@ class UnitSlave(Fmi2Slave):
 
     # -- errors -------------------------------------------------------------------------------
     def fail(self, message: str):
-        """Log an error and raise, which pythonfmu turns into fmi2Error (the host survives)."""
+        """Log an error and raise; ``_guarded`` turns it into fmi2Error (through the C front)."""
         self.log(message, Fmi2Status.error, "logStatusError")
-        raise ValueError(message)
+        raise _Failure(message)
+
+    def _guarded(self, fn, *args):
+        """Run an FMI callback; with the C front, a failure sets ``_failed`` instead of raising."""
+        self._failed = False
+        try:
+            result = fn(*args)
+            return True if result is None else result
+        except Exception as exc:   # noqa: BLE001 - reported as fmi2Error, never lost
+            if not isinstance(exc, _Failure):
+                self.log(f"{type(exc).__name__}: {exc}", Fmi2Status.error, "logStatusError")
+            if not STATUS_FRONT:
+                raise
+            self._failed = True
+            return True
 
     def require_finite(self, **values):
         for name, v in values.items():
@@ -156,8 +189,11 @@ class UnitSlave(Fmi2Slave):
     def exit_initialization_mode(self):
         self._in_init = False
         self._setup_key = None          # always validate at the exit
-        self._ensure_setup()
-        self._evaluate_init()
+
+        def run():
+            self._ensure_setup()
+            self._evaluate_init()
+        self._guarded(run)
 
     def _refresh_init(self):
         """In Initialization Mode: bring the outputs up to date (f_init). A parameter or input
@@ -266,6 +302,10 @@ class UnitSlave(Fmi2Slave):
         if deps:
             attrib["dependenciesKind"] = " ".join(["dependent"] * len(deps))
         return attrib
+
+
+class _Failure(ValueError):
+    """A failure already logged by ``fail``."""
 
 
 def _version():
