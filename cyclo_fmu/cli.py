@@ -268,6 +268,17 @@ def cmd_build(args) -> int:
     return 0
 
 
+def cmd_export_modelica(args) -> int:
+    from .modelica_export import export_modelica
+    a, b, _ = parse_mode(args.mode)
+    design = _load_design(args.design)
+    with _staged_dir("out", args.out) as out:
+        path = export_modelica(a + b, out, design,
+                               design_name=Path(args.design).name if args.design else None)
+    print(Path(args.out) / path.name)
+    return 0
+
+
 def cmd_bench(args) -> int:
     from .bench import Sensors, run_bench, scenario
     from .fmu_build import SLAVES, build_fmu
@@ -475,6 +486,12 @@ def build_parser() -> argparse.ArgumentParser:
                     "carries; default: the paper's test drive")
     bp.add_argument("names", nargs="*", help="FMUs to build (default: all)")
     bp.set_defaults(func=cmd_build)
+    mx = sub.add_parser("export-modelica", help="a Modelica package: the mode as MSL LossyGear "
+                        "with a loss table fitted to the core over the bench envelope")
+    mx.add_argument("--mode", required=True, help=f"operating mode, one of {', '.join(MODES)}")
+    mx.add_argument("--design", help="design file (TOML); default: the paper's test drive")
+    mx.add_argument("--out", required=True, help="output folder (writes CycloidDrive_<mode>.mo)")
+    mx.set_defaults(func=cmd_export_modelica)
     bench = sub.add_parser("bench", help="simulate the motor - reducer - brake test bench (SSP)")
     bench.add_argument("--mode", default="S1", help="operating mode of the reducer (S1, S2, ...)")
     bench.add_argument("--scenario", default="paper",
