@@ -216,3 +216,76 @@ def test_real_import_error(fmus, tmp_path):
     assert r.returncode != 0
     assert "numpy" in r.stderr.splitlines()[-1], r.stderr[-500:]
     assert "model_core" not in r.stderr.splitlines()[-1]
+
+
+C_HOST = r"""
+#include <dlfcn.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include "fmi2Functions.h"
+static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c,
+                   fmi2String m, ...)
+{ (void)e; fprintf(stderr, "[%s %d %s] %s\n", n, (int)s, c, m); }
+#define LOAD(f) f##TYPE *f = (f##TYPE *)dlsym(lib, #f); if (!f) { printf("no %s\n", #f); return 3; }
+int main(int argc, char **argv) {
+    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    fmi2ValueReference in[2], out[2];
+    fmi2Real u[2] = {300.0, -10.0}, y[2], t = 0.0;
+    fmi2Component c; void *lib; int k;
+    if (argc != 8) return 2;
+    in[0] = atoi(argv[4]); in[1] = atoi(argv[5]); out[0] = atoi(argv[6]); out[1] = atoi(argv[7]);
+    lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    if (!lib) { printf("dlopen: %s\n", dlerror()); return 3; }
+    LOAD(fmi2Instantiate) LOAD(fmi2SetupExperiment) LOAD(fmi2EnterInitializationMode)
+    LOAD(fmi2ExitInitializationMode) LOAD(fmi2SetReal) LOAD(fmi2GetReal) LOAD(fmi2DoStep)
+    LOAD(fmi2Terminate) LOAD(fmi2FreeInstance)
+    c = fmi2Instantiate("host", fmi2CoSimulation, argv[2], argv[3], &cb, fmi2False, fmi2False);
+    if (!c) { printf("instantiate failed\n"); return 4; }
+    if (fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) > fmi2Warning) return 5;
+    if (fmi2EnterInitializationMode(c) > fmi2Warning) return 5;
+    if (fmi2SetReal(c, in, 2, u) > fmi2Warning) return 5;
+    if (fmi2ExitInitializationMode(c) > fmi2Warning) return 5;
+    for (k = 0; k < 3; k++, t += 1e-3) if (fmi2DoStep(c, t, 1e-3, fmi2True) > fmi2Warning) return 6;
+    if (fmi2GetReal(c, out, 2, y) > fmi2Warning) return 7;
+    printf("%.17g %.17g\n", y[0], y[1]);
+    fmi2Terminate(c); fmi2FreeInstance(c);
+    return 0;
+}
+"""
+
+
+def test_python_fmu_in_a_c_host(fmus, tmp_path):
+    """README recipe: a C host (no Python) runs CycloidDrive.fmu with libpython preloaded and
+    the interpreter's home and packages named; without them it refuses with a message."""
+    import shutil
+    import sysconfig
+
+    from fmpy import extract
+
+    from cyclo_fmu.native.build import fmi_header_dir
+    gcc = shutil.which("gcc")
+    libpy = Path(sysconfig.get_config_var("LIBDIR")) / (sysconfig.get_config_var("INSTSONAME")
+                                                        or "")
+    if not gcc or not sysconfig.get_config_var("Py_ENABLE_SHARED") or not libpy.is_file():
+        pytest.skip("needs gcc and a shared-library Python")
+    src = tmp_path / "host.c"
+    src.write_text(C_HOST)
+    exe = tmp_path / "host"
+    subprocess.run([gcc, "-std=c99", "-o", str(exe), str(src), f"-I{fmi_header_dir()}", "-ldl"],
+                   check=True, capture_output=True)
+    d = Path(extract(fmus["CycloidDrive"]))
+    md = read_model_description(fmus["CycloidDrive"])
+    vr = {v.name: str(v.valueReference) for v in md.modelVariables}
+    argv = [str(exe), str(d / "binaries" / "linux64" / "CycloidDrive.so"), md.guid,
+            (d / "resources").as_uri(), vr["w_in"], vr["tau_out"], vr["tau_in"], vr["eta"]]
+    r = subprocess.run(argv, env={}, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 4 and "_Py_NoneStruct" in r.stderr and "LD_PRELOAD" in r.stderr
+    site = next(p for p in sys.path if p.endswith("site-packages"))
+    env = {"LD_PRELOAD": str(libpy), "PYTHONHOME": sys.base_prefix, "PYTHONPATH": site}
+    r = subprocess.run(argv, env=env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, (r.stdout, r.stderr[-1000:])
+    tau_in, eta = map(float, r.stdout.split())
+    a = Inst(fmus["CycloidDrive"])
+    o = a.step(300.0, -10.0)
+    a.close()
+    assert tau_in == pytest.approx(o["tau_in"], rel=1e-12) and eta == pytest.approx(o["eta"])

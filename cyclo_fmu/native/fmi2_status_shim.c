@@ -24,6 +24,7 @@
 #define SUFFIX ".pythonfmu.so"
 
 static void *lib = NULL;
+static char load_error[768] = "";
 
 static void *load(void)
 {
@@ -37,7 +38,10 @@ static void *load(void)
     memcpy(path, info.dli_fname, n - 3);          /* strip ".so" */
     memcpy(path + n - 3, SUFFIX, sizeof(SUFFIX));
     lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (!lib) fprintf(stderr, "cyclo-fmu: cannot load %s: %s\n", path, dlerror());
+    if (!lib) {
+        const char *e = dlerror();
+        snprintf(load_error, sizeof load_error, "%s", e ? e : path);
+    }
     return lib;
 }
 
@@ -134,10 +138,17 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     fmi2InstantiateTYPE *f = (fmi2InstantiateTYPE *)sym("fmi2Instantiate");
     Wrap *w;
     if (!f) {
+        char buf[1024];
+        size_t i;
+        const char *why = load_error[0] ? load_error : NULL;
+        snprintf(buf, sizeof buf, "cannot load the pythonfmu binary (%s): a non-Python host needs "
+                 "libpython preloaded (LD_PRELOAD) and numpy/scipy on PYTHONPATH (README, Use it "
+                 "in your tool)", why ? why : "not found");
+        for (i = 0; buf[i]; i++)
+            if (buf[i] == '%') buf[i] = '?';
         if (functions && functions->logger)
             functions->logger(functions->componentEnvironment, instanceName, fmi2Error,
-                              "logStatusError", "cannot load the pythonfmu binary (%s)",
-                              dlerror());
+                              "logStatusError", buf);
         return NULL;
     }
     if (functions == NULL) return NULL;
