@@ -234,6 +234,8 @@ def generate_data_c(design, lt, lw, modes, constants, guid, torque_max, speed_ma
     for kind, ctype, fmt in (("Real", "CDConstReal", _hex), ("Integer", "CDConstInteger", str),
                              ("String", "CDConstString", _c_string)):
         rows = [f"    {{{vr}u, {fmt(c[2])}}}" for c, vr in zip(constants, vrs) if c[1] == kind]
+        if kind == "Real":   # map_torque_max, map_speed_max (value references 200, 201)
+            rows += [f"    {{200u, {_hex(torque_max)}}}", f"    {{201u, {_hex(speed_max)}}}"]
         n = len(rows)
         if not rows:   # C forbids empty initialisers
             rows = ["    {0u, 0}"]
