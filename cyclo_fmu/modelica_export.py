@@ -191,7 +191,8 @@ sign), driving-shaft torque magnitude {t_lo:g} to {t_hi:g} N.m.</p>
 signs of speed, grid {N_CHECK} x {N_CHECK}): forward {100 * fit.max_error_forward:.3f}
 percentage points; backward {back}.</p>
 <p><strong>Limits</strong>: outside the band the table is held (speed) or the affine torque law is
-extrapolated (torque): at light load the core's efficiency falls faster than the affine law;
+extrapolated (torque): it underestimates the core's efficiency there, at light load strongly
+(several points below a third of the band's lowest torque);
 the core's extra physics (drag, Stribeck, inertia, ripple, warm-up) is not in this model; the
 support (held shaft) torque follows from LossyGear's balance; self-locking appears only as
 LossyGear's stuck mode at zero speed.</p>
