@@ -33,7 +33,7 @@ def main():
         mode, checks = check_plausibility(r, "S1")
         t_check = time.perf_counter() - t
         t = time.perf_counter()
-        d = Diagnoser(mode=mode).fit(r)
+        d = Diagnoser(mode=mode).fit(r).diagnosis_
         t_fit = time.perf_counter() - t
         print(f"600 000 samples: synth + write {t_synth:.1f} s; read {t_read:.2f} s (reference: "
               f"bare pyarrow parse of the same file {t_ref:.2f} s), checks {t_check:.2f} s, "

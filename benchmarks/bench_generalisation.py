@@ -55,7 +55,7 @@ def run(effect, seed, mode="S1", size="medium"):
     half = sw <= np.median(sw[sw > 0.05 * sw.max()])
     low_rec = SimpleNamespace(**{k: (v[half] if isinstance(v, np.ndarray) else v)
                                  for k, v in vars(rec).items()})
-    found = diag.fit(low_rec)
+    found = diag.fit(low_rec).diagnosis_
     P = diag.prepare(rec)
     y, w, T = P["y"], P["w_in"], P["T_out"]
     aw = np.abs(w)

@@ -324,12 +324,13 @@ def recording_from_result(result) -> dict:
     }
 
 
-def write_recording(path, rec: dict) -> Path:
+def write_recording(path, rec: dict, columns=None) -> Path:
     path = Path(path)
+    columns = list(columns or RECORDING_COLUMNS)
     with path.open("w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(RECORDING_COLUMNS)
-        cols = [rec[c] for c in RECORDING_COLUMNS]
+        w.writerow(columns)
+        cols = [rec[c] for c in columns]
         for row in zip(*cols):
             w.writerow([f"{row[0]:.6f}"] + [f"{v:.6g}" for v in row[1:]])
     return path

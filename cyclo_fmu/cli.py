@@ -336,8 +336,9 @@ def cmd_synth(args) -> int:
 
 
 def cmd_diagnose(args) -> int:
-    from .diagnosis import Diagnoser
+    from .diagnosis import DiagnosisError
     from .io import RecordingError, load_recording
+    from .sweep.batch import diagnose_recording
     design = _load_design(args.design)
     if args.mode.strip().lower() != "auto":
         parse_mode(args.mode)
@@ -346,31 +347,33 @@ def cmd_diagnose(args) -> int:
     try:
         rec, mode, checks = load_recording(args.recording, args.mode, design,
                                            columns=args.columns, units=args.units)
-    except RecordingError as exc:
+        d, result = diagnose_recording(rec, mode, checks, design)
+    except (RecordingError, DiagnosisError) as exc:
         raise CycloidInputError("recording", args.recording, str(exc))
-    d = Diagnoser(design, mode).fit(rec)
-    result = d.to_json()
-    result["mode"] = mode
-    result["checks"] = list(checks)
-    result["read_notes"] = list(rec.notes)
-    result["exclusions"] = [{"reason": e.reason, "count": e.count,
-                             "first_time_s": _json_num(e.first_time)} for e in rec.exclusions]
-    result["excluded"] = result["exclusions"]
     if args.out:
-        _write_diagnosis(args.out, d, design, result)
+        write_diagnosis(args.out, d, design, result, source=str(args.recording))
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
-    for e in rec.exclusions:
-        print(f"excluded: {e.count} samples ({e.reason}) from t = {e.first_time:.3f} s")
+    for e in result["excluded"]:
+        print(f"excluded: {e['count']} {e.get('unit', 'samples')} ({e['reason']})")
     print(f"located: {d.located['statement']}")
-    print(f"effect: {d.effect} - {d.effect_description}")
-    for k, v in d.parameters.items():
-        ci = f" [{v['ci95'][0]:.4g}, {v['ci95'][1]:.4g}]" if v["ci95"] else ""
-        print(f"  {k} = {v['value']:.5g} {v['unit']}{ci}")
+    if not d.effects:
+        print("effects: none - " + EFFECTS_NONE)
+    for e in d.effects:
+        print(f"effect: {e['id']} - {e['description']} (explains {1e3 * e['explained_rms_Nm']:.2f}"
+              f" mN*m)")
+        for k, v in e["parameters"].items():
+            ci = f" [{v['ci95'][0]:.4g}, {v['ci95'][1]:.4g}]" if v["ci95"] else ""
+            print(f"  {k} = {v['value']:.5g} {v['unit']}{ci}")
+    if d.calibration and d.effect != "friction_miscalibrated":
+        v = d.calibration["mu_boundary_rel_error"]
+        print(f"friction level: mu_boundary off by {100 * v['value']:+.2f} % "
+              f"[{100 * v['ci95'][0]:+.2f}, {100 * v['ci95'][1]:+.2f}]")
     if d.indistinguishable_from:
         print(f"  cannot be told apart from: {', '.join(d.indistinguishable_from)}; "
               f"a run that would: {d.suggested_test}")
+    print(f"unexplained: {d.unexplained['statement']}")
     print(f"held-out RMSE of input torque: {1e3 * d.rmse_before_Nm:.2f} -> "
           f"{1e3 * d.rmse_after_Nm:.2f} mN*m; zeta_d (Eq. 31): {100 * d.zeta_d_before:.2f} -> "
           f"{100 * d.zeta_d_after:.2f} %; residual whiteness p: {d.whiteness_before:.2g} -> "
@@ -378,17 +381,24 @@ def cmd_diagnose(args) -> int:
     return 0
 
 
-def _write_diagnosis(out_dir, d, design, result):
-    """Write one diagnosis' folder (plots, diagnosis.json, design_updated.toml); removed again
-    if any of it fails."""
+EFFECTS_NONE = "the model explains the data within its noise"
+
+
+def write_diagnosis(out_dir, d, design, result, source=""):
+    """Write one diagnosis' folder (diagnosis.png, report.html, diagnosis.json,
+    design_updated.toml); removed again if any of it fails."""
     from model_core import design_to_toml
-    from .diagnosis import plot_diagnosis, updated_design
+    from .diagnosis import plot_diagnosis, updated_design, write_report
     with _staged_dir("out", out_dir) as out:
         plot_diagnosis(d, out)
+        write_report(d, out / "report.html", result, source)
         (out / "diagnosis.json").write_text(json.dumps(result, indent=2))
         fixed, notes = updated_design(design, d)
         (out / "design_updated.toml").write_text(design_to_toml(fixed) + "".join(
             f"# {n}\n" for n in notes))
+
+
+_write_diagnosis = write_diagnosis
 
 
 def _workers(args):
