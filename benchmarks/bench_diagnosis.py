@@ -1,5 +1,5 @@
 """Speed of the diagnosis: a 10-minute recording at 1 kHz (600 000 samples) written by
-``synth``, read, checked and diagnosed (replay, location, 8 candidates with their shape grids,
+``synth``, read, checked and diagnosed (replay, location, every candidate with its shape grid, stepwise selection with fold stability, the structure test,
 BIC and 5-fold blocked cross-validation). Target (issue 10): read + check + diagnose at most
 3 s on this 2-core machine; read and checks are timed separately.
 Run: python benchmarks/bench_diagnosis.py

@@ -137,10 +137,10 @@ class Diagnoser:
         self.candidates = tuple(c for c in (candidates or EFFECTS) if c != "none")
 
     # -- the regression problem ------------------------------------------------------------
-    def _problem(self, rec, design):
+    def _problem(self, rec, design, sensitivities=None):
         t = rec.time
         dt = float(np.median(np.diff(t)))
-        rp = replay(design, self.mode, rec, self.bandwidth)
+        rp = replay(design, self.mode, rec, self.bandwidth, sensitivities)
         sig = rp.signals
         T_model_f = first_order(rp.T_model, dt, self.bandwidth)
         m = max(1, int(round(self.block / dt)))
@@ -211,12 +211,14 @@ class Diagnoser:
             rel1 = float(fr[0])
             d2 = replace(self.design, friction=replace(
                 self.design.friction, mu_boundary=self.design.friction.mu_boundary * (1 + rel1)))
-            state = self._analyse(rec, d2, forced=("friction_miscalibrated",))
+            sig = first["P"]["sig"]
+            state = self._analyse(rec, d2, forced=("friction_miscalibrated",),
+                                  sensitivities=(sig["sens_mu"], sig["sens_nu"]))
         self.diagnosis_ = self._result(rec, first, state, rel1)
         return self
 
-    def _analyse(self, rec, design, forced=()):
-        P = self._problem(rec, design)
+    def _analyse(self, rec, design, forced=(), sensitivities=None):
+        P = self._problem(rec, design, sensitivities)
         y, X, options, generic = P["y"], P["X"], P["options"], P["generic"]
         w, n_spikes, sigma = R.robust_weights(X, y)
         prob = GramProblem(X, y, w, self.n_folds)
@@ -350,7 +352,10 @@ class Diagnoser:
                            P["blocks"]["alpha"], P["blocks"]["temperature"])
         located["orders"] = {k: a for k, (a, se) in unexplained.pop("_orders_all").items()
                              if a > ORDER_SE * se and a >= st["min_expl"]}
-        if located["orders"]:
+        if not effects and not unexplained["present"]:
+            located["statement"] = ("the model explains the recording within its noise: "
+                                    "there is no mismatch to locate.")
+        elif located["orders"]:
             located["statement"] = located["statement"][:-1] + "; it sits at " + ", ".join(
                 f"{k} of the input speed ({1e3 * v:.1f} mN*m)"
                 for k, v in located["orders"].items()) + "."

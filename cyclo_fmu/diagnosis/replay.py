@@ -64,22 +64,26 @@ class Replay:
     signals: dict
 
 
-def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0) -> Replay:
+def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
+           sensitivities=None) -> Replay:
     """Replay ``rec`` (measured input speed and output torque) through the model of ``design``.
 
     ``bandwidth`` [Hz]: the speed transducer's first-order bandwidth; the shaft angle is
     advanced by its group delay 1/(2 pi f_c) (at the roller-pass order of 2800 r/min the
-    0.16 ms of a 1 kHz transducer are 0.65 rad of phase)."""
+    0.16 ms of a 1 kHz transducer are 0.65 rad of phase). ``sensitivities``: (sens_mu,
+    sens_nu) of an earlier replay to reuse (a re-linearised replay at a nearby design)."""
     t, w_in, T_out = rec.time, rec.speed_in, rec.torque_out
     tau_out = -T_out
     T_in, loss = replay_input_torque(design, mode, w_in, tau_out)
-    h = SENSITIVITY_STEP
-    Tm_hi, _ = replay_input_torque(_scaled(design, mu=1 + h), mode, w_in, tau_out)
-    Tm_lo, _ = replay_input_torque(_scaled(design, mu=1 - h), mode, w_in, tau_out)
-    sens_mu = (Tm_hi - Tm_lo) / (math.log(1 + h) - math.log(1 - h))
-    Tn_hi, _ = replay_input_torque(_scaled(design, nu=1 + h), mode, w_in, tau_out)
-    Tn_lo, _ = replay_input_torque(_scaled(design, nu=1 - h), mode, w_in, tau_out)
-    sens_nu = (Tn_hi - Tn_lo) / (math.log(1 + h) - math.log(1 - h))
+    if sensitivities is None:
+        h = SENSITIVITY_STEP
+        dln = math.log(1 + h) - math.log(1 - h)
+        sens_mu = (replay_input_torque(_scaled(design, mu=1 + h), mode, w_in, tau_out)[0]
+                   - replay_input_torque(_scaled(design, mu=1 - h), mode, w_in, tau_out)[0]) / dln
+        sens_nu = (replay_input_torque(_scaled(design, nu=1 + h), mode, w_in, tau_out)[0]
+                   - replay_input_torque(_scaled(design, nu=1 - h), mode, w_in, tau_out)[0]) / dln
+    else:
+        sens_mu, sens_nu = sensitivities
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
     from scipy.ndimage import uniform_filter1d
     w_s = uniform_filter1d(w_in, max(1, int(round(SPEED_SMOOTHING / dt))), mode="nearest")

@@ -42,8 +42,8 @@ def robust_weights(X, y, iterations=4):
     spikes = np.zeros(n, bool)
     sigma = 0.0
     for _ in range(iterations):
-        sw = np.sqrt(w)
-        b = np.linalg.lstsq(Xs * sw[:, None], y * sw, rcond=1e-10)[0]
+        Xw = Xs * w[:, None]
+        b = np.linalg.lstsq(Xw.T @ Xs, Xw.T @ y, rcond=1e-12)[0]   # normal equations
         r = y - Xs @ b
         sigma = robust_sigma(r[~spikes]) or float(np.std(r)) or 1e-12
         out = np.abs(r) > SPIKE_SIGMA * sigma
