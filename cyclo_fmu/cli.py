@@ -347,7 +347,7 @@ def cmd_diagnose(args) -> int:
     try:
         rec, mode, checks = load_recording(args.recording, args.mode, design,
                                            columns=args.columns, units=args.units)
-        d, result = diagnose_recording(rec, mode, checks, design)
+        d, result = diagnose_recording(rec, mode, checks, design, progress=True)
     except (RecordingError, DiagnosisError) as exc:
         raise CycloidInputError("recording", args.recording, str(exc))
     if args.out:
@@ -393,7 +393,7 @@ def write_diagnosis(out_dir, d, design, result, source=""):
         plot_diagnosis(d, out)
         write_report(d, out / "report.html", result, source)
         (out / "diagnosis.json").write_text(json.dumps(result, indent=2))
-        fixed, notes = updated_design(design, d)
+        fixed, notes = d.updated or updated_design(design, d)
         (out / "design_updated.toml").write_text(design_to_toml(fixed) + "".join(
             f"# {n}\n" for n in notes))
 

@@ -84,6 +84,8 @@ class Diagnosis:
     unstable: list = field(default_factory=list)
     notes: list = field(default_factory=list)
     temperature_form: bool = False
+    design_check: dict = field(default_factory=dict)
+    updated: tuple = field(default=None, repr=False)   # (design, notes) checked by the Diagnoser
     series: dict = field(default_factory=dict, repr=False)
 
     def to_json(self) -> dict:
@@ -99,7 +101,7 @@ class Diagnosis:
                 "whiteness_p_before": self.whiteness_before,
                 "whiteness_p_after": self.whiteness_after,
                 "withdrawn": self.withdrawn, "unstable": self.unstable,
-                "notes": self.notes}
+                "notes": self.notes, "design_check": self.design_check}
 
 
 def zeta_d(w_in, T_in, w_out, T_out, T_in_model, m):
@@ -125,16 +127,25 @@ class Diagnoser:
         Time-ordered folds of the cross-validation.
     candidates : sequence of str, optional
         Effect ids to consider (default: all of ``EFFECTS``).
+    progress : bool
+        A progress bar over the fit's stages on stderr (terminals only).
     """
 
     def __init__(self, design: DriveDesign = None, mode: str = "S1", bandwidth: float = 1000.0,
-                 block: float = 0.01, n_folds: int = 5, candidates=None):
+                 block: float = 0.01, n_folds: int = 5, candidates=None, progress=False):
         self.design = design or DriveDesign()
         self.mode = "".join(parse_mode(mode)[:2])
         self.bandwidth = bandwidth
         self.block = block
         self.n_folds = n_folds
         self.candidates = tuple(c for c in (candidates or EFFECTS) if c != "none")
+        self.progress = progress
+        self._bar = None
+
+    def _stage(self, name):
+        if self._bar is not None:
+            self._bar.set_description(name)
+            self._bar.update(1)
 
     # -- the regression problem ------------------------------------------------------------
     def _problem(self, rec, design, sensitivities=None):
@@ -203,6 +214,10 @@ class Diagnoser:
         """Diagnose ``rec`` (a ``cyclo_fmu.recordings.Recording`` in SI units); the result is
         ``self.diagnosis_``."""
         self._check(rec)
+        import sys
+        from tqdm import tqdm
+        self._bar = tqdm(total=8, leave=False, unit=" stages", desc="replay",
+                         disable=not (self.progress and sys.stderr.isatty()))
         first = self._analyse(rec, self.design)
         state = first
         fr = first["friction"]
@@ -214,11 +229,44 @@ class Diagnoser:
             sig = first["P"]["sig"]
             state = self._analyse(rec, d2, forced=("friction_miscalibrated",),
                                   sensitivities=(sig["sens_mu"], sig["sens_nu"]))
+        self._stage("result")
         self.diagnosis_ = self._result(rec, first, state, rel1)
+        self._bar.close()
+        self._bar = None
+        self._rec, self._first = rec, first
         return self
+
+    def residual_rms(self, design: DriveDesign) -> float:
+        """RMS (N*m) of the block-mean residual of the fitted recording under ``design`` (its
+        extra physics and transducer corrections included), robust weights and spike
+        exclusions of the diagnosis applied: how well a design explains the recording."""
+        rec, first = self._rec, self._first
+        sig = first["P"]["sig"]
+        rp = replay(design, self.mode, rec, self.bandwidth, (sig["sens_mu"], sig["sens_nu"]))
+        dt, m = first["P"]["dt"], first["P"]["m"]
+        y = block_means(rec.torque_in - first_order(rp.T_model, dt, self.bandwidth), m)
+        w = first["weights"]
+        return float(np.sqrt(np.sum(w * y * y) / max(np.sum(w), 1e-300)))
+
+    def updated_design(self):
+        """``(design, notes)``: the diagnosis's design (``report.updated_design``), kept only
+        if it explains the recording at least as well as the design the diagnosis started
+        from; otherwise the starting design with a note saying why."""
+        from .report import updated_design
+        fixed, notes = updated_design(self.design, self.diagnosis_)
+        if fixed == self.design:
+            return fixed, notes
+        before, after = self.residual_rms(self.design), self.residual_rms(fixed)
+        self.diagnosis_.design_check = {"rms_given_Nm": before, "rms_updated_Nm": after}
+        if after > before:
+            return self.design, notes + [
+                f"the updated design would fit worse (residual RMS {1e3 * after:.3f} against "
+                f"{1e3 * before:.3f} mN*m): not applied"]
+        return fixed, notes
 
     def _analyse(self, rec, design, forced=(), sensitivities=None):
         P = self._problem(rec, design, sensitivities)
+        self._stage("selection")
         y, X, options, generic = P["y"], P["X"], P["options"], P["generic"]
         w, n_spikes, sigma = R.robust_weights(X, y)
         prob = GramProblem(X, y, w, self.n_folds)
@@ -230,6 +278,7 @@ class Diagnoser:
         forced_terms = tuple(self._best_shape(prob, (), opts[f]) for f in forced if f in opts)
         sel = self._select(prob, opts, min_expl, forced_terms)
         S = sel.fit
+        self._stage("stability")
         # stability: the selection with one fold left out at a time (BIC rule only)
         counts = {}
         for f in range(self.n_folds):
@@ -243,6 +292,7 @@ class Diagnoser:
         if unstable:      # select again without them
             sel = self._select(prob, opts, min_expl, forced_terms, exclude=unstable)
             S = sel.fit
+        self._stage("structure")
         # the honest unknown: what the generic basis still explains next to the selection
         withdrawn = []
         with_g = prob.fit(S.terms + (generic,))

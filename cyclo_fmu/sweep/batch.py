@@ -14,11 +14,13 @@ from pathlib import Path
 SUFFIXES = (".csv", ".mf4")
 
 
-def diagnose_recording(rec, mode, checks, design):
+def diagnose_recording(rec, mode, checks, design, progress=False):
     """Diagnose a loaded recording: ``(diagnosis, result dict)`` with the JSON contract's
     keys (the diagnosis's own, ``mode``, ``checks``, ``read_notes``, ``excluded``)."""
     from cyclo_fmu.diagnosis import Diagnoser
-    d = Diagnoser(design, mode).fit(rec).diagnosis_
+    est = Diagnoser(design, mode, progress=progress).fit(rec)
+    d = est.diagnosis_
+    d.updated = est.updated_design()      # (design, notes), checked against the recording
     result = d.to_json()
     result["mode"] = mode
     result["checks"] = list(checks)
