@@ -111,6 +111,8 @@ class ExtraPhysics:
 
     drag_torque: float = _f(0.0, "N*m", "load-independent drag at 300 rad/s of the driving "
                             "shaft, growing as (speed)^(2/3) (churning, seals, bearing drag)")
+    drag_exponent: float = _f(2.0 / 3.0, "1", "exponent p of the drag's speed law "
+                              "T_drag (|w|/300 rad/s)^p: 2/3 churning, 0 seals, 1 viscous")
     stribeck_torque: float = _f(0.0, "N*m", "extra friction at standstill of the driving shaft, "
                                 "decaying as exp(-(w/w_s)^2)")
     stribeck_speed: float = _f(40.0, "rad/s", "Stribeck speed w_s")
@@ -147,7 +149,8 @@ class ExtraPhysics:
         from .effects import EFFECTS
         w = _np.asarray(w, float)
         s = {"w_in": _np.atleast_1d(w).ravel()}
-        t = self.drag_torque * EFFECTS["load_independent_loss"].basis(s)[:, 0]
+        t = self.drag_torque * EFFECTS["load_independent_loss"].basis(
+            s, self.drag_exponent)[:, 0]
         if self.stribeck_torque:
             t = t + self.stribeck_torque * EFFECTS["low_speed_friction"].basis(
                 s, self.stribeck_speed)[:, 0]
@@ -299,6 +302,9 @@ def validate_design(d: DriveDesign) -> None:
     for name in ("stribeck_speed", "thermal_tau", "viscosity_tau"):
         if not getattr(d.extra, name) > 0:
             raise CycloidInputError("extra." + name, getattr(d.extra, name), "must be positive")
+    if not 0.0 <= d.extra.drag_exponent <= 2.0:
+        raise CycloidInputError("extra.drag_exponent", d.extra.drag_exponent,
+                                "must lie between 0 and 2")
     for name in ("drag_torque", "stribeck_torque", "input_inertia"):
         if getattr(d.extra, name) < 0:
             raise CycloidInputError("extra." + name, getattr(d.extra, name),
@@ -416,7 +422,10 @@ def _section_to_dict(obj) -> dict:
             continue
         v = getattr(obj, f.name)
         if isinstance(v, float):
-            v = float(f"{_from_si(v, f.metadata.get('scale', 1.0)):.12g}")
+            scale = f.metadata.get('scale', 1.0)
+            x = _from_si(v, scale)
+            short = float(f"{x:.12g}")      # 12 digits hide the unit conversion's noise,
+            v = short if _to_si(short, scale) == v else x   # unless they lose the value
         out[_toml_key(f)] = v
     return out
 

@@ -32,6 +32,11 @@ import numpy as np
 from .kinematics import parse_mode, shaft_speeds
 
 W_REF = 300.0   # rad/s, reference input speed of the drag law (about 2860 r/min)
+#: exponent of the no-load drag on speed: (nu n)^(2/3) for churning and the viscous part of
+#: bearing drag (SKF M0, Niemann/Winter); the grid the diagnosis scans spans a seal's nearly
+#: constant friction (0) to a purely viscous drag (1)
+DRAG_EXPONENT = 2.0 / 3.0
+DRAG_EXPONENTS = (0.0, 1.0 / 3.0, 0.5, 2.0 / 3.0, 0.85, 1.0)
 #: [K] temperature step of the temperature form of the warm-up terms (per 10 K, as catalogue
 #: viscosity and transducer drift figures are quoted)
 T_STEP = 10.0
@@ -93,7 +98,8 @@ def _warm(s, shape):
 
 def _drag(s, shape):
     w = s["w_in"]
-    return (np.sign(w) * (np.abs(w) / W_REF) ** (2.0 / 3.0))[:, None]
+    p = DRAG_EXPONENT if shape is None else shape
+    return (np.sign(w) * (np.abs(w) / W_REF) ** p)[:, None]
 
 
 def _thermal(s, shape):
@@ -153,8 +159,10 @@ EFFECTS = {
     "load_independent_loss": Effect(
         "load_independent_loss",
         "no-load drag (grease churning, seals, bearing drag): a torque that grows with speed as "
-        "(nu n)^(2/3) and does not depend on load",
+        "n^p (p = 2/3 for churning, (nu n)^(2/3); 0 for seal friction; 1 for viscous drag) and "
+        "does not depend on load",
         (Parameter("T_drag", "N*m", 0.0, 0.5, f"drag torque at the input at {W_REF:.0f} rad/s"),),
+        shape=DRAG_EXPONENTS, shape_name="p", shape_unit="1",
         separating_run="a speed sweep at light load, in both directions",
         synth_default=({"T_drag": 0.012}, None)),
     "thermal_drift": Effect(
@@ -253,7 +261,8 @@ def extra_torque(extra, s: dict) -> np.ndarray:
     n = len(s["t"])
     total = np.zeros(n)
     if extra.drag_torque:
-        total += EFFECTS["load_independent_loss"].torque(s, [extra.drag_torque])
+        total += EFFECTS["load_independent_loss"].torque(s, [extra.drag_torque],
+                                                         extra.drag_exponent)
     if extra.stribeck_torque:
         total += EFFECTS["low_speed_friction"].torque(s, [extra.stribeck_torque],
                                                      extra.stribeck_speed)
@@ -311,6 +320,16 @@ def _apply_viscosity(design, v, shape, temperature):
                        viscosity_tau=shape), [note]
 
 
+def _apply_drag(design, v, shape, temperature):
+    ex = design.extra
+    p = DRAG_EXPONENT if shape is None else shape
+    if ex.drag_torque and abs(ex.drag_exponent - p) > 1e-12:
+        # a second drag term of another exponent: keep the larger one's exponent, add at W_REF
+        p = ex.drag_exponent
+    return _with_extra(design, drag_torque=ex.drag_torque + max(v["T_drag"], 0.0),
+                       drag_exponent=p), []
+
+
 def _apply_ripple(design, v, shape, temperature):
     # A sin(th + phi) = A cos(phi) sin(th) + A sin(phi) cos(th)
     return _with_extra(design, ripple_1x=float(np.hypot(v["A1_sin"], v["A1_cos"])),
@@ -334,8 +353,7 @@ def _apply_gain(design, v, shape, temperature):
 
 _APPLY = {
     "friction_miscalibrated": _apply_friction,
-    "load_independent_loss": lambda d, v, sh, T: (
-        _with_extra(d, drag_torque=d.extra.drag_torque + max(v["T_drag"], 0.0)), []),
+    "load_independent_loss": _apply_drag,
     "low_speed_friction": lambda d, v, sh, T: (
         _with_extra(d, stribeck_torque=max(v["T_stribeck"], 0.0), stribeck_speed=sh), []),
     "inertia": lambda d, v, sh, T: (
