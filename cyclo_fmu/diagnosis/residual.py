@@ -63,8 +63,9 @@ def generic_basis(blocks: dict) -> tuple:
     """Columns of the generic structure basis and their group names.
 
     Groups: ``operating point (losses)`` sign(w) P(u, v) with u = |w|/max|w|, v = |T_out|/max,
-    total degree <= 3; ``operating point (reading)`` the even terms (1, u, v, u v, u^2, v^2);
-    ``time`` Legendre P1..P5 of time; ``acceleration`` dw/dt and |w| dw/dt;
+    total degree <= 3; ``operating point (reading)`` the even terms (u, v, u v, u^2, v^2);
+    ``time`` Legendre P1..P5 of time; ``acceleration`` u dw/dt and v dw/dt; the library's
+    exact signatures (a constant, dw/dt) are left out: the basis holds what the library does not;
     ``temperature`` (T - T0) and its square, with a temperature column."""
     w, T = blocks["w_in"], blocks["T_out"]
     moving = np.abs(w) > MOVING_SHARE * max(np.max(np.abs(w)), 1e-12)
@@ -72,7 +73,8 @@ def generic_basis(blocks: dict) -> tuple:
     v = np.abs(T) / max(np.max(np.abs(T)), 1e-12)
     s = np.sign(w)
     odd = [s * u ** i * v ** j for i in range(4) for j in range(4) if i + j <= 3]
-    even = [np.ones_like(u), u, v, u * v, u * u, v * v]
+    # no constant: a zero offset is a library term (the basis holds what the library does not)
+    even = [u, v, u * v, u * u, v * v]
     t = blocks["t"]
     tn = 2 * (t - t[0]) / max(t[-1] - t[0], 1e-12) - 1
     cols, groups = [], []
@@ -82,8 +84,10 @@ def generic_basis(blocks: dict) -> tuple:
     P = _legendre(tn, 5)
     cols += list(P.T)
     groups += ["time"] * P.shape[1]
+    # acceleration beyond a plain inertia (J dw/dt is a library term): growing with speed or
+    # with load
     a = blocks["alpha"]
-    cols += [a, a * u]
+    cols += [a * u, a * v]
     groups += ["acceleration"] * 2
     if blocks.get("temperature") is not None:
         dT = blocks["temperature"] - blocks["temperature"][0]
