@@ -148,6 +148,12 @@ class Diagnoser:
             self._bar.update(1)
 
     # -- the regression problem ------------------------------------------------------------
+    def problem(self, rec) -> dict:
+        """The regression problem of ``rec`` under the Diagnoser's design: ``y`` (block-mean
+        residual, N*m), ``X`` (every candidate's columns, then the generic basis), ``options``
+        ({effect: [Term]}, a term's ``cols`` index ``X``), ``blocks`` (block-mean signals)."""
+        return self._problem(rec, self.design)
+
     def _problem(self, rec, design, sensitivities=None):
         t = rec.time
         dt = float(np.median(np.diff(t)))
