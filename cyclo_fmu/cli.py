@@ -306,8 +306,16 @@ def cmd_bench(args) -> int:
 def cmd_synth(args) -> int:
     from .synth import PLANS, SIZES, synthesize, write_synth  # noqa: F401
     from model_core.effects import EFFECTS
-    if args.effect not in EFFECTS:
-        raise CycloidInputError("effect", args.effect, f"must be one of {', '.join(EFFECTS)}")
+    effects = [e.strip() for e in args.effect.split(",")]
+    for e in effects:
+        if e not in EFFECTS:
+            raise CycloidInputError("effect", e, f"must be one of {', '.join(EFFECTS)} (several "
+                                    "separated by commas)")
+    if len(set(effects)) != len(effects):
+        raise CycloidInputError("effect", args.effect, "names an effect twice")
+    rise = args.temperature_rise
+    if rise is not None and not (math.isfinite(rise) and -50.0 <= rise <= 150.0):
+        raise CycloidInputError("temperature-rise", rise, "must lie between -50 and 150 K")
     if args.size not in SIZES:
         raise CycloidInputError("size", args.size, f"must be one of {', '.join(SIZES)}")
     mode = "".join(parse_mode(args.mode)[:2])
@@ -324,7 +332,11 @@ def cmd_synth(args) -> int:
     _output_file("out", args.out)
     if truth:
         _output_file("truth", truth)
-    rec = synthesize(args.effect, args.seed, mode, args.size, plan=args.plan, engine=args.engine)
+    if args.engine == "bench" and (len(effects) > 1 or rise is not None):
+        raise CycloidInputError("engine", args.engine, "hides exactly one effect and writes no "
+                                "temperature column; use --engine fast")
+    rec = synthesize(effects[0] if len(effects) == 1 else effects, args.seed, mode, args.size,
+                     plan=args.plan, engine=args.engine, temperature_rise=rise)
     with _staged_file("out", args.out) as tmp, \
             (_staged_file("truth", truth) if truth else contextlib.nullcontext()) as tmp_truth:
         write_synth(tmp, rec)
@@ -361,8 +373,9 @@ def cmd_diagnose(args) -> int:
     if not d.effects:
         print("effects: none - " + EFFECTS_NONE)
     for e in d.effects:
+        form = f"; fitted {e['form']}" if e.get("form", "").startswith("per") else ""
         print(f"effect: {e['id']} - {e['description']} (explains {1e3 * e['explained_rms_Nm']:.2f}"
-              f" mN*m)")
+              f" mN*m{form})")
         for k, v in e["parameters"].items():
             ci = f" [{v['ci95'][0]:.4g}, {v['ci95'][1]:.4g}]" if v["ci95"] else ""
             print(f"  {k} = {v['value']:.5g} {v['unit']}{ci}")
@@ -496,7 +509,10 @@ def build_parser() -> argparse.ArgumentParser:
                        "design_updated.toml a diagnosis wrote")
     bench.set_defaults(func=cmd_bench, fmus=True)
     sy = sub.add_parser("synth", help="write a bench recording with one hidden effect")
-    sy.add_argument("--effect", required=True, help="hidden effect id (see model_core.effects)")
+    sy.add_argument("--effect", required=True, help="hidden effect id (see model_core.effects); "
+                    "several separated by commas")
+    sy.add_argument("--temperature-rise", type=float, help="K: the recording carries a "
+                    "temperature column warming by this much (warm-up effects follow it)")
     sy.add_argument("--seed", type=int, default=1)
     sy.add_argument("--mode", default="S1")
     sy.add_argument("--size", default="small", help="tiny (42 s), small (2 min), medium (5), "

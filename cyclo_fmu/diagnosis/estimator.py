@@ -373,6 +373,9 @@ class Diagnoser:
                                 "ci95": [float(val - 1.96 * se), float(val + 1.96 * se)]}
             form = eff.temperature_form and t.shape is None and sig.get("temperature") is not None
             temp_form = temp_form or form
+            if form:
+                for v in params.values():
+                    v["unit"] = f"{v['unit']} per 10 K"
             if eff.shape and t.shape is not None:
                 params[eff.shape_name] = {"value": float(t.shape), "unit": eff.shape_unit,
                                           "ci95": None}
