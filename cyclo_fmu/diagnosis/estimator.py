@@ -218,7 +218,16 @@ class Diagnoser:
     # -- fit ---------------------------------------------------------------------------------
     def fit(self, rec) -> "Diagnoser":
         """Diagnose ``rec`` (a ``cyclo_fmu.recordings.Recording`` in SI units); the result is
-        ``self.diagnosis_``."""
+        ``self.diagnosis_``.
+
+        The linear algebra runs on one BLAS thread: a multi-threaded BLAS sums in an order that
+        depends on the thread count, and a diagnosis must give the same numbers in a terminal,
+        on a dask worker and on another machine (the fits are small; one thread costs little)."""
+        from threadpoolctl import threadpool_limits
+        with threadpool_limits(limits=1, user_api="blas"):
+            return self._fit(rec)
+
+    def _fit(self, rec) -> "Diagnoser":
         self._check(rec)
         import sys
         from tqdm import tqdm
