@@ -502,7 +502,8 @@ class Diagnoser:
         held = R.held_speeds(sig["w_in"])
         peaks = R.spectral_peaks(r_raw, dt, min_amplitude=2 * min_expl,
                                  exclude=R.order_frequencies(orders.values(), held, dt))
-        if "mesh_ripple" in S.ids:
+        ex = self.design.extra
+        if "mesh_ripple" in S.ids or ex.ripple_1x or ex.ripple_roller:
             inside = {}       # the library's orders, fitted: what is left is phase tracking
         if outside or inside:
             present = True
