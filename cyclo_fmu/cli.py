@@ -9,10 +9,7 @@ import argparse
 import contextlib
 import json
 import math
-import os
-import shutil
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -37,96 +34,10 @@ def _number(name):
     return conv
 
 
-# -- shared robustness helpers: every command validates its outputs up front and writes them so
-# that a failure leaves nothing half-written --------------------------------------------------
-
-def _nearest_existing(path: Path) -> Path:
-    p = path
-    while not p.exists() and p != p.parent:
-        p = p.parent
-    return p
-
-
-def _output_dir(field: str, path, create: bool = True) -> Path:
-    """Check an output folder before any work: it may exist (a folder, writable) or be created
-    with its missing parents; an ancestor that is a file, or an unwritable one, is an error
-    naming ``field`` and the path. Returns the folder (created when ``create``)."""
-    p = Path(path)
-    if p.exists() and not p.is_dir():
-        raise CycloidInputError(field, str(path), "is a file, not a folder")
-    base = _nearest_existing(p)
-    if not base.is_dir():
-        raise CycloidInputError(field, str(path), f"{base} is a file, not a folder")
-    if not os.access(base, os.W_OK | os.X_OK):
-        raise CycloidInputError(field, str(path), f"{base} is not writable")
-    missing = [q for q in [p, *p.parents] if not q.exists()]
-    try:   # a real probe: permissions alone do not tell (root, read-only or virtual file systems)
-        p.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=p):
-            pass
-    except OSError as exc:
-        raise CycloidInputError(field, str(path), f"cannot be written ({exc.strerror})") from None
-    finally:
-        if not create:
-            for q in missing:
-                with contextlib.suppress(OSError):
-                    q.rmdir()
-    return p
-
-
-def _output_file(field: str, path) -> Path:
-    """Check an output file before any work: its folder must exist and be writable, and the
-    path must not be a folder."""
-    p = Path(path)
-    if p.is_dir():
-        raise CycloidInputError(field, str(path), "is a folder, not a file")
-    parent = p.parent
-    if not parent.exists():
-        raise CycloidInputError(field, str(path), f"folder {parent} does not exist")
-    if not parent.is_dir():
-        raise CycloidInputError(field, str(path), f"{parent} is a file, not a folder")
-    if not os.access(parent, os.W_OK | os.X_OK) or (p.exists() and not os.access(p, os.W_OK)):
-        raise CycloidInputError(field, str(path), "is not writable")
-    try:
-        with tempfile.TemporaryFile(dir=parent):
-            pass
-    except OSError as exc:
-        raise CycloidInputError(field, str(path), f"cannot be written ({exc.strerror})") from None
-    return p
-
-
-@contextlib.contextmanager
-def _staged_dir(field: str, path):
-    """Yield the output folder (validated, created); if the command fails, remove what it added:
-    the folder itself (and parents) when it did not exist, else the new entries."""
-    p = Path(path)
-    created = [] if p.exists() else [q for q in [p, *p.parents] if not q.exists()]
-    before = set(p.iterdir()) if p.exists() and p.is_dir() else set()
-    _output_dir(field, p, create=True)
-    try:
-        yield p
-    except BaseException:
-        if created:
-            shutil.rmtree(created[-1], ignore_errors=True)
-        else:
-            for q in set(p.iterdir()) - before:
-                shutil.rmtree(q, ignore_errors=True) if q.is_dir() else q.unlink(missing_ok=True)
-        raise
-
-
-@contextlib.contextmanager
-def _staged_file(field: str, path):
-    """Yield a temporary path next to the output file (validated); moved onto it on success,
-    removed on failure."""
-    p = _output_file(field, path)
-    tmp = p.with_name(f".{p.name}.partial-{os.getpid()}{p.suffix}")
-    try:
-        yield tmp
-        if tmp.exists():
-            os.replace(tmp, p)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+# -- shared robustness helpers (cyclo_fmu.outputs): every command validates its outputs up front
+# and writes them so that a failure leaves nothing half-written
+from .outputs import (output_dir as _output_dir, output_file as _output_file,  # noqa: E402
+                      staged_dir as _staged_dir, staged_file as _staged_file)
 
 
 def _check_seed(seed):
@@ -363,6 +274,7 @@ def cmd_diagnose(args) -> int:
     except (RecordingError, DiagnosisError) as exc:
         raise CycloidInputError("recording", args.recording, str(exc))
     if args.out:
+        from .diagnosis import write_diagnosis
         write_diagnosis(args.out, d, design, result, source=str(args.recording))
     if args.json:
         print(json.dumps(result, indent=2))
@@ -397,21 +309,6 @@ def cmd_diagnose(args) -> int:
 EFFECTS_NONE = "the model explains the data within its noise"
 
 
-def write_diagnosis(out_dir, d, design, result, source=""):
-    """Write one diagnosis' folder (diagnosis.png, report.html, diagnosis.json,
-    design_updated.toml); removed again if any of it fails."""
-    from model_core import design_to_toml
-    from .diagnosis import plot_diagnosis, updated_design, write_report
-    with _staged_dir("out", out_dir) as out:
-        plot_diagnosis(d, out)
-        write_report(d, out / "report.html", result, source)
-        (out / "diagnosis.json").write_text(json.dumps(result, indent=2))
-        fixed, notes = d.updated or updated_design(design, d)
-        (out / "design_updated.toml").write_text(design_to_toml(fixed) + "".join(
-            f"# {n}\n" for n in notes))
-
-
-_write_diagnosis = write_diagnosis
 
 
 def _workers(args):

@@ -6,7 +6,7 @@ what remains unexplained.
 """
 from .estimator import Diagnoser, Diagnosis, DiagnosisError, zeta_d
 from .residual import ljung_box_p
-from .report import plot_diagnosis, updated_design, write_report
+from .report import plot_diagnosis, updated_design, write_diagnosis, write_report
 
 __all__ = ["Diagnoser", "Diagnosis", "DiagnosisError", "zeta_d", "ljung_box_p",
-           "plot_diagnosis", "updated_design", "write_report"]
+           "plot_diagnosis", "updated_design", "write_diagnosis", "write_report"]

@@ -155,3 +155,18 @@ zeta_d (paper Eq. 31) {100 * d.zeta_d_before:.2f} &rarr; {100 * d.zeta_d_after:.
 </body></html>"""
     from pathlib import Path
     Path(path).write_text(text, encoding="utf-8")
+
+
+def write_diagnosis(out_dir, d, design, result, source=""):
+    """Write one diagnosis' folder (diagnosis.png, report.html, diagnosis.json,
+    design_updated.toml); removed again if any of it fails."""
+    import json
+    from model_core import design_to_toml
+    from ..outputs import staged_dir
+    with staged_dir("out", out_dir) as out:
+        plot_diagnosis(d, out)
+        write_report(d, out / "report.html", result, source)
+        (out / "diagnosis.json").write_text(json.dumps(result, indent=2))
+        fixed, notes = d.updated or updated_design(design, d)
+        (out / "design_updated.toml").write_text(design_to_toml(fixed) + "".join(
+            f"# {n}\n" for n in notes))

@@ -68,7 +68,6 @@ def generic_basis(blocks: dict) -> tuple:
     exact signatures (a constant, dw/dt) are left out: the basis holds what the library does not;
     ``temperature`` (T - T0) and its square, with a temperature column."""
     w, T = blocks["w_in"], blocks["T_out"]
-    moving = np.abs(w) > MOVING_SHARE * max(np.max(np.abs(w)), 1e-12)
     u = np.abs(w) / max(np.max(np.abs(w)), 1e-12)
     v = np.abs(T) / max(np.max(np.abs(T)), 1e-12)
     s = np.sign(w)

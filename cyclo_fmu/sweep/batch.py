@@ -59,7 +59,7 @@ def _folder_names(paths) -> dict:
 
 def _task(design, mode, columns, out, item):
     path, name = item
-    from cyclo_fmu.cli import write_diagnosis
+    from cyclo_fmu.diagnosis import write_diagnosis
     row = {"recording": path.name, "folder": name, "effect": "", "error": ""}
     try:
         d, result = diagnose_one(path, design, mode, columns)
