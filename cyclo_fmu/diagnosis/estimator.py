@@ -434,6 +434,11 @@ class Diagnoser:
         z_after = zeta_d(rec.speed_in, rec.torque_in, w_out, rec.torque_out, T_model + fitted, m)
         evidence = self._evidence(st)
         notes = []
+        steps = unexplained["bursts"]["at"].get("load or speed steps", 0)
+        if "load or speed steps" in unexplained["bursts"]["tied"]:
+            notes.append(f"{steps} of the {unexplained['bursts']['count']} excluded spike "
+                         "blocks sit at load or speed steps: transients a quasi-static replay of "
+                         "the map does not follow")
         if not P["loaded"]:
             notes.append(f"no load (|torque_out| below {MIN_LOAD:g} N*m): the friction level "
                          "and the load-dependent effects cannot be judged")
@@ -513,6 +518,18 @@ class Diagnoser:
             present = True
             parts.append("the residual spectrum peaks at " + ", ".join(
                 f"{f:.2f} Hz ({1e3 * a:.2f} mN*m)" for f, a in peaks))
+        # spike blocks tied to reversals are a transient the library does not hold (backlash,
+        # lost motion, compliance); at load or speed steps they are the transients a
+        # quasi-static replay cannot follow, said but not counted as missing physics
+        P = st["P"]
+        b = R.bursts(P["blocks"]["t"], st["weights"] == 0, P["blocks"]["w_in"],
+                     P["blocks"]["T_out"])
+        rev = [e for e in b["tied"] if "reversal" in e]
+        if rev:
+            present = True
+            parts.append(f"{sum(b['at'][e] for e in rev)} residual bursts (excluded from the "
+                         f"fit) sit at {' and '.join(rev)}: a transient such as backlash or "
+                         "compliance, not in the library")
         if st["withdrawn"]:
             parts.append("withdrawn because the unexplained mismatch could hold them: "
                          + ", ".join(st["withdrawn"]))
@@ -521,7 +538,7 @@ class Diagnoser:
         return {"present": present, "rms_Nm": rms if present else 0.0, "statement": statement,
                 "follows": follows, "orders": {n: a for n, a in outside.items()},
                 "library_orders_left": inside, "peaks_Hz_Nm": peaks,
-                "could_include": list(st["withdrawn"]), "_orders_all": amps}
+                "could_include": list(st["withdrawn"]), "bursts": b, "_orders_all": amps}
 
     def _lookalikes(self, st) -> dict:
         prob, S, opts = st["prob"], st["S"], st["opts"]

@@ -185,6 +185,64 @@ def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=1.0, exclude=())
     return sorted(peaks, key=lambda p: -p[1])[:5]
 
 
+#: [s] a residual burst within this time of an event (a reversal, a step) belongs to it: the
+#: transients of backlash and compliance last tens of milliseconds
+EVENT_WINDOW = 0.1
+#: [1] share of the peak speed or torque below which a sign is not judged (noise about zero)
+SIGN_SHARE = 0.02
+#: binomial tail probability below which bursts are tied to events, not chance
+BURST_P = 1e-6
+
+
+def _near(t, events, window):
+    if not len(events):
+        return np.zeros(len(t), bool)
+    i = np.searchsorted(events, t)
+    lo = np.abs(t - events[np.clip(i - 1, 0, len(events) - 1)])
+    hi = np.abs(events[np.clip(i, 0, len(events) - 1)] - t)
+    return np.minimum(lo, hi) <= window
+
+
+def _reversals(t, x):
+    """Times where x changes sign (ignoring values within SIGN_SHARE of its peak of zero)."""
+    big = np.abs(x) > SIGN_SHARE * max(np.max(np.abs(x)), 1e-300)
+    tt, sx = t[big], np.sign(x[big])
+    k = np.flatnonzero(sx[1:] != sx[:-1])
+    return 0.5 * (tt[k] + tt[k + 1])
+
+
+def _steps(t, x, factor=20.0):
+    """Times of steps: block-to-block changes ``factor`` times the median change."""
+    d = np.abs(np.diff(x))
+    ref = np.median(d) or 1e-300
+    return t[1:][d > factor * ref]
+
+
+def bursts(t, spikes, w, T_out) -> dict:
+    """Where the excluded spike blocks sit: at speed reversals, at torque reversals, at steps of
+    load or speed, or elsewhere; ``tied``: the events whose bursts are too many for chance
+    (binomial tail below ``BURST_P``)."""
+    n = int(spikes.sum())
+    out = {"count": n, "at": {}, "tied": []}
+    if n == 0:
+        return out
+    left = spikes.copy()
+    for name, events in (("speed reversals", _reversals(t, w)),
+                         ("torque reversals", _reversals(t, T_out)),
+                         ("load or speed steps", np.union1d(_steps(t, T_out), _steps(t, w)))):
+        near = _near(t, np.sort(events), EVENT_WINDOW)
+        k = int((left & near).sum())
+        out["at"][name] = k
+        if k >= 3:
+            from scipy.stats import binom
+            p0 = max(float(near.mean()), 1e-12)
+            if binom.sf(k - 1, n, p0) < BURST_P:
+                out["tied"].append(name)
+        left &= ~near
+    out["at"]["elsewhere"] = int(left.sum())
+    return out
+
+
 def locate(t, r, w, T_out, T_in, alpha, temperature=None) -> dict:
     """Where the residual (measured - model input torque, N*m, block means) concentrates and
     what it follows; a plain statement with the numbers behind it."""
