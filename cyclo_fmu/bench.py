@@ -155,6 +155,15 @@ def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDe
         "brake.T_count": int(sc.T_count), "brake.hold_time": float(sc.hold),
         "brake.J_out": float(sc.J_out),
     }
+    # schedules as numbered Real parameters: every master (fmpy's SSP master, libcosim,
+    # run_fmus) sets them, unlike the String form
+    from model_core.rig import parse_schedule, schedule_parameters
+    if sc.frequency_schedule:
+        p.update(schedule_parameters("motor.", parse_schedule(sc.frequency_schedule,
+                                                               "frequency_schedule")))
+    if sc.torque_schedule:
+        p.update(schedule_parameters("brake.", parse_schedule(sc.torque_schedule,
+                                                               "torque_schedule")))
     if design is not None:
         p.update(drive_parameters(design))
     for name, scale, noise, res, gain, off in (
@@ -396,16 +405,15 @@ def plot_bench(run: BenchRun, out: Path):
     import matplotlib.pyplot as plt
     sc, rec, win = run.scenario, run.recording, run.windows
     fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
-    ax = axes[0, 0]
-    ax.plot(rec["time_s"], rec["speed_in_rpm"], lw=0.6, label="input speed / (r/min)")
-    ax.plot(rec["time_s"], 100 * rec["torque_in_Nm"], lw=0.6, label="100 x input torque / N*m")
-    ax.set(xlabel="time / s", title=f"bench recording, mode {sc.mode}, scenario {sc.name}")
-    ax.legend(fontsize=7)
-    ax = axes[0, 1]
-    ax.plot(rec["time_s"], rec["speed_out_rpm"], lw=0.6, label="output speed / (r/min)")
-    ax.plot(rec["time_s"], rec["torque_out_Nm"], lw=0.6, label="output torque / N*m")
-    ax.set(xlabel="time / s")
-    ax.legend(fontsize=7)
+    # speed and torque each on their own axis (a twin axis for the torque)
+    for ax, side, title in ((axes[0, 0], "in", f"input shaft, mode {sc.mode}, scenario {sc.name}"),
+                            (axes[0, 1], "out", "output shaft")):
+        ax.plot(rec["time_s"], rec[f"speed_{side}_rpm"], lw=0.6, color="C0")
+        ax.set(xlabel="time / s", ylabel=f"{side}put speed / (r/min)", title=title)
+        ax.yaxis.label.set_color("C0")
+        tx = ax.twinx()
+        tx.plot(rec["time_s"], rec[f"torque_{side}_Nm"], lw=0.6, color="C3")
+        tx.set_ylabel(f"{side}put torque / N*m", color="C3")
     if win:
         T = np.array([w["torque_in_Nm"] for w in win])
         n = np.array([w["speed_in_rpm"] for w in win])

@@ -274,7 +274,9 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
     pole_pairs = 1
     f_sched = "; ".join(f"{t0:.6g} {n * pole_pairs / 60:.6g}" for t0, n, _ in steps)
     T_sched = "; ".join(f"{t0:.6g} {T:.6g}" for t0, _, T in steps)
-    sc = Scenario("synth", mode=mode, frequency_schedule=f_sched, torque_schedule=T_sched,
+    # the plan has more setpoints than the numbered Real schedule parameters hold: the String
+    # form, which run_fmus sets
+    sc = Scenario("synth", mode=mode,
                   duration=duration, hold=hold, J_out=settings.J_out)
     params = bench_parameters(sc, sensors, design)
     params["motor.frequency_schedule"] = f_sched

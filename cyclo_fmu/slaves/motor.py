@@ -36,6 +36,7 @@ class InductionMotor(UnitSlave):
                        Integer)
         self.parameter("frequency_schedule", "", None, "instead of the series: setpoints "
                        "'t0 f0; t1 f1; ...' (s, Hz), each held until the next", String)
+        self.schedule_parameters("Hz", "frequency")
         self.parameter("w_start", 0.0, "rad/s", "initial speed")
         self.input("tau_shaft", 0.0, "N.m", "torque the motor delivers into the shaft (reducer tau_in)")
         self.output("w", 0.0, "rad/s", "shaft speed")
@@ -59,8 +60,7 @@ class InductionMotor(UnitSlave):
                 raise ValueError(f"breakdown_ratio = {self.breakdown_ratio!r}: must exceed 1")
             if self.pole_pairs < 1:
                 raise ValueError(f"pole_pairs = {self.pole_pairs!r}: must be at least 1")
-            self._schedule = (core.rig.parse_schedule(self.frequency_schedule, "frequency_schedule")
-                              if self.frequency_schedule.strip() else None)
+            self._schedule = self.schedule_from_parameters("frequency_schedule")
             if self.f_count < 1 or self.loads_per_frequency < 1:
                 raise ValueError("f_count and loads_per_frequency must be at least 1")
         except ValueError as exc:
