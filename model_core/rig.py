@@ -47,11 +47,20 @@ class InductionMotor:
 
     def torque(self, w: float, frequency: float) -> float:
         """Electromagnetic torque (N*m) at shaft speed w (rad/s) and stator frequency (Hz)."""
-        dw = 2 * math.pi * frequency / self.pole_pairs - w
+        return self.torque_function()(w, frequency)
+
+    def torque_function(self):
+        """``torque`` with the motor's constants evaluated once (for sub-stepping loops)."""
+        c_sync = 2 * math.pi / self.pole_pairs
         dwk = self.breakdown_slip_speed
-        if dw == 0.0:
-            return 0.0
-        return 2 * self.breakdown_ratio * self.rated_torque / (dw / dwk + dwk / dw)
+        tk2 = 2 * self.breakdown_ratio * self.rated_torque
+
+        def torque(w, frequency):
+            dw = c_sync * frequency - w
+            if dw == 0.0:
+                return 0.0
+            return tk2 / (dw / dwk + dwk / dw)
+        return torque
 
 
 def ramp_toward(value: float, target: float, rate: float, dt: float) -> float:
@@ -164,9 +173,9 @@ def coupled_drum_step(twist, w_drum, w_shaft, dt, setpoint, w_reg, J, k, c):
     return th, wd, Ts, felt_brake_torque(wd, setpoint, w_reg)
 
 
-#: [s] sub-step of the brake drum on its coupling (a tenth of the period of a 500 N*m/rad
-#: coupling on a 2e-3 kg*m^2 drum, 80 Hz)
-COUPLING_SUBSTEP = 1e-4
+#: [s] sub-step of the brake drum on its coupling: a fiftieth of the period of a 500 N*m/rad
+#: coupling on a 2e-3 kg*m^2 drum (80 Hz, 12.6 ms); the friction and the damper are implicit
+COUPLING_SUBSTEP = 2.5e-4
 
 
 @dataclass(frozen=True)
@@ -180,11 +189,14 @@ class Transducer:
     noise: float = 0.0           # standard deviation, measured unit
     resolution: float = 0.0      # quantisation step, measured unit; <= 0 means none
 
+    def filter_coefficient(self, dt: float) -> float:
+        """a of the exact first-order low-pass update over dt with x held: y <- a y + (1 - a) x
+        (0 without a bandwidth)."""
+        return math.exp(-2 * math.pi * self.bandwidth * dt) if self.bandwidth > 0 else 0.0
+
     def filter_step(self, y: float, x: float, dt: float) -> float:
         """Exact first-order low-pass update over dt with x held."""
-        if self.bandwidth <= 0:
-            return x
-        a = math.exp(-2 * math.pi * self.bandwidth * dt)
+        a = self.filter_coefficient(dt)
         return a * y + (1 - a) * x
 
     def reading(self, filtered: float, noise_sample: float) -> float:

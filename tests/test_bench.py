@@ -199,3 +199,15 @@ def test_schedule_given_two_ways_is_an_error():
     assert p == {"brake.schedule_points": 2, "brake.schedule_time_1": 0.0,
                  "brake.schedule_value_1": 2.0, "brake.schedule_time_2": 3.0,
                  "brake.schedule_value_2": 7.0}
+
+
+def test_lean_master_gives_fmpys_numbers(fmu_dir):
+    """The package's master (cached value references, raw FMI calls) and fmpy's SSP master run
+    the same SSP to the same numbers, schedules included."""
+    from cyclo_fmu.bench import scenario
+    sc = scenario("loadstep", "S2")
+    lean = run_bench(sc, fmu_dir, master="lean").result
+    ref = run_bench(sc, fmu_dir, master="fmpy").result
+    n = min(len(lean), len(ref))
+    for name in lean.dtype.names:
+        np.testing.assert_allclose(lean[name][:n], ref[name][:n], rtol=1e-9, atol=1e-9)
