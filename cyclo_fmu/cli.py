@@ -167,6 +167,35 @@ def cmd_paper(args) -> int:
         return run_paper_comparison(design, out, args.json)
 
 
+def cmd_stiffness(args) -> int:
+    from model_core import stiffness as st
+    design = _load_design(args.design)
+    rated = args.rated_torque
+    if rated is not None and not (math.isfinite(rated) and rated > 0):
+        raise CycloidInputError("rated-torque", rated, "must be a positive number of N*m")
+    if args.out:
+        _output_dir("out", args.out, create=False)
+    values = st.catalogue_values(design, rated)
+    if args.out:
+        from .plots import plot_stiffness
+        with _staged_dir("out", args.out) as out:
+            plot_stiffness(design, values["rated_torque_Nm"], out / "stiffness.png")
+            (out / "stiffness.json").write_text(json.dumps(values, indent=2))
+    if args.json:
+        print(json.dumps(values, indent=2))
+        return 0
+    print(f"Torsional behaviour with the input locked (contact model; rated torque "
+          f"{values['rated_torque_Nm']:.3g} N*m)")
+    print(f"  torsional rigidity (50-100 % rated)   {values['torsional_rigidity_Nm_per_arcmin']:.4g} N*m/arcmin")
+    print(f"  lost motion (+-3 % rated)             {values['lost_motion_arcmin']:.4g} arcmin")
+    print(f"  backlash                              {values['backlash_arcmin']:.4g} arcmin")
+    print(f"  twist at rated torque                 {values['twist_at_rated_arcmin']:.4g} arcmin")
+    print(f"  hysteresis loss (loop width at 0)     {values['hysteresis_loss_arcmin']:.4g} arcmin")
+    if args.out:
+        print(f"  figure: {Path(args.out) / 'stiffness.png'}")
+    return 0
+
+
 def cmd_build(args) -> int:
     from .fmu_build import ALL_FMUS, build_any
     for name in args.names:
@@ -388,6 +417,14 @@ def build_parser() -> argparse.ArgumentParser:
     pp.add_argument("--design", help="design file (TOML); default: the paper's test drive")
     pp.add_argument("--json", action="store_true", help="print one JSON object")
     pp.set_defaults(func=cmd_paper)
+    sp = sub.add_parser("stiffness", help="torsional rigidity, lost motion, backlash and the "
+                        "hysteresis curve from the contact model, as a catalogue states them")
+    sp.add_argument("--design", help="design file (TOML); default: the paper's test drive")
+    sp.add_argument("--rated-torque", type=_number("rated-torque"), help="rated output torque "
+                    "N*m the catalogue values refer to (default: the paper's motor times z1-1)")
+    sp.add_argument("--json", action="store_true", help="print one JSON object")
+    sp.add_argument("--out", help="folder for stiffness.png and stiffness.json")
+    sp.set_defaults(func=cmd_stiffness)
     bp = sub.add_parser("build", help="build the FMUs (dist/CycloidDrive.fmu, "
                         "dist/CycloidDriveNative.fmu, ...)")
     bp.add_argument("--dest", default="dist", help="output folder (default: dist)")
