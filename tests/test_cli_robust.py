@@ -29,6 +29,7 @@ OUTPUT_COMMANDS = {
     "sweep": (["sweep", "{spec}"], "--out", "file"),
     "diagnose-batch": (["diagnose-batch", "{recdir}", "--mode", "S1"], "--out", "dir"),
     "export-modelica": (["export-modelica", "--mode", "S1"], "--out", "dir"),
+    "stiffness": (["stiffness"], "--out", "dir"),
 }
 
 # name: argv that takes ``--design`` and would otherwise run
@@ -40,6 +41,7 @@ DESIGN_COMMANDS = {
     "diagnose-batch": ["diagnose-batch", "{recdir}", "--mode", "S1", "--out", "{tmp}/batch"],
     "build": ["build", "--dest", "{tmp}/build_out", "CycloidDriveNative"],
     "export-modelica": ["export-modelica", "--mode", "S1", "--out", "{tmp}/mo_out"],
+    "stiffness": ["stiffness"],
 }
 
 SEED_COMMANDS = {

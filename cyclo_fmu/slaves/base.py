@@ -49,7 +49,7 @@ DISPLAY_UNITS = {
 QUANTITIES = {"rad/s": "AngularVelocity", "N.m": "Torque", "W": "Power", "m": "Length",
               "m2/s": "KinematicViscosity", "kg/m3": "Density", "kg.m2": "MomentOfInertia",
               "s": "Time", "rad": "Angle", "Hz": "Frequency", "1": "DimensionlessRatio",
-              "N.m.s/rad": "RotationalDampingConstant"}
+              "N.m.s/rad": "RotationalDampingConstant", "N.m/rad": "RotationalSpringConstant"}
 
 # SI base-unit exponents of the units we use (FMI 2.0 BaseUnit attributes)
 UNITS = {
@@ -65,6 +65,7 @@ UNITS = {
     "rad": dict(rad=1),
     "Hz": dict(s=-1),
     "N.m.s/rad": dict(kg=1, m=2, s=-1, rad=-1),
+    "N.m/rad": dict(kg=1, m=2, s=-2, rad=-1),
 }
 
 
@@ -111,6 +112,41 @@ class UnitSlave(Fmi2Slave):
             self._quantity[name] = quantity
         if display:
             self._display[name] = display
+
+    def schedule_parameters(self, unit, what):
+        """Numbered Real parameters carrying a schedule of at most SCHEDULE_POINTS setpoints
+        (every master can set them): ``schedule_points`` (0: none), ``schedule_time_k`` [s] and
+        ``schedule_value_k`` [unit]."""
+        from . import core
+        SCHEDULE_POINTS = core.rig.SCHEDULE_POINTS
+        self.parameter("schedule_points", 0, None, f"number of {what} setpoints carried by "
+                       f"schedule_time_k/schedule_value_k (0: none; at most {SCHEDULE_POINTS})",
+                       Integer)
+        for k in range(1, SCHEDULE_POINTS + 1):
+            self.parameter(f"schedule_time_{k}", 0.0, "s", f"time of {what} setpoint {k}")
+            self.parameter(f"schedule_value_{k}", 0.0, unit, f"{what} setpoint {k}, held until "
+                           "the next")
+
+    def schedule_from_parameters(self, text_name):
+        """The schedule of the String parameter ``text_name`` or of the numbered parameters
+        (not both), or None."""
+        from . import core
+        SCHEDULE_POINTS = core.rig.SCHEDULE_POINTS
+        parse_schedule, schedule_from_points = core.rig.parse_schedule, core.rig.schedule_from_points
+        text = getattr(self, text_name).strip()
+        n = int(self.schedule_points)
+        if text and n:
+            raise ValueError(f"{text_name} and schedule_points = {n}: give the schedule one way")
+        if text:
+            return parse_schedule(text, text_name)
+        if n:
+            k = range(1, SCHEDULE_POINTS + 1)
+            return schedule_from_points(n, [getattr(self, f"schedule_time_{i}") for i in k],
+                                        [getattr(self, f"schedule_value_{i}") for i in k],
+                                        "schedule")
+        if not 0 <= n <= SCHEDULE_POINTS:
+            raise ValueError(f"schedule_points = {n}: must be 0 to {SCHEDULE_POINTS}")
+        return None
 
     def input(self, name, value, unit, description=""):
         setattr(self, name, value)
@@ -262,7 +298,8 @@ class UnitSlave(Fmi2Slave):
             # attribute order as the schema lists them: quantity, unit, displayUnit, ..., min, max
             start = real.attrib.pop("start", None)
             quantity = self._quantity.get(name) or QUANTITIES.get(unit or "1")
-            real.set("quantity", quantity)
+            if quantity:
+                real.set("quantity", quantity)
             if unit:
                 real.set("unit", unit)
                 disp = self._display.get(name) or next(iter(DISPLAY_UNITS.get(unit, ())),
