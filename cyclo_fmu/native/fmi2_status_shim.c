@@ -64,13 +64,14 @@ static fmi2Status map(fmi2Status s) { return s == fmi2Fatal ? fmi2Error : s; }
 #define FAILED_VR 0
 #endif
 
-/* the slave's flag ``_failed``: set when the call just made failed (reason already logged) */
+/* the slave's flag ``_failed``: set when the call just made failed (reason already logged);
+ * fmi2Error then, else the call's own status */
 static fmi2Status checked(fmi2Component c, fmi2Status s)
 {
     static fmi2GetBooleanTYPE *get = NULL;
     const fmi2ValueReference vr = FAILED_VR;
     fmi2Boolean failed = fmi2False;
-    if (s > fmi2Warning) return map(s);
+    if (s > fmi2Discard) return map(s);
     if (!get) get = (fmi2GetBooleanTYPE *)sym("fmi2GetBoolean");
     if (get && get(c, &vr, 1, &failed) == fmi2OK && failed) return fmi2Error;
     return s;
@@ -232,8 +233,17 @@ STATUS_FN(fmi2SetRealInputDerivatives, (fmi2Component c, const fmi2ValueReferenc
 STATUS_FN(fmi2GetRealOutputDerivatives, (fmi2Component c, const fmi2ValueReference vr[],
                                          size_t n, const fmi2Integer o[], fmi2Real v[]),
           (c, vr, n, o, v))
-CHECKED_FN(fmi2DoStep, (fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noPrior),
-          (c, t, h, noPrior))
+/* a failed step returns False from do_step (fmi2Discard from pythonfmu): only then is the flag
+ * read, so a good step costs no extra call into Python */
+FMI2_Export fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noPrior)
+{
+    static fmi2DoStepTYPE *f = NULL;
+    fmi2Status s;
+    if (!f) f = (fmi2DoStepTYPE *)sym("fmi2DoStep");
+    if (!f) return fmi2Error;
+    s = f(c, t, h, noPrior);
+    return s == fmi2Discard ? checked(c, s) : map(s);
+}
 STATUS_FN(fmi2CancelStep, (fmi2Component c), (c))
 STATUS_FN(fmi2GetStatus, (fmi2Component c, const fmi2StatusKind k, fmi2Status *v), (c, k, v))
 STATUS_FN(fmi2GetRealStatus, (fmi2Component c, const fmi2StatusKind k, fmi2Real *v), (c, k, v))

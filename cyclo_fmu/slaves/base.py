@@ -25,8 +25,8 @@ from pythonfmu.variables import Boolean, Integer, Real, String
 
 #: Inside an FMU whose linux64 binary is our C front (fmu_build._install_status_shim, which
 #: writes this marker): a failure is reported through the variable ``_failed`` (value
-#: reference 0), which the front reads after fmi2ExitInitializationMode and fmi2DoStep and
-#: answers with fmi2Error. pythonfmu's own binary turns a raised exception into fmi2Fatal and its
+#: reference 0), which the front reads after fmi2ExitInitializationMode and after a step that
+#: returned False (fmi2Discard from pythonfmu), and answers with fmi2Error. pythonfmu's own binary turns a raised exception into fmi2Fatal and its
 #: exception handling can corrupt the host's interpreter (a crash at a later point), so with
 #: the front no exception crosses into pythonfmu. Elsewhere (win64, source tree) we raise.
 STATUS_FRONT = (sys.platform.startswith("linux")
@@ -185,7 +185,7 @@ class UnitSlave(Fmi2Slave):
             if not STATUS_FRONT:
                 raise
             self._failed = True
-            return True
+            return False        # do_step: fmi2Discard from pythonfmu, which the front reads
 
     def require_finite(self, **values):
         for name, v in values.items():
