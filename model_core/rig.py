@@ -71,6 +71,32 @@ def schedule_value(schedule, t: float) -> float:
     return v
 
 
+#: most breakpoints a schedule carries as numbered Real parameters (``<x>_time_<i>``,
+#: ``<x>_value_<i>``, i = 1..MAX_POINTS): enough for the named scenarios; longer schedules
+#: (the synthesiser's plans) go as the String parameter to masters that can set Strings
+MAX_POINTS = 8
+
+
+def schedule_from_points(count: int, times, values, name: str = "schedule"):
+    """[(t_i, v_i)] from ``count`` numbered breakpoints (the first ``count`` of ``times`` and
+    ``values``); ValueError names the field when count is out of 0..MAX_POINTS, a value is not
+    finite or the times do not increase. count = 0: no schedule (None)."""
+    if not 0 <= count <= min(MAX_POINTS, len(times), len(values)):
+        raise ValueError(f"{name}_points = {count!r}: must be 0..{MAX_POINTS}")
+    if count == 0:
+        return None
+    out = []
+    for i in range(count):
+        t, v = float(times[i]), float(values[i])
+        if not (math.isfinite(t) and math.isfinite(v)):
+            raise ValueError(f"{name}_time_{i + 1}, {name}_value_{i + 1} = {t!r}, {v!r}: "
+                             "must be finite")
+        if out and t < out[-1][0]:
+            raise ValueError(f"{name}_time_{i + 1} = {t!r}: times must increase")
+        out.append((t, v))
+    return out
+
+
 def parse_schedule(text: str, name: str = "schedule"):
     """'t0 v0; t1 v1; ...' -> [(t0, v0), ...] with increasing times; ValueError names the field."""
     out = []

@@ -1,9 +1,10 @@
 """FMI slave: felt friction brake with the output-side inertia.
 
 Takes the output shaft speed and gives the torque the load applies on the reducer's output
-shaft: tau_out = -(T_set tanh(w/w_reg) + J_out dw/dt). The inertia of brake drum, coupling and
-output transducer is carried here as a torque from the speed's backward difference over the
-last step (the reducer is massless, the motor integrates the drive train).
+shaft: tau_out = -(T_set tanh(w/w_reg) + J_out dw/dt). The bench sets J_out = 0 and gives the
+output-side inertia to the reducer (``CycloidDrive.J_out``), which reflects it to the motor's
+integrator; J_out > 0 here differentiates the input speed (backward difference over the last
+step), kept only for hosts that connect the brake alone.
 """
 from __future__ import annotations
 
@@ -25,6 +26,12 @@ class FeltBrake(UnitSlave):
         self.parameter("hold_time", 1.0, "s", "time each setpoint is held")
         self.parameter("torque_schedule", "", None, "instead of the series: setpoints "
                        "'t0 T0; t1 T1; ...' (s, N*m), each held until the next", String)
+        self.parameter("T_points", 0, None, "instead of the series (when torque_schedule is "
+                       "empty): number of setpoints T_time_i, T_value_i used (0..8)", Integer)
+        for i in range(1, core.rig.MAX_POINTS + 1):
+            self.parameter(f"T_time_{i}", 0.0, "s", f"time of brake torque setpoint {i}")
+            self.parameter(f"T_value_{i}", 0.0, "N.m", f"brake torque setpoint {i}, held until "
+                           "the next")
         self.parameter("w_reg", 0.5, "rad/s", "speed below which the Coulomb torque is "
                        "regularised (tanh)")
         self.parameter("J_out", 2.0e-3, "kg.m2", "output-side inertia: brake drum, coupling, "
@@ -41,21 +48,26 @@ class FeltBrake(UnitSlave):
     def exit_initialization_mode(self):
         try:
             self._schedule = (core.rig.parse_schedule(self.torque_schedule, "torque_schedule")
-                              if self.torque_schedule.strip() else None)
+                              if self.torque_schedule.strip() else core.rig.schedule_from_points(
+                                  self.T_points, self._points("T_time"), self._points("T_value"),
+                                  "T"))
             if self.T_count < 1:
                 raise ValueError(f"T_count = {self.T_count!r}: must be at least 1")
             if min(self.T_first, self.T_last) < 0:
                 raise ValueError("T_first, T_last: a brake torque setpoint must not be negative")
-            for name in ("w_reg", "J_out"):
-                v = getattr(self, name)
-                if not (math.isfinite(v) and v > 0):
-                    raise ValueError(f"{name} = {v!r}: must be positive")
+            if not (math.isfinite(self.w_reg) and self.w_reg > 0):
+                raise ValueError(f"w_reg = {self.w_reg!r}: must be positive")
+            if not (math.isfinite(self.J_out) and self.J_out >= 0):
+                raise ValueError(f"J_out = {self.J_out!r}: must not be negative")
             if self._schedule and any(v < 0 for _, v in self._schedule):
-                raise ValueError(f"torque_schedule = {self.torque_schedule!r}: a brake torque "
+                raise ValueError(f"torque schedule {self._schedule!r}: a brake torque "
                                  "setpoint must not be negative")
         except ValueError as exc:
             self.fail(f"invalid parameter: {exc}")
         self._update(0.0, 0.0)
+
+    def _points(self, prefix):
+        return [getattr(self, f"{prefix}_{i}") for i in range(1, core.rig.MAX_POINTS + 1)]
 
     def _update(self, t, dt):
         w = self.w

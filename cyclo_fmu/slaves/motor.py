@@ -2,7 +2,11 @@
 
 It owns the rotor inertia (rotor, coupling, input transducer rotor), integrates it and outputs
 the speed (no direct feedthrough). Input ``tau_shaft`` is the torque the motor delivers into
-the shaft towards the load (the reducer's ``tau_in``): J dw/dt = T_em(w, f) - tau_shaft.
+the shaft towards the load without the load's inertia (the reducer's ``tau_in_static``) and
+``J_load`` the load's inertia as seen at this shaft (the reducer's ``J_load``):
+(J + J_load) dw/dt = T_em(w, f) - tau_shaft. Output ``alpha`` is the mean acceleration over
+the last step, (w_end - w_start)/h, from the integrator's own state (the reducer uses it for the
+load's inertial torque; no co-simulation input is differentiated).
 """
 from __future__ import annotations
 
@@ -36,8 +40,17 @@ class InductionMotor(UnitSlave):
                        Integer)
         self.parameter("frequency_schedule", "", None, "instead of the series: setpoints "
                        "'t0 f0; t1 f1; ...' (s, Hz), each held until the next", String)
+        self.parameter("f_points", 0, None, "instead of the series (when frequency_schedule is "
+                       "empty): number of setpoints f_time_i, f_value_i used (0..8)", Integer)
+        for i in range(1, core.rig.MAX_POINTS + 1):
+            self.parameter(f"f_time_{i}", 0.0, "s", f"time of frequency setpoint {i}")
+            self.parameter(f"f_value_{i}", 0.0, "Hz", f"frequency setpoint {i}, held until the next")
         self.parameter("w_start", 0.0, "rad/s", "initial speed")
-        self.input("tau_shaft", 0.0, "N.m", "torque the motor delivers into the shaft (reducer tau_in)")
+        self.input("tau_shaft", 0.0, "N.m", "torque the motor delivers into the shaft, without the "
+                   "load's inertia (reducer tau_in_static)")
+        self.input("J_load", 0.0, "kg.m2", "inertia of the load seen at the motor shaft (reducer "
+                   "J_load), integrated here")
+        self.output("alpha", 0.0, "rad/s2", "mean shaft acceleration over the last step")
         self.output("w", 0.0, "rad/s", "shaft speed")
         self.output("T_em", 0.0, "N.m", "electromagnetic torque")
         self.output("frequency", 0.0, "Hz", "stator frequency after the ramp")
@@ -60,14 +73,24 @@ class InductionMotor(UnitSlave):
             if self.pole_pairs < 1:
                 raise ValueError(f"pole_pairs = {self.pole_pairs!r}: must be at least 1")
             self._schedule = (core.rig.parse_schedule(self.frequency_schedule, "frequency_schedule")
-                              if self.frequency_schedule.strip() else None)
+                              if self.frequency_schedule.strip() else core.rig.schedule_from_points(
+                                  self.f_points, self._points("f_time"), self._points("f_value"),
+                                  "f"))
             if self.f_count < 1 or self.loads_per_frequency < 1:
                 raise ValueError("f_count and loads_per_frequency must be at least 1")
         except ValueError as exc:
             self.fail(f"invalid parameter: {exc}")
+        m = self._motor
+        # constants of the Kloss curve, computed once (not in every sub-step)
+        self._w_per_hz = 2 * math.pi / m.pole_pairs
+        self._dwk = m.breakdown_slip_speed
+        self._two_Tk = 2 * m.breakdown_ratio * m.rated_torque
         self.w = float(self.w_start)
         self.frequency = 0.0 if self.w == 0 else self.w * self.pole_pairs / (2 * math.pi)
         self._outputs()
+
+    def _points(self, prefix):
+        return [getattr(self, f"{prefix}_{i}") for i in range(1, core.rig.MAX_POINTS + 1)]
 
     def _setpoint(self, t):
         if self._schedule is not None:
@@ -80,16 +103,29 @@ class InductionMotor(UnitSlave):
         self.P_mech = self.T_em * self.w
 
     def do_step(self, current_time, step_size):
-        tau = self.tau_shaft
-        if not math.isfinite(tau):
-            self.require_finite(tau_shaft=tau)
+        tau, J_load = self.tau_shaft, self.J_load
+        if not (math.isfinite(tau) and math.isfinite(J_load) and J_load >= 0):
+            self.require_finite(tau_shaft=tau, J_load=J_load)
+            self.fail(f"J_load = {J_load!r}: input must not be negative")
         n = max(1, int(math.ceil(step_size / _SUBSTEP - 1e-9)))
         h = step_size / n
-        m, J = self._motor, self._motor.inertia
-        w, f = self.w, self.frequency
+        inv_J = 1.0 / (self._motor.inertia + J_load)
+        dstep = self._motor.ramp_rate * h
+        w_per_hz, dwk, two_Tk = self._w_per_hz, self._dwk, self._two_Tk
+        w0 = w = self.w
+        f = self.frequency
+        target = self._setpoint(current_time)
+        # one setpoint for the whole step unless a setpoint change falls inside it
+        constant = self._setpoint(current_time + step_size * (1 - 1e-9)) == target
         for k in range(n):
-            f = core.rig.ramp_toward(f, self._setpoint(current_time + k * h), m.ramp_rate, h)
-            w += h * (m.torque(w, f) - tau) / J
+            if not constant:
+                target = self._setpoint(current_time + k * h)
+            d = target - f
+            f = target if -dstep <= d <= dstep else (f + dstep if d > 0 else f - dstep)
+            dw = w_per_hz * f - w            # slip speed; Kloss torque as in rig.InductionMotor
+            T = 0.0 if dw == 0.0 else two_Tk / (dw / dwk + dwk / dw)
+            w += h * (T - tau) * inv_J
         self.w, self.frequency = w, f
+        self.alpha = (w - w0) / step_size
         self._outputs()
         return True
