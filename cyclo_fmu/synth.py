@@ -100,7 +100,7 @@ def signals_for_effects(t, w_in, loss_in, mode, z1, temperature=None):
 def synthesize(effect: str, seed: int, mode: str = "S1", size: str = "small",
                design: DriveDesign = None, settings: SynthSettings = SynthSettings(),
                friction_error: float = None, effect_values: dict = None, shape=None,
-               plan: str = "full", engine: str = "fast", fmu_dir=None) -> dict:
+               plan: str = "full", engine: str = "fast", fmu_dir=None, progress=False) -> dict:
     """A recording dict (schema columns, SI-free edge units r/min and N*m) plus ``truth``."""
     if effect not in EFFECTS:
         raise ValueError(f"effect = {effect!r}: must be one of {', '.join(EFFECTS)}")
@@ -146,7 +146,7 @@ def synthesize(effect: str, seed: int, mode: str = "S1", size: str = "small",
     eff_shape = shape if shape is not None else eff_shape
     if engine == "bench":
         return _through_the_bench(effect, values, eff_shape, true_design, plan, hold, mode,
-                                  duration, seed, settings, friction_error, fmu_dir)
+                                  duration, seed, settings, friction_error, fmu_dir, progress)
     tmax = float(np.max(np.abs(tau_out))) * 1.05 + 1e-6
     wmax = float(np.max(np.abs(w_in))) * 1.05 + 1e-6
     true_map = ModeMap(true_design, mode, tmax, wmax)
@@ -213,7 +213,7 @@ def paper_like(mode: str = "S1", seed: int = 1, size: str = "small", **kw) -> di
 
 
 def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, duration, seed,
-                       settings, friction_error, fmu_dir):
+                       settings, friction_error, fmu_dir, progress=False):
     """The recording from the bench's FMUs (motor, reducer, brake, transducers): the hidden
     effect switched on in the reducer FMU's extra physics (or the transducer's zero offset),
     the setpoints of the plan as the motor's and brake's schedules."""
@@ -242,7 +242,7 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
         if fmu_dir is None:
             for name in sorted({f for f, _ in COMPONENTS.values()}):
                 build_fmu(name, d)
-        res = run_fmus(d, params, duration, 1.0 / settings.sample_rate)
+        res = run_fmus(d, params, duration, 1.0 / settings.sample_rate, progress=progress)
     rec = recording_from_result(res)
     rec["truth"] = {"effect": effect, "values": values, "shape": shape,
                     "friction_error": friction_error, "mode": mode, "seed": seed,

@@ -144,11 +144,16 @@ class Transducer:
     noise: float = 0.0           # standard deviation, measured unit
     resolution: float = 0.0      # quantisation step, measured unit; <= 0 means none
 
-    def filter_step(self, y: float, x: float, dt: float) -> float:
-        """Exact first-order low-pass update over dt with x held."""
-        if self.bandwidth <= 0:
-            return x
-        a = math.exp(-2 * math.pi * self.bandwidth * dt)
+    def filter_factor(self, dt: float) -> float:
+        """a = exp(-2 pi f_c dt) of the exact first-order update y' = a y + (1 - a) x over dt
+        (0 without a bandwidth: y' = x)."""
+        return 0.0 if self.bandwidth <= 0 else math.exp(-2 * math.pi * self.bandwidth * dt)
+
+    def filter_step(self, y: float, x: float, dt: float, a: float = None) -> float:
+        """Exact first-order low-pass update over dt with x held (``a``: filter_factor(dt),
+        when the caller keeps it for a fixed step)."""
+        if a is None:
+            a = self.filter_factor(dt)
         return a * y + (1 - a) * x
 
     def reading(self, filtered: float, noise_sample: float) -> float:

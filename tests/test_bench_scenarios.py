@@ -161,3 +161,56 @@ def test_cli_reversal_recording(tmp_path):
     assert r.returncode == 0, r.stderr
     data = np.genfromtxt(tmp_path / "recording_S1_reversal.csv", delimiter=",", names=True)
     assert data["speed_in_rpm"].min() < REVERSE_RPM
+
+
+def test_steady_step_passes_the_convergence_check(fmu_dir):
+    """The step the bench uses for steady scenarios (STEADY_STEP, chosen on the paper scenario)
+    passes the same check on a shorter steady series: window efficiencies within
+    STEP_ETA_TOL and mean speeds within STEP_SPEED_TOL of the 1 ms run."""
+    from cyclo_fmu.bench import STEADY_STEP, Scenario, converged_step
+    sc = Scenario("quick", mode="S1", f_first=30, f_last=50, f_count=2, T_first=3.0, T_last=8.0,
+                  T_count=2, hold=2.0, settle=1.2)
+    h, report = converged_step(fmu_dir, sc, candidates=(STEADY_STEP,))
+    assert h >= STEADY_STEP, report
+
+
+def _run_with_tty_stderr(argv):
+    """Run the CLI with stderr on a pseudo-terminal; returns (exit code, stderr text)."""
+    import os
+    import pty
+    import fcntl
+    import struct
+    import termios
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))   # 100 columns
+    p = subprocess.Popen([sys.executable, "-m", "cyclo_fmu.cli"] + argv, stdout=subprocess.PIPE,
+                         stderr=slave)
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            data = os.read(master, 4096)
+        except OSError:
+            break
+        if not data:
+            break
+        chunks.append(data)
+    p.wait(timeout=600)
+    os.close(master)
+    return p.returncode, b"".join(chunks).decode(errors="replace")
+
+
+def test_bench_progress_bar_on_a_terminal_only(tmp_path):
+    argv = ["bench", "--scenario", "runup", "--step", "steady", "--out", str(tmp_path / "a")]
+    rc, err = _run_with_tty_stderr(argv)
+    assert rc == 0 and "bench" in err and "step" in err          # tqdm's bar
+    rc, err = _run_with_tty_stderr(argv[:-1] + [str(tmp_path / "b"), "--quiet"])
+    assert rc == 0 and err == ""
+    r = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli"] + argv[:-1] + [str(tmp_path / "c")],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0 and r.stderr == ""                   # not a terminal: no bar
+
+
+def test_efficiency_figure_at_the_bench_speeds():
+    from cyclo_fmu.paper import FIGURE_SPEEDS_RPM
+    assert FIGURE_SPEEDS_RPM == (1000.0, 1500.0, 2000.0, 2500.0, 2800.0)

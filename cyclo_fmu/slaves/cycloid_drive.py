@@ -82,6 +82,8 @@ OUTPUT_LOSSES = ("PL1", "PL2", "PL3", "PL5", "PL6")
 #: rad/s^2; below this driving-shaft acceleration J_load is the secant over this value (the
 #: inertial torque it stands for, J_out r * 1 rad/s^2, is below the torque transducers' noise)
 _ALPHA_MIN = 1.0
+#: relative change of w_in and tau_out within which a steady step reuses the last J_load
+_SLOPE_REUSE = 1e-3
 
 
 class CycloidDrive(UnitSlave):
@@ -135,6 +137,7 @@ class CycloidDrive(UnitSlave):
         self.output("P_extra", 0.0, "W", "power of the physics beyond the paper (drag, Stribeck, "
                     "inertia, ripple, warm-up) at the driving shaft", depends=both)
         self._theta = 0.0
+        self._slope_key = None
         self._w_last = None
         self._map = None
         self._design = None
@@ -207,11 +210,16 @@ class CycloidDrive(UnitSlave):
         # efficiency's kink (forward or back-driven) the inertia is on, not how large the last
         # acceleration was (a secant over it would feed it back with one step's delay)
         if abs(alpha) > _ALPHA_MIN:
-            a, moved = alpha, gear
+            J_load = (gear - static) / alpha
         else:
             a = _ALPHA_MIN if alpha >= 0 else -_ALPHA_MIN
-            moved = self._gear_torque(w_in, tau_ext - J_r * a)
-        J_load = (moved - static) / a
+            key = self._slope_key
+            if (key is not None and key[0] == a and abs(w_in - key[1]) <= _SLOPE_REUSE * abs(key[1])
+                    and abs(tau_ext - key[2]) <= _SLOPE_REUSE * abs(key[2])):
+                J_load = key[3]          # steady: the slope of the last step still holds
+            else:
+                J_load = (self._gear_torque(w_in, tau_ext - J_r * a) - static) / a
+                self._slope_key = (a, w_in, tau_ext, J_load)
         if not (math.isfinite(J_load) and J_load > 0):    # standstill in the exact core
             J_load = J_r * self._ratio_out
         self.J_load = J_load

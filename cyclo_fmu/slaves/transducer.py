@@ -27,6 +27,7 @@ class Transducer(UnitSlave):
         self.input("x", 0.0, "1", "true value")
         self.output("y", 0.0, "1", "reading", depends=("x",))
         self._filtered = None
+        self._dt = self._a = None
 
     def exit_initialization_mode(self):
         try:
@@ -54,6 +55,9 @@ class Transducer(UnitSlave):
         x = self.x
         if not math.isfinite(x):
             self.require_finite(x=x)
-        self._filtered = self._model.filter_step(self._filtered, self.scale * x, step_size)
+        if step_size != self._dt:                      # the factor once per step size
+            self._dt, self._a = step_size, self._model.filter_factor(step_size)
+        self._filtered = self._model.filter_step(self._filtered, self.scale * x, step_size,
+                                                 self._a)
         self._read()
         return True
