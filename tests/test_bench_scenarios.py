@@ -168,7 +168,7 @@ def test_steady_step_passes_the_convergence_check(fmu_dir):
     passes the same check on a shorter steady series: window efficiencies within
     STEP_ETA_TOL and mean speeds within STEP_SPEED_TOL of the 1 ms run."""
     from cyclo_fmu.bench import STEADY_STEP, Scenario, converged_step
-    # steady: the windows start 1.8 s into each slot (the 20 -> 50 Hz ramp takes 0.8 s); with
+    # steady: the windows start 1.8 s into each slot (the 30 -> 50 Hz ramp takes 0.8 s); with
     # settle = 1.2 s the windows hold the tail of the ramp's transient and 20 ms fails the check
     sc = Scenario("quick", mode="S1", f_first=30, f_last=50, f_count=2, T_first=3.0, T_last=8.0,
                   T_count=2, hold=2.5, settle=1.8)
