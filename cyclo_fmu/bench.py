@@ -3,12 +3,8 @@
 Components (TestBench.ssp, SSP 1.0): ``motor`` (InductionMotor), ``drive`` (CycloidDrive),
 ``brake`` (FeltBrake) and four ``Transducer`` instances: ``t_in`` (HBM T22/20 on the input
 shaft), ``n_in`` (optical speed sensor), ``t_out`` and ``n_out`` (HBM T30FN on the output).
-Causality: the motor integrates the drive train and outputs speed and its mean acceleration;
-reducer and brake take speed and give torque. The output-side inertia (brake drum, coupling,
-T30FN rotor) is a parameter of the reducer, which reflects it to the motor's integrator
-(``J_load``, ``tau_in_static``): no component differentiates a co-simulation input. Schedules
-(frequency and brake torque over time) travel as numbered Real parameters (``f_time_i``,
-``f_value_i``; ``T_time_i``, ``T_value_i``) that every master can set. Parameters: resources/<component>.ssv bound to each component in the .ssd
+Causality: the motor integrates the drive train and outputs speed; reducer and brake take speed
+and give torque. Parameters: resources/<component>.ssv bound to each component in the .ssd
 (libcosim applies them) and the same values in resources/TestBench.ssv, which ``run_ssp``
 passes to fmpy as ``parameter_set`` (fmpy ignores ParameterBindings). The paper's series steps the motor
 frequency and the brake torque; each pair is held to steady state.
@@ -24,7 +20,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from model_core import MODES, DriveDesign, operating_point, rig
+from model_core import MODES, DriveDesign, operating_point
 from model_core.kinematics import parse_mode
 
 RPM_PER_RAD_S = 30 / math.pi
@@ -159,11 +155,19 @@ def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDe
         "motor.loads_per_frequency": int(sc.T_count),
         "brake.T_first": float(sc.T_first), "brake.T_last": float(sc.T_last),
         "brake.T_count": int(sc.T_count), "brake.hold_time": float(sc.hold),
-        # the output inertia is integrated on the motor's side through the reducer
+        # the output inertia is integrated on the motor's side through the reducer (README,
+        # "Where the inertias are integrated"); the brake then has no drum of its own
         "drive.J_out": float(sc.J_out), "brake.J_out": 0.0,
     }
-    p.update(schedule_parameters("motor", "f", "frequency_schedule", sc.frequency_schedule))
-    p.update(schedule_parameters("brake", "T", "torque_schedule", sc.torque_schedule))
+    # schedules as numbered Real parameters: every master (fmpy's SSP master, libcosim,
+    # run_fmus) sets them, unlike the String form
+    from model_core.rig import parse_schedule, schedule_parameters
+    if sc.frequency_schedule:
+        p.update(schedule_parameters("motor.", parse_schedule(sc.frequency_schedule,
+                                                               "frequency_schedule")))
+    if sc.torque_schedule:
+        p.update(schedule_parameters("brake.", parse_schedule(sc.torque_schedule,
+                                                               "torque_schedule")))
     if design is not None:
         p.update(drive_parameters(design))
     for name, scale, noise, res, gain, off in (
@@ -179,23 +183,6 @@ def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDe
                   f"{name}.ideal": bool(sensors.ideal),
                   f"{name}.seed": int(sensors.seed + list(COMPONENTS).index(name))})
     return p
-
-
-def schedule_parameters(component: str, prefix: str, string_name: str, text: str) -> dict:
-    """A schedule 't0 v0; t1 v1; ...' as the component's numbered Real parameters
-    (``<prefix>_points``, ``<prefix>_time_i``, ``<prefix>_value_i``), which every master can set;
-    a schedule with more than rig.MAX_POINTS entries as the String parameter ``string_name``
-    (for masters that set Strings: ``run_fmus``, libcosim)."""
-    if not text.strip():
-        return {}
-    points = rig.parse_schedule(text, string_name)
-    if len(points) > rig.MAX_POINTS:
-        return {f"{component}.{string_name}": text}
-    out = {f"{component}.{prefix}_points": len(points)}
-    for i, (t, v) in enumerate(points, 1):
-        out[f"{component}.{prefix}_time_{i}"] = float(t)
-        out[f"{component}.{prefix}_value_{i}"] = float(v)
-    return out
 
 
 def _ssv(params: dict) -> str:
@@ -275,7 +262,7 @@ def run_ssp(ssp_path, stop_time: float, step: float = 1e-3):
     strings = [p.name for p in params.parameters if p.type == "String"]
     if strings:
         raise ValueError(f"{strings[0]}: fmpy's SSP master cannot set String parameters; "
-                         "run_bench runs this bench (run_fmus sets them)")
+                         "run_bench's lean master runs this bench (run_fmus sets them)")
     for prm in params.parameters:
         # fmpy sets Booleans as value != 0.0, so the string "false" would read as true
         if prm.type == "Boolean":
@@ -310,13 +297,15 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
     dst = np.array([d for d, _ in links], dtype=np.intp)
     src = np.array([s_ for _, s_ in links], dtype=np.intp)
     size = ctypes.sizeof(fmi2Real)
-    comps, calls = [], []
+    comps, calls, unpacked = [], [], {}
     try:
         for name, (fmu, connectors) in COMPONENTS.items():
             path = str(Path(fmu_dir) / f"{fmu}.fmu")
-            md = read_model_description(path)
+            if path not in unpacked:     # one extraction per FMU, shared by its instances
+                unpacked[path] = (read_model_description(path), extract(path))
+            md, unzipped = unpacked[path]
             var = {v.name: v for v in md.modelVariables}
-            f = FMU2Slave(guid=md.guid, unzipDirectory=extract(path),
+            f = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
                           modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
             f.instantiate()
             comps.append(f)
@@ -380,6 +369,9 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
         for f in comps:
             f.terminate()
             f.freeInstance()
+        import shutil
+        for _, unzipped in unpacked.values():
+            shutil.rmtree(unzipped, ignore_errors=True)
     out = np.empty(n_steps, dtype=[("time", float)] + [(fl, float) for fl in fields])
     out["time"] = np.arange(n_steps) * step
     for i, fl in enumerate(fields):
@@ -413,12 +405,13 @@ def recording_from_result(result) -> dict:
     }
 
 
-def write_recording(path, rec: dict) -> Path:
+def write_recording(path, rec: dict, columns=None) -> Path:
     path = Path(path)
+    columns = list(columns or RECORDING_COLUMNS)
     with path.open("w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(RECORDING_COLUMNS)
-        cols = [rec[c] for c in RECORDING_COLUMNS]
+        w.writerow(columns)
+        cols = [rec[c] for c in columns]
         for row in zip(*cols):
             w.writerow([f"{row[0]:.6f}"] + [f"{v:.6g}" for v in row[1:]])
     return path
@@ -457,17 +450,28 @@ class BenchRun:
     result: object = field(repr=False)
 
 
+MASTERS = ("lean", "fmpy")
+
+
 def run_bench(sc: Scenario, fmu_dir, out_dir=None, sensors: Sensors = Sensors(),
-              step: float = 1e-3, design: DriveDesign = None, progress=False) -> BenchRun:
-    """Build the SSP (written next to the results; fmpy's SSP master and libcosim run it as
-    is), simulate the same bench with the lean master ``run_fmus`` (about twice as fast, and
-    it sets String design parameters such as ``ring_rollers``), and (with ``out_dir``) write
-    recording, windows and plots."""
+              step: float = 1e-3, design: DriveDesign = None, master: str = "lean",
+              progress=False) -> BenchRun:
+    """Build the SSP, simulate it, and (with ``out_dir``) write recording, windows and plots.
+
+    ``master``: ``"lean"`` runs the SSP's components, connections and parameters in this
+    package's fixed-step Jacobi master (``run_fmus``: cached value references, direct FMI
+    calls; the same numbers as fmpy's SSP master, a test), ``"fmpy"`` in fmpy's SSP master."""
     parse_mode(sc.mode)
+    if master not in MASTERS:
+        raise ValueError(f"master = {master!r}: must be one of {', '.join(MASTERS)}")
     out = Path(out_dir) if out_dir else None
-    build_ssp((out or Path(fmu_dir)) / "TestBench.ssp", fmu_dir, sc, sensors, design)
-    result = run_fmus(fmu_dir, bench_parameters(sc, sensors, design), sc.stop_time, step,
-                      progress=progress)
+    if master == "fmpy" or out is not None:     # the SSP is an output, or what fmpy runs
+        ssp = build_ssp((out or Path(fmu_dir)) / "TestBench.ssp", fmu_dir, sc, sensors, design)
+    if master == "fmpy":
+        result = run_ssp(ssp, sc.stop_time, step)
+    else:
+        result = run_fmus(fmu_dir, bench_parameters(sc, sensors, design), sc.stop_time, step,
+                          progress=progress)
     rec = recording_from_result(result)
     windows = steady_windows(rec, sc, design or DriveDesign())
     run = BenchRun(sc, rec, windows, result)
@@ -487,19 +491,16 @@ def plot_bench(run: BenchRun, out: Path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     sc, rec, win = run.scenario, run.recording, run.windows
-    fig, axes = plt.subplots(3, 2, figsize=(11, 10))
-    t = rec["time_s"]
-    for col, (side, n, T) in enumerate((("input", "speed_in_rpm", "torque_in_Nm"),
-                                        ("output", "speed_out_rpm", "torque_out_Nm"))):
-        ax = axes[0, col]
-        ax.plot(t, rec[n], lw=0.6)
-        ax.set(ylabel=f"{side} speed / (r/min)",
-               title=f"{side} shaft, mode {sc.mode}, scenario {sc.name}")
-        ax = axes[1, col]              # torque on its own axes, in its own unit
-        ax.plot(t, rec[T], lw=0.6, color="C1")
-        ax.set(xlabel="time / s", ylabel=f"{side} torque / N*m")
-        ax.sharex(axes[0, col])
-    axes = axes[1:]
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
+    # speed and torque each on their own axis (a twin axis for the torque)
+    for ax, side, title in ((axes[0, 0], "in", f"input shaft, mode {sc.mode}, scenario {sc.name}"),
+                            (axes[0, 1], "out", "output shaft")):
+        ax.plot(rec["time_s"], rec[f"speed_{side}_rpm"], lw=0.6, color="C0")
+        ax.set(xlabel="time / s", ylabel=f"{side}put speed / (r/min)", title=title)
+        ax.yaxis.label.set_color("C0")
+        tx = ax.twinx()
+        tx.plot(rec["time_s"], rec[f"torque_{side}_Nm"], lw=0.6, color="C3")
+        tx.set_ylabel(f"{side}put torque / N*m", color="C3")
     if win:
         T = np.array([w["torque_in_Nm"] for w in win])
         n = np.array([w["speed_in_rpm"] for w in win])

@@ -215,8 +215,3 @@ def test_bench_progress_bar_on_a_terminal_only(tmp_path):
     r = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli"] + argv[:-1] + [str(tmp_path / "c")],
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0 and r.stderr == ""                   # not a terminal: no bar
-
-
-def test_efficiency_figure_at_the_bench_speeds():
-    from cyclo_fmu.paper import FIGURE_SPEEDS_RPM
-    assert FIGURE_SPEEDS_RPM == (1000.0, 1500.0, 2000.0, 2500.0, 2800.0)

@@ -1,12 +1,10 @@
 """FMI slave: induction motor on a frequency regulator (Kloss curve, setpoint ramp, inertia).
 
 It owns the rotor inertia (rotor, coupling, input transducer rotor), integrates it and outputs
-the speed (no direct feedthrough). Input ``tau_shaft`` is the torque the motor delivers into
-the shaft towards the load without the load's inertia (the reducer's ``tau_in_static``) and
-``J_load`` the load's inertia as seen at this shaft (the reducer's ``J_load``):
-(J + J_load) dw/dt = T_em(w, f) - tau_shaft. Output ``alpha`` is the mean acceleration over
-the last step, (w_end - w_start)/h, from the integrator's own state (the reducer uses it for the
-load's inertial torque; no co-simulation input is differentiated).
+the speed and its mean acceleration over the step (no direct feedthrough). In the bench the
+reducer reflects the output-side inertia here: ``J_load`` adds to J and ``tau_shaft`` is then the
+reducer's ``tau_in_static``. Input ``tau_shaft`` is the torque the motor delivers into
+the shaft towards the load (the reducer's ``tau_in``): J dw/dt = T_em(w, f) - tau_shaft.
 """
 from __future__ import annotations
 
@@ -15,7 +13,7 @@ import math
 from . import core
 from .base import Integer, Real, String, UnitSlave
 
-_SUBSTEP = 1e-4   # s; the rotor's mechanical time constant on the Kloss slope is ~5 ms
+_SUBSTEP = 2.5e-4   # s; a twentieth of the rotor's mechanical time constant on the Kloss slope (~5 ms)
 
 
 class InductionMotor(UnitSlave):
@@ -40,17 +38,14 @@ class InductionMotor(UnitSlave):
                        Integer)
         self.parameter("frequency_schedule", "", None, "instead of the series: setpoints "
                        "'t0 f0; t1 f1; ...' (s, Hz), each held until the next", String)
-        self.parameter("f_points", 0, None, "instead of the series (when frequency_schedule is "
-                       "empty): number of setpoints f_time_i, f_value_i used (0..8)", Integer)
-        for i in range(1, core.rig.MAX_POINTS + 1):
-            self.parameter(f"f_time_{i}", 0.0, "s", f"time of frequency setpoint {i}")
-            self.parameter(f"f_value_{i}", 0.0, "Hz", f"frequency setpoint {i}, held until the next")
+        self.schedule_parameters("Hz", "frequency")
         self.parameter("w_start", 0.0, "rad/s", "initial speed")
         self.input("tau_shaft", 0.0, "N.m", "torque the motor delivers into the shaft, without the "
                    "load's inertia (reducer tau_in_static)")
         self.input("J_load", 0.0, "kg.m2", "inertia of the load seen at the motor shaft (reducer "
                    "J_load), integrated here")
-        self.output("alpha", 0.0, "rad/s2", "mean shaft acceleration over the last step")
+        self.output("alpha", 0.0, "rad/s2", "mean shaft acceleration over the last step, from "
+                    "the integrator's own state")
         self.output("w", 0.0, "rad/s", "shaft speed")
         self.output("T_em", 0.0, "N.m", "electromagnetic torque")
         self.output("frequency", 0.0, "Hz", "stator frequency after the ramp")
@@ -72,25 +67,15 @@ class InductionMotor(UnitSlave):
                 raise ValueError(f"breakdown_ratio = {self.breakdown_ratio!r}: must exceed 1")
             if self.pole_pairs < 1:
                 raise ValueError(f"pole_pairs = {self.pole_pairs!r}: must be at least 1")
-            self._schedule = (core.rig.parse_schedule(self.frequency_schedule, "frequency_schedule")
-                              if self.frequency_schedule.strip() else core.rig.schedule_from_points(
-                                  self.f_points, self._points("f_time"), self._points("f_value"),
-                                  "f"))
+            self._schedule = self.schedule_from_parameters("frequency_schedule")
             if self.f_count < 1 or self.loads_per_frequency < 1:
                 raise ValueError("f_count and loads_per_frequency must be at least 1")
         except ValueError as exc:
             self.fail(f"invalid parameter: {exc}")
-        m = self._motor
-        # constants of the Kloss curve, computed once (not in every sub-step)
-        self._w_per_hz = 2 * math.pi / m.pole_pairs
-        self._dwk = m.breakdown_slip_speed
-        self._two_Tk = 2 * m.breakdown_ratio * m.rated_torque
+        self._torque = self._motor.torque_function()
         self.w = float(self.w_start)
         self.frequency = 0.0 if self.w == 0 else self.w * self.pole_pairs / (2 * math.pi)
         self._outputs()
-
-    def _points(self, prefix):
-        return [getattr(self, f"{prefix}_{i}") for i in range(1, core.rig.MAX_POINTS + 1)]
 
     def _setpoint(self, t):
         if self._schedule is not None:
@@ -109,22 +94,18 @@ class InductionMotor(UnitSlave):
             self.fail(f"J_load = {J_load!r}: input must not be negative")
         n = max(1, int(math.ceil(step_size / _SUBSTEP - 1e-9)))
         h = step_size / n
-        inv_J = 1.0 / (self._motor.inertia + J_load)
-        dstep = self._motor.ramp_rate * h
-        w_per_hz, dwk, two_Tk = self._w_per_hz, self._dwk, self._two_Tk
+        m, J = self._motor, self._motor.inertia + J_load
+        torque = self._torque
         w0 = w = self.w
         f = self.frequency
-        target = self._setpoint(current_time)
-        # one setpoint for the whole step unless a setpoint change falls inside it
-        constant = self._setpoint(current_time + step_size * (1 - 1e-9)) == target
+        df = m.ramp_rate * h
+        # the setpoint changes at most at the series' or schedule's steps: evaluated at the
+        # sub-steps only when it differs between the step's ends
+        s0, s1 = self._setpoint(current_time), self._setpoint(current_time + step_size)
         for k in range(n):
-            if not constant:
-                target = self._setpoint(current_time + k * h)
-            d = target - f
-            f = target if -dstep <= d <= dstep else (f + dstep if d > 0 else f - dstep)
-            dw = w_per_hz * f - w            # slip speed; Kloss torque as in rig.InductionMotor
-            T = 0.0 if dw == 0.0 else two_Tk / (dw / dwk + dwk / dw)
-            w += h * (T - tau) * inv_J
+            target = s0 if s0 == s1 else self._setpoint(current_time + k * h)
+            f = target if abs(target - f) <= df else f + math.copysign(df, target - f)
+            w += h * (torque(w, f) - tau) / J
         self.w, self.frequency = w, f
         self.alpha = (w - w0) / step_size
         self._outputs()

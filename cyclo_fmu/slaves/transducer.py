@@ -27,7 +27,6 @@ class Transducer(UnitSlave):
         self.input("x", 0.0, "1", "true value")
         self.output("y", 0.0, "1", "reading", depends=("x",))
         self._filtered = None
-        self._dt = self._a = None
 
     def exit_initialization_mode(self):
         try:
@@ -43,6 +42,7 @@ class Transducer(UnitSlave):
                                           self.noise, self.resolution)
         self._rng = random.Random(int(self.seed))
         self._filtered = self.scale * self.x
+        self._dt, self._a = None, 0.0
         self._read()
 
     def _read(self):
@@ -55,9 +55,9 @@ class Transducer(UnitSlave):
         x = self.x
         if not math.isfinite(x):
             self.require_finite(x=x)
-        if step_size != self._dt:                      # the factor once per step size
-            self._dt, self._a = step_size, self._model.filter_factor(step_size)
-        self._filtered = self._model.filter_step(self._filtered, self.scale * x, step_size,
-                                                 self._a)
+        if step_size != self._dt:        # the filter coefficient of this step size, once
+            self._dt, self._a = step_size, self._model.filter_coefficient(step_size)
+        a = self._a
+        self._filtered = a * self._filtered + (1 - a) * self.scale * x
         self._read()
         return True
