@@ -65,7 +65,7 @@ def test_initial_unknowns_name_parameters(fmus):
     outs = {u.variable.name: {d.name for d in (u.dependencies or [])} for u in md.outputs}
     assert {"mode", "mode_number", "mu_boundary", "w_in", "tau_out"} <= init["tau_in"]
     assert "input_inertia" not in init["tau_in"]          # no step yet, no acceleration
-    assert outs["tau_in"] == {"w_in", "tau_out"}          # Step Mode: the inputs only
+    assert outs["tau_in"] == {"w_in", "tau_out", "alpha_in"}   # Step Mode: the inputs only
     init_m = {u.variable.name: {d.name for d in (u.dependencies or [])}
               for u in read_model_description(fmus["InductionMotor"]).initialUnknowns}
     assert "w_start" in init_m["w"] and "J" not in init_m["w"]

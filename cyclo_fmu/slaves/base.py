@@ -54,6 +54,7 @@ QUANTITIES = {"rad/s": "AngularVelocity", "N.m": "Torque", "W": "Power", "m": "L
 # SI base-unit exponents of the units we use (FMI 2.0 BaseUnit attributes)
 UNITS = {
     "rad/s": dict(rad=1, s=-1),
+    "rad/s2": dict(rad=1, s=-2),
     "N.m": dict(kg=1, m=2, s=-2),
     "W": dict(kg=1, m=2, s=-3),
     "m": dict(m=1),

@@ -7,7 +7,9 @@ transducer's rotor) is integrated here with its own sub-steps against the felt b
 friction T_set tanh(w_drum/w_reg). The twist is the integral of the speed the FMU receives, so
 no co-simulation input is differentiated: an earlier version took J_out dw/dt from a backward
 difference of the input speed, which made a +-1.5 N*m oscillation that moved with the
-communication step.
+communication step. With J_out = 0 (the bench's default: the reducer carries the output
+inertia and reflects it to the motor's integrator) there is no drum and no coupling: the felt
+brake's friction acts on the shaft, T_set tanh(w/w_reg).
 """
 from __future__ import annotations
 
@@ -59,10 +61,12 @@ class FeltBrake(UnitSlave):
                 raise ValueError(f"T_count = {self.T_count!r}: must be at least 1")
             if min(self.T_first, self.T_last) < 0:
                 raise ValueError("T_first, T_last: a brake torque setpoint must not be negative")
-            for name in ("w_reg", "J_out", "k_coupling", "zeta_coupling"):
+            for name in ("w_reg", "k_coupling", "zeta_coupling"):
                 v = getattr(self, name)
                 if not (math.isfinite(v) and v > 0):
                     raise ValueError(f"{name} = {v!r}: must be positive")
+            if not (math.isfinite(self.J_out) and self.J_out >= 0):
+                raise ValueError(f"J_out = {self.J_out!r}: must not be negative")
             if self._schedule and any(v < 0 for _, v in self._schedule):
                 raise ValueError("torque schedule: a brake torque setpoint must not be negative")
         except ValueError as exc:
@@ -87,7 +91,11 @@ class FeltBrake(UnitSlave):
         if not math.isfinite(w):
             self.require_finite(w=w)
         setpoint = self._setpoint(t)
-        if dt > 0:
+        if self.J_out == 0:
+            # no drum here (the bench gives the output inertia to the reducer, which reflects
+            # it to the motor's integrator): the friction acts on the shaft directly
+            Ts = Tb = core.rig.felt_brake_torque(w, setpoint, self.w_reg)
+        elif dt > 0:
             self._twist, self._w_drum, Ts, Tb = core.rig.coupled_drum_step(
                 self._twist, self._w_drum, w, dt, setpoint, self.w_reg, self.J_out,
                 self.k_coupling, self._c)

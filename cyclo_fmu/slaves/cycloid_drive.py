@@ -11,6 +11,17 @@ power into the reducer at a shaft is tau*w):
            eta efficiency of the actual power flow, locked (self-locking back-drive holds)
 Forward motoring into a brake: tau_in*w_in > 0, tau_out*w_out < 0.
 
+Output-side inertia (``J_out``, default 0): the inertia on the driven shaft (brake drum,
+coupling, output transducer) is integrated by the driving side's integrator, not differentiated
+here. With the driving shaft's mean acceleration ``alpha_in`` of the last step (from the motor's
+integrator), the load on the driven shaft is tau_out - J_out r alpha_in (r = w_out/w_in), and
+all losses and ``tau_in`` are at that total torque. ``tau_in_static`` is the driving torque
+without the inertial part and ``J_load`` the output inertia as the driving shaft feels it
+through the reducer's efficiency, (tau_in(tau_out - J_out r a) - tau_in(tau_out))/a, a secant
+over the last step's acceleration a (at least _ALPHA_MIN): J_out r^2/eta forward, J_out r^2 eta'
+when the load back-drives.
+The motor integrates (J_motor + J_load) dw/dt = T_em - tau_in_static.
+
 Parameters: ``mode`` (12, 21, 1S, S1, 2S, S2) and the design values a system engineer varies
 (defaults: the paper's test drive). At initialization the full physics core is solved on a grid
 (model_core.lossmap.ModeMap); a step interpolates it (``exact = false``) or solves the full core
@@ -83,6 +94,11 @@ PARAMETER_LIMITS = dict(
     mode_number=(0, 6), map_torque_max=(0.0, None), map_speed_max=(0.0, None))
 
 OUTPUT_LOSSES = ("PL1", "PL2", "PL3", "PL5", "PL6")
+#: rad/s^2; below this driving-shaft acceleration J_load is the secant over this value (the
+#: inertial torque it stands for, J_out r * 1 rad/s^2, is below the torque transducers' noise)
+_ALPHA_MIN = 1.0
+#: relative change of w_in and tau_out within which a steady step reuses the last J_load
+_SLOPE_REUSE = 1e-3
 
 
 class CycloidDrive(UnitSlave):
@@ -105,12 +121,18 @@ class CycloidDrive(UnitSlave):
                            display="um" if name == "pin_roughness" else None)
         self.parameter("exact", False, None, "solve the full model every step instead of "
                        "interpolating the map built at initialization", Boolean)
+        self.parameter("J_out", 0.0, "kg.m2", "inertia on the driven shaft, reflected to the "
+                       "driving side's integrator (see J_load)", min=0.0)
         self.parameter("map_torque_max", 30.0, "N.m", "largest |tau_out| in the loss map", min=0.0)
         self.parameter("map_speed_max", 350.0, "rad/s", "largest |w_in| in the loss map", min=0.0)
         self.input("w_in", 0.0, "rad/s", "speed of the driving shaft")
         self.input("tau_out", 0.0, "N.m", "torque the load applies on the driven shaft")
+        self.input("alpha_in", 0.0, "rad/s2", "mean acceleration of the driving shaft over the "
+                   "last step (from its integrator); used with J_out")
         self.output("w_out", 0.0, "rad/s", "speed of the driven shaft", depends=("w_in",))
-        both = ("w_in", "tau_out")
+        # alpha_in acts through J_out (0 by default); declared, so that the dependencies hold
+        # for every parameter value
+        both = ("w_in", "tau_out", "alpha_in")
         self.output("tau_in", 0.0, "N.m", "torque the driver applies on the driving shaft",
                     depends=both)
         self.output("tau_housing", 0.0, "N.m", "torque the support applies on the held shaft",
@@ -126,12 +148,20 @@ class CycloidDrive(UnitSlave):
                     quantity="Efficiency", display="%")
         self.output("locked", False, None, "self-locking back-drive holds: the driving shaft "
                     "must push although the load drives", depends=both, kind=Boolean)
+        self.output("tau_in_static", 0.0, "N.m", "tau_in without the torque that accelerates "
+                    "J_out (for the driving side's integrator)", depends=both)
+        self.output("J_load", 0.0, "kg.m2", "J_out as the driving shaft feels it through the "
+                    "reducer", depends=both)
+        self.output("torque_out", 0.0, "N.m", "torque the driven shaft delivers to the load side, "
+                    "J_out's inertial torque included (what a transducer there reads)",
+                    depends=both)
         self.output("P_extra", 0.0, "W", "power of the physics beyond the paper (drag, Stribeck, "
                     "inertia, ripple, warm-up) at the driving shaft", depends=both)
         self.output("P_stored", 0.0, "W", "power into stored energy at the driving shaft: "
                     "kinetic energy of input_inertia and the ripples' zero-mean exchange (part "
                     "of P_extra, not a loss)", depends=both)
         self._theta = 0.0
+        self._slope_key = None
         self._w_last = None
         self._map = None
         self._design = None
@@ -170,6 +200,8 @@ class CycloidDrive(UnitSlave):
                 v = getattr(self, name)
                 if not (math.isfinite(v) and v > 0):
                     raise core.CycloidInputError(name, v, "must be a positive number")
+            if not (math.isfinite(self.J_out) and self.J_out >= 0):
+                raise core.CycloidInputError("J_out", self.J_out, "must not be negative")
             self._map = None if self.exact else core.lossmap.ModeMap(
                 self._design, self._mode, self.map_torque_max, self.map_speed_max)
             ex = self._design.extra
@@ -200,9 +232,47 @@ class CycloidDrive(UnitSlave):
 
     # -- physics ------------------------------------------------------------------------------
     def _update(self, t=0.0, dt=0.0):
-        w_in, tau_out = self.w_in, self.tau_out
-        if not (math.isfinite(w_in) and math.isfinite(tau_out)):
-            self.require_finite(w_in=w_in, tau_out=tau_out)
+        w_in, tau_ext, alpha = self.w_in, self.tau_out, self.alpha_in
+        if not (math.isfinite(w_in) and math.isfinite(tau_ext) and math.isfinite(alpha)):
+            self.require_finite(w_in=w_in, tau_out=tau_ext, alpha_in=alpha)
+        J_r = self.J_out * self._ratio_out
+        tau_out = tau_ext - J_r * alpha          # the load including the output inertia
+        self._update_at(t, dt, w_in, tau_out)
+        self.torque_out = -tau_out
+        if J_r == 0.0:
+            self.tau_in_static, self.J_load = self.tau_in, 0.0
+            return
+        gear = self._tau_in_gear
+        static = self._gear_torque(w_in, tau_ext)
+        # the slope over a small acceleration of the last step's sign: which side of the
+        # efficiency's kink (forward or back-driven) the inertia is on, not how large the last
+        # acceleration was (a secant over it would feed it back with one step's delay)
+        if abs(alpha) > _ALPHA_MIN:
+            J_load = (gear - static) / alpha
+        else:
+            a = _ALPHA_MIN if alpha >= 0 else -_ALPHA_MIN
+            key = self._slope_key
+            if (key is not None and key[0] == a and abs(w_in - key[1]) <= _SLOPE_REUSE * abs(key[1])
+                    and abs(tau_ext - key[2]) <= _SLOPE_REUSE * abs(key[2])):
+                J_load = key[3]          # steady: the slope of the last step still holds
+            else:
+                J_load = (self._gear_torque(w_in, tau_ext - J_r * a) - static) / a
+                self._slope_key = (a, w_in, tau_ext, J_load)
+        if not (math.isfinite(J_load) and J_load > 0):    # standstill in the exact core
+            J_load = J_r * self._ratio_out
+        self.J_load = J_load
+        self.tau_in_static = self.tau_in - (gear - static)
+
+    def _gear_torque(self, w_in, tau_out):
+        """Driving-shaft torque of the gear alone (map or exact core) at a load torque."""
+        if self._map is not None:
+            return self._map.solve(w_in, tau_out)[1][self._shaft_index[0]]
+        if w_in == 0 or tau_out == 0:
+            return 0.0
+        op = core.operating_point(self._design, self._mode, w_in, T_out=tau_out)
+        return float(op.torques[self._mode[0]]) - float(self._design.extra.steady_torque(w_in))
+
+    def _update_at(self, t, dt, w_in, tau_out):
         if self._map is not None:
             speeds, torques, losses, eta, eta0, locked, forward = self._map.solve(w_in, tau_out)
             # below the grid (|w_in| < map_speed_max/1000: start-up, standstill) the edge values

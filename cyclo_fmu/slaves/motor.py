@@ -1,7 +1,9 @@
 """FMI slave: induction motor on a frequency regulator (Kloss curve, setpoint ramp, inertia).
 
 It owns the rotor inertia (rotor, coupling, input transducer rotor), integrates it and outputs
-the speed (no direct feedthrough). Input ``tau_shaft`` is the torque the motor delivers into
+the speed and its mean acceleration over the step (no direct feedthrough). In the bench the
+reducer reflects the output-side inertia here: ``J_load`` adds to J and ``tau_shaft`` is then the
+reducer's ``tau_in_static``. Input ``tau_shaft`` is the torque the motor delivers into
 the shaft towards the load (the reducer's ``tau_in``): J dw/dt = T_em(w, f) - tau_shaft.
 """
 from __future__ import annotations
@@ -38,7 +40,12 @@ class InductionMotor(UnitSlave):
                        "'t0 f0; t1 f1; ...' (s, Hz), each held until the next", String)
         self.schedule_parameters("Hz", "frequency")
         self.parameter("w_start", 0.0, "rad/s", "initial speed")
-        self.input("tau_shaft", 0.0, "N.m", "torque the motor delivers into the shaft (reducer tau_in)")
+        self.input("tau_shaft", 0.0, "N.m", "torque the motor delivers into the shaft, without the "
+                   "load's inertia (reducer tau_in_static)")
+        self.input("J_load", 0.0, "kg.m2", "inertia of the load seen at the motor shaft (reducer "
+                   "J_load), integrated here")
+        self.output("alpha", 0.0, "rad/s2", "mean shaft acceleration over the last step, from "
+                    "the integrator's own state")
         self.output("w", 0.0, "rad/s", "shaft speed")
         self.output("T_em", 0.0, "N.m", "electromagnetic torque")
         self.output("frequency", 0.0, "Hz", "stator frequency after the ramp")
@@ -92,14 +99,16 @@ class InductionMotor(UnitSlave):
         self.P_mech = self.T_em * self.w
 
     def do_step(self, current_time, step_size):
-        tau = self.tau_shaft
-        if not math.isfinite(tau):
-            self.require_finite(tau_shaft=tau)
+        tau, J_load = self.tau_shaft, self.J_load
+        if not (math.isfinite(tau) and math.isfinite(J_load) and J_load >= 0):
+            self.require_finite(tau_shaft=tau, J_load=J_load)
+            self.fail(f"J_load = {J_load!r}: input must not be negative")
         n = max(1, int(math.ceil(step_size / _SUBSTEP - 1e-9)))
         h = step_size / n
-        m, J = self._motor, self._motor.inertia
+        m, J = self._motor, self._motor.inertia + J_load
         torque = self._torque
-        w, f = self.w, self.frequency
+        w0 = w = self.w
+        f = self.frequency
         df = m.ramp_rate * h
         # the setpoint changes at most at the series' or schedule's steps: evaluated at the
         # sub-steps only when it differs between the step's ends
@@ -109,5 +118,6 @@ class InductionMotor(UnitSlave):
             f = target if abs(target - f) <= df else f + math.copysign(df, target - f)
             w += h * (torque(w, f) - tau) / J
         self.w, self.frequency = w, f
+        self.alpha = (w - w0) / step_size
         self._outputs()
         return True
