@@ -49,7 +49,8 @@ DISPLAY_UNITS = {
 QUANTITIES = {"rad/s": "AngularVelocity", "N.m": "Torque", "W": "Power", "m": "Length",
               "m2/s": "KinematicViscosity", "kg/m3": "Density", "kg.m2": "MomentOfInertia",
               "s": "Time", "rad": "Angle", "Hz": "Frequency", "1": "DimensionlessRatio",
-              "N.m.s/rad": "RotationalDampingConstant", "N.m/rad": "RotationalSpringConstant"}
+              "N.m.s/rad": "RotationalDampingConstant", "N.m/rad": "RotationalSpringConstant",
+              "rad/s2": "AngularAcceleration"}
 
 # SI base-unit exponents of the units we use (FMI 2.0 BaseUnit attributes)
 UNITS = {
