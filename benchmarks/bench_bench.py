@@ -1,27 +1,70 @@
-"""Speed of the bench: the paper scenario (48 s simulated, 1 ms steps, 7 FMUs in fmpy's SSP
-master) in simulated seconds per wall-clock second.
+"""Speed of the bench: the paper scenario (48 s simulated, 7 FMUs) in simulated seconds per
+wall-clock second, next to the floor of the same master stepping seven trivial pythonfmu FMUs
+with the bench's connectors (no physics: do_step returns), measured in the same run.
+
+Rows: the lean master behind ``run_bench`` (``run_fmus``) at 1 ms, fmpy's SSP master at 1 ms
+(the SSP file as written), and the lean master at the step chosen by the convergence check
+(``bench.steady_step``). Target (issue 9): the paper scenario at 1 ms at least 20x real time.
 Run: python benchmarks/bench_bench.py
 """
 import tempfile
 import time
+from pathlib import Path
 
-from cyclo_fmu.bench import build_ssp, paper_scenario, run_ssp
+from cyclo_fmu.bench import (COMPONENTS, Sensors, bench_parameters, build_ssp, paper_scenario,
+                             run_fmus, run_ssp, steady_step)
 from cyclo_fmu.fmu_build import SLAVES, build_fmu
 
 
+def trivial_fmus(dest: Path):
+    """One trivial pythonfmu FMU per bench FMU, with the same connector names."""
+    from pythonfmu.builder import FmuBuilder
+    for fmu in sorted({f for f, _ in COMPONENTS.values()}):
+        cons = next(c for f, c in COMPONENTS.values() if f == fmu)
+        src = ["from pythonfmu import Fmi2Causality, Fmi2Slave, Real", "", "",
+               f"class {fmu}(Fmi2Slave):", "    def __init__(self, **kwargs):",
+               "        super().__init__(**kwargs)"]
+        for c, k in cons:
+            src += [f"        self.{c} = 0.0",
+                    f"        self.register_variable(Real({c!r}, causality=Fmi2Causality.{k}))"]
+        src += ["", "    def do_step(self, t, dt):", "        return True", ""]
+        script = dest / f"{fmu}.py"
+        script.write_text("\n".join(src))
+        FmuBuilder.build_FMU(script, dest=dest, needsExecutionTool="false")
+
+
+def timed(fn):
+    t = time.perf_counter()
+    fn()
+    return time.perf_counter() - t
+
+
 def main():
+    sc = paper_scenario("S1")
     with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        (tmp / "real").mkdir()
+        (tmp / "trivial").mkdir()
         for name in SLAVES:
-            build_fmu(name, tmp)
-        for mode in ("S1", "S2"):
-            sc = paper_scenario(mode)
-            ssp = build_ssp(f"{tmp}/TestBench_{mode}.ssp", tmp, sc)
-            t = time.perf_counter()
-            res = run_ssp(ssp, sc.stop_time)
-            wall = time.perf_counter() - t
-            print(f"paper scenario {mode}: {sc.stop_time:.0f} s simulated, {len(res)} steps of 1 ms, "
-                  f"{wall:.1f} s wall -> {sc.stop_time / wall:.1f} simulated s per wall s "
-                  f"({wall / len(res) * 1e6:.0f} us per co-simulation step)")
+            build_fmu(name, tmp / "real")
+        trivial_fmus(tmp / "trivial")
+        params = bench_parameters(sc, Sensors())
+        floor = timed(lambda: run_fmus(tmp / "trivial", {}, sc.stop_time, 1e-3))
+        lean = timed(lambda: run_fmus(tmp / "real", params, sc.stop_time, 1e-3))
+        ssp = build_ssp(tmp / "TestBench.ssp", tmp / "real", sc)
+        fmpy_ssp = timed(lambda: run_ssp(ssp, sc.stop_time, 1e-3))
+        h = steady_step()
+        coarse = timed(lambda: run_fmus(tmp / "real", params, sc.stop_time, h))
+        n = sc.stop_time / 1e-3
+        print(f"paper scenario S1, {sc.stop_time:.0f} s simulated (measured under the machine's "
+              "current load):")
+        for label, wall, steps in (
+                ("7 trivial pythonfmu FMUs, lean master, 1 ms (floor)", floor, n),
+                ("bench, lean master (run_bench), 1 ms", lean, n),
+                ("bench, fmpy's SSP master, 1 ms", fmpy_ssp, n),
+                (f"bench, lean master, {h * 1e3:g} ms (steady_step)", coarse, sc.stop_time / h)):
+            print(f"  {label:<55} {wall:6.1f} s wall  {sc.stop_time / wall:6.1f}x real time  "
+                  f"{wall / steps * 1e6:6.0f} us per step")
 
 
 if __name__ == "__main__":

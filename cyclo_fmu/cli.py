@@ -9,10 +9,7 @@ import argparse
 import contextlib
 import json
 import math
-import os
-import shutil
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -37,96 +34,10 @@ def _number(name):
     return conv
 
 
-# -- shared robustness helpers: every command validates its outputs up front and writes them so
-# that a failure leaves nothing half-written --------------------------------------------------
-
-def _nearest_existing(path: Path) -> Path:
-    p = path
-    while not p.exists() and p != p.parent:
-        p = p.parent
-    return p
-
-
-def _output_dir(field: str, path, create: bool = True) -> Path:
-    """Check an output folder before any work: it may exist (a folder, writable) or be created
-    with its missing parents; an ancestor that is a file, or an unwritable one, is an error
-    naming ``field`` and the path. Returns the folder (created when ``create``)."""
-    p = Path(path)
-    if p.exists() and not p.is_dir():
-        raise CycloidInputError(field, str(path), "is a file, not a folder")
-    base = _nearest_existing(p)
-    if not base.is_dir():
-        raise CycloidInputError(field, str(path), f"{base} is a file, not a folder")
-    if not os.access(base, os.W_OK | os.X_OK):
-        raise CycloidInputError(field, str(path), f"{base} is not writable")
-    missing = [q for q in [p, *p.parents] if not q.exists()]
-    try:   # a real probe: permissions alone do not tell (root, read-only or virtual file systems)
-        p.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=p):
-            pass
-    except OSError as exc:
-        raise CycloidInputError(field, str(path), f"cannot be written ({exc.strerror})") from None
-    finally:
-        if not create:
-            for q in missing:
-                with contextlib.suppress(OSError):
-                    q.rmdir()
-    return p
-
-
-def _output_file(field: str, path) -> Path:
-    """Check an output file before any work: its folder must exist and be writable, and the
-    path must not be a folder."""
-    p = Path(path)
-    if p.is_dir():
-        raise CycloidInputError(field, str(path), "is a folder, not a file")
-    parent = p.parent
-    if not parent.exists():
-        raise CycloidInputError(field, str(path), f"folder {parent} does not exist")
-    if not parent.is_dir():
-        raise CycloidInputError(field, str(path), f"{parent} is a file, not a folder")
-    if not os.access(parent, os.W_OK | os.X_OK) or (p.exists() and not os.access(p, os.W_OK)):
-        raise CycloidInputError(field, str(path), "is not writable")
-    try:
-        with tempfile.TemporaryFile(dir=parent):
-            pass
-    except OSError as exc:
-        raise CycloidInputError(field, str(path), f"cannot be written ({exc.strerror})") from None
-    return p
-
-
-@contextlib.contextmanager
-def _staged_dir(field: str, path):
-    """Yield the output folder (validated, created); if the command fails, remove what it added:
-    the folder itself (and parents) when it did not exist, else the new entries."""
-    p = Path(path)
-    created = [] if p.exists() else [q for q in [p, *p.parents] if not q.exists()]
-    before = set(p.iterdir()) if p.exists() and p.is_dir() else set()
-    _output_dir(field, p, create=True)
-    try:
-        yield p
-    except BaseException:
-        if created:
-            shutil.rmtree(created[-1], ignore_errors=True)
-        else:
-            for q in set(p.iterdir()) - before:
-                shutil.rmtree(q, ignore_errors=True) if q.is_dir() else q.unlink(missing_ok=True)
-        raise
-
-
-@contextlib.contextmanager
-def _staged_file(field: str, path):
-    """Yield a temporary path next to the output file (validated); moved onto it on success,
-    removed on failure."""
-    p = _output_file(field, path)
-    tmp = p.with_name(f".{p.name}.partial-{os.getpid()}{p.suffix}")
-    try:
-        yield tmp
-        if tmp.exists():
-            os.replace(tmp, p)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+# -- shared robustness helpers (cyclo_fmu.outputs): every command validates its outputs up front
+# and writes them so that a failure leaves nothing half-written
+from .outputs import (output_dir as _output_dir, output_file as _output_file,  # noqa: E402
+                      staged_dir as _staged_dir, staged_file as _staged_file)
 
 
 def _check_seed(seed):
@@ -256,6 +167,35 @@ def cmd_paper(args) -> int:
         return run_paper_comparison(design, out, args.json)
 
 
+def cmd_stiffness(args) -> int:
+    from model_core import stiffness as st
+    design = _load_design(args.design)
+    rated = args.rated_torque
+    if rated is not None and not (math.isfinite(rated) and rated > 0):
+        raise CycloidInputError("rated-torque", rated, "must be a positive number of N*m")
+    if args.out:
+        _output_dir("out", args.out, create=False)
+    values = st.catalogue_values(design, rated)
+    if args.out:
+        from .plots import plot_stiffness
+        with _staged_dir("out", args.out) as out:
+            plot_stiffness(design, values["rated_torque_Nm"], out / "stiffness.png")
+            (out / "stiffness.json").write_text(json.dumps(values, indent=2))
+    if args.json:
+        print(json.dumps(values, indent=2))
+        return 0
+    print(f"Torsional behaviour with the input locked (contact model; rated torque "
+          f"{values['rated_torque_Nm']:.3g} N*m)")
+    print(f"  torsional rigidity (50-100 % rated)   {values['torsional_rigidity_Nm_per_arcmin']:.4g} N*m/arcmin")
+    print(f"  lost motion (+-3 % rated)             {values['lost_motion_arcmin']:.4g} arcmin")
+    print(f"  backlash                              {values['backlash_arcmin']:.4g} arcmin")
+    print(f"  twist at rated torque                 {values['twist_at_rated_arcmin']:.4g} arcmin")
+    print(f"  hysteresis loss (loop width at 0)     {values['hysteresis_loss_arcmin']:.4g} arcmin")
+    if args.out:
+        print(f"  figure: {Path(args.out) / 'stiffness.png'}")
+    return 0
+
+
 def cmd_build(args) -> int:
     from .fmu_build import ALL_FMUS, build_any
     for name in args.names:
@@ -268,6 +208,37 @@ def cmd_build(args) -> int:
     return 0
 
 
+def cmd_export_modelica(args) -> int:
+    from .modelica_export import export_modelica
+    a, b, _ = parse_mode(args.mode)
+    design = _load_design(args.design)
+    with _staged_dir("out", args.out) as out:
+        path = export_modelica(a + b, out, design,
+                               design_name=Path(args.design).name if args.design else None)
+    print(Path(args.out) / path.name)
+    return 0
+
+
+def _progress_on(args) -> bool:
+    """Progress bars (tqdm, stderr) unless --quiet or stderr is not a terminal."""
+    return not getattr(args, "quiet", False) and sys.stderr.isatty()
+
+
+def _bench_step(text) -> float:
+    """--step in ms ('steady': bench.STEADY_STEP) -> s; one line naming the field if bad."""
+    from .bench import STEADY_STEP
+    if str(text).strip().lower() == "steady":
+        return STEADY_STEP
+    try:
+        ms = float(text)
+    except ValueError:
+        ms = float("nan")
+    if not (math.isfinite(ms) and 0.01 <= ms <= 100):
+        raise CycloidInputError("step", text, "must be a step in ms from 0.01 to 100, or "
+                                "'steady'")
+    return ms * 1e-3
+
+
 def cmd_bench(args) -> int:
     from .bench import Sensors, run_bench, scenario
     from .fmu_build import SLAVES, build_fmu
@@ -276,6 +247,7 @@ def cmd_bench(args) -> int:
         raise CycloidInputError("mode", args.mode, "the bench drives the eccentric shaft S: "
                                 "S1 or S2")
     _check_seed(args.seed)
+    step = _bench_step(args.step)
     try:
         sc = scenario(args.scenario, mode)
     except ValueError as exc:
@@ -288,7 +260,7 @@ def cmd_bench(args) -> int:
             build_fmu(name, fmu_dir)
         try:
             run = run_bench(sc, fmu_dir, out, Sensors(ideal=args.ideal_sensors, seed=args.seed),
-                            design=design)
+                            step=step, design=design, progress=_progress_on(args))
         except CycloidInputError:
             raise
         except ValueError as exc:
@@ -306,8 +278,16 @@ def cmd_bench(args) -> int:
 def cmd_synth(args) -> int:
     from .synth import PLANS, SIZES, synthesize, write_synth  # noqa: F401
     from model_core.effects import EFFECTS
-    if args.effect not in EFFECTS:
-        raise CycloidInputError("effect", args.effect, f"must be one of {', '.join(EFFECTS)}")
+    effects = [e.strip() for e in args.effect.split(",")]
+    for e in effects:
+        if e not in EFFECTS:
+            raise CycloidInputError("effect", e, f"must be one of {', '.join(EFFECTS)} (several "
+                                    "separated by commas)")
+    if len(set(effects)) != len(effects):
+        raise CycloidInputError("effect", args.effect, "names an effect twice")
+    rise = args.temperature_rise
+    if rise is not None and not (math.isfinite(rise) and -50.0 <= rise <= 150.0):
+        raise CycloidInputError("temperature-rise", rise, "must lie between -50 and 150 K")
     if args.size not in SIZES:
         raise CycloidInputError("size", args.size, f"must be one of {', '.join(SIZES)}")
     mode = "".join(parse_mode(args.mode)[:2])
@@ -324,20 +304,32 @@ def cmd_synth(args) -> int:
     _output_file("out", args.out)
     if truth:
         _output_file("truth", truth)
-    rec = synthesize(args.effect, args.seed, mode, args.size, plan=args.plan, engine=args.engine)
+    if args.engine == "bench" and (len(effects) > 1 or rise is not None):
+        raise CycloidInputError("engine", args.engine, "hides exactly one effect and writes no "
+                                "temperature column; use --engine fast")
+    from tqdm import tqdm
+    bar = tqdm(total=2, desc="synth", unit="stage", disable=not _progress_on(args), leave=False)
+    rec = synthesize(effects[0] if len(effects) == 1 else effects, args.seed, mode, args.size,
+                     plan=args.plan, engine=args.engine, temperature_rise=rise,
+                     progress=_progress_on(args))
+    bar.update()
+    bar.set_description("synth: writing")
     with _staged_file("out", args.out) as tmp, \
             (_staged_file("truth", truth) if truth else contextlib.nullcontext()) as tmp_truth:
         write_synth(tmp, rec)
         if truth:
             Path(tmp_truth).write_text(json.dumps(rec["truth"], indent=2))
+    bar.update()
+    bar.close()
     path = Path(args.out)
     print(f"wrote {path}: {len(rec['time_s'])} samples, {rec['time_s'][-1]:.0f} s, mode {mode}")
     return 0
 
 
 def cmd_diagnose(args) -> int:
-    from .diagnosis import Diagnoser
+    from .diagnosis import DiagnosisError
     from .io import RecordingError, load_recording
+    from .sweep.batch import diagnose_recording
     design = _load_design(args.design)
     if args.mode.strip().lower() != "auto":
         parse_mode(args.mode)
@@ -346,31 +338,35 @@ def cmd_diagnose(args) -> int:
     try:
         rec, mode, checks = load_recording(args.recording, args.mode, design,
                                            columns=args.columns, units=args.units)
-    except RecordingError as exc:
+        d, result = diagnose_recording(rec, mode, checks, design, progress=True)
+    except (RecordingError, DiagnosisError) as exc:
         raise CycloidInputError("recording", args.recording, str(exc))
-    d = Diagnoser(design, mode).fit(rec)
-    result = d.to_json()
-    result["mode"] = mode
-    result["checks"] = list(checks)
-    result["read_notes"] = list(rec.notes)
-    result["exclusions"] = [{"reason": e.reason, "count": e.count,
-                             "first_time_s": _json_num(e.first_time)} for e in rec.exclusions]
-    result["excluded"] = result["exclusions"]
     if args.out:
-        _write_diagnosis(args.out, d, design, result)
+        from .diagnosis import write_diagnosis
+        write_diagnosis(args.out, d, design, result, source=str(args.recording))
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
-    for e in rec.exclusions:
-        print(f"excluded: {e.count} samples ({e.reason}) from t = {e.first_time:.3f} s")
+    for e in result["excluded"]:
+        print(f"excluded: {e['count']} {e.get('unit', 'samples')} ({e['reason']})")
     print(f"located: {d.located['statement']}")
-    print(f"effect: {d.effect} - {d.effect_description}")
-    for k, v in d.parameters.items():
-        ci = f" [{v['ci95'][0]:.4g}, {v['ci95'][1]:.4g}]" if v["ci95"] else ""
-        print(f"  {k} = {v['value']:.5g} {v['unit']}{ci}")
+    if not d.effects:
+        print("effects: none - " + EFFECTS_NONE)
+    for e in d.effects:
+        form = f"; fitted {e['form']}" if e.get("form", "").startswith("per") else ""
+        print(f"effect: {e['id']} - {e['description']} (explains {1e3 * e['explained_rms_Nm']:.2f}"
+              f" mN*m{form})")
+        for k, v in e["parameters"].items():
+            ci = f" [{v['ci95'][0]:.4g}, {v['ci95'][1]:.4g}]" if v["ci95"] else ""
+            print(f"  {k} = {v['value']:.5g} {v['unit']}{ci}")
+    if d.calibration and d.effect != "friction_miscalibrated":
+        v = d.calibration["mu_boundary_rel_error"]
+        print(f"friction level: mu_boundary off by {100 * v['value']:+.2f} % "
+              f"[{100 * v['ci95'][0]:+.2f}, {100 * v['ci95'][1]:+.2f}]")
     if d.indistinguishable_from:
         print(f"  cannot be told apart from: {', '.join(d.indistinguishable_from)}; "
               f"a run that would: {d.suggested_test}")
+    print(f"unexplained: {d.unexplained['statement']}")
     print(f"held-out RMSE of input torque: {1e3 * d.rmse_before_Nm:.2f} -> "
           f"{1e3 * d.rmse_after_Nm:.2f} mN*m; zeta_d (Eq. 31): {100 * d.zeta_d_before:.2f} -> "
           f"{100 * d.zeta_d_after:.2f} %; residual whiteness p: {d.whiteness_before:.2g} -> "
@@ -378,17 +374,9 @@ def cmd_diagnose(args) -> int:
     return 0
 
 
-def _write_diagnosis(out_dir, d, design, result):
-    """Write one diagnosis' folder (plots, diagnosis.json, design_updated.toml); removed again
-    if any of it fails."""
-    from model_core import design_to_toml
-    from .diagnosis import plot_diagnosis, updated_design
-    with _staged_dir("out", out_dir) as out:
-        plot_diagnosis(d, out)
-        (out / "diagnosis.json").write_text(json.dumps(result, indent=2))
-        fixed, notes = updated_design(design, d)
-        (out / "design_updated.toml").write_text(design_to_toml(fixed) + "".join(
-            f"# {n}\n" for n in notes))
+EFFECTS_NONE = "the model explains the data within its noise"
+
+
 
 
 def _workers(args):
@@ -407,7 +395,8 @@ def cmd_sweep(args) -> int:
         raise CycloidInputError("out", args.out, "must end in .parquet")
     _workers(args)
     n = len(spec.designs())
-    df = run_sweep(spec, scheduler=args.scheduler, workers=args.workers, serial=args.serial)
+    df = run_sweep(spec, scheduler=args.scheduler, workers=args.workers, serial=args.serial,
+                   progress=_progress_on(args))
     with _staged_file("out", args.out) as tmp:
         df.to_parquet(tmp, index=False)
     bad = int((df["error"] != "").sum())
@@ -434,7 +423,8 @@ def cmd_diagnose_batch(args) -> int:
     _workers(args)
     with _staged_dir("out", args.out) as out:
         df = diagnose_batch(folder, out, design, mode, columns=columns,
-                            scheduler=args.scheduler, workers=args.workers, serial=args.serial)
+                            scheduler=args.scheduler, workers=args.workers, serial=args.serial,
+                            progress=_progress_on(args))
     bad = int((df["error"] != "").sum())
     print(f"diagnose-batch: {len(df)} recordings -> {args.out}/summary.csv"
           f"{f'; {bad} could not be diagnosed (column error)' if bad else ''}")
@@ -468,6 +458,14 @@ def build_parser() -> argparse.ArgumentParser:
     pp.add_argument("--design", help="design file (TOML); default: the paper's test drive")
     pp.add_argument("--json", action="store_true", help="print one JSON object")
     pp.set_defaults(func=cmd_paper)
+    sp = sub.add_parser("stiffness", help="torsional rigidity, lost motion, backlash and the "
+                        "hysteresis curve from the contact model, as a catalogue states them")
+    sp.add_argument("--design", help="design file (TOML); default: the paper's test drive")
+    sp.add_argument("--rated-torque", type=_number("rated-torque"), help="rated output torque "
+                    "N*m the catalogue values refer to (default: the paper's motor times z1-1)")
+    sp.add_argument("--json", action="store_true", help="print one JSON object")
+    sp.add_argument("--out", help="folder for stiffness.png and stiffness.json")
+    sp.set_defaults(func=cmd_stiffness)
     bp = sub.add_parser("build", help="build the FMUs (dist/CycloidDrive.fmu, "
                         "dist/CycloidDriveNative.fmu, ...)")
     bp.add_argument("--dest", default="dist", help="output folder (default: dist)")
@@ -475,6 +473,12 @@ def build_parser() -> argparse.ArgumentParser:
                     "carries; default: the paper's test drive")
     bp.add_argument("names", nargs="*", help="FMUs to build (default: all)")
     bp.set_defaults(func=cmd_build)
+    mx = sub.add_parser("export-modelica", help="a Modelica package: the mode as MSL LossyGear "
+                        "with a loss table fitted to the core over the bench envelope")
+    mx.add_argument("--mode", required=True, help=f"operating mode, one of {', '.join(MODES)}")
+    mx.add_argument("--design", help="design file (TOML); default: the paper's test drive")
+    mx.add_argument("--out", required=True, help="output folder (writes CycloidDrive_<mode>.mo)")
+    mx.set_defaults(func=cmd_export_modelica)
     bench = sub.add_parser("bench", help="simulate the motor - reducer - brake test bench (SSP)")
     bench.add_argument("--mode", default="S1", help="operating mode of the reducer (S1, S2, ...)")
     bench.add_argument("--scenario", default="paper",
@@ -482,11 +486,18 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--out", default="out/bench", help="output folder (default: out/bench)")
     bench.add_argument("--ideal-sensors", action="store_true", help="switch transducer errors off")
     bench.add_argument("--seed", type=int, default=1, help="noise seed of the transducers")
+    bench.add_argument("--step", default="1", help="communication step in ms (default 1, the "
+                       "recording's rate); 'steady': the step the convergence check chose for "
+                       "steady scenarios (README)")
+    bench.add_argument("--quiet", action="store_true", help="no progress bar")
     bench.add_argument("--design", help="design file (TOML) for the reducer, e.g. the "
                        "design_updated.toml a diagnosis wrote")
     bench.set_defaults(func=cmd_bench, fmus=True)
     sy = sub.add_parser("synth", help="write a bench recording with one hidden effect")
-    sy.add_argument("--effect", required=True, help="hidden effect id (see model_core.effects)")
+    sy.add_argument("--effect", required=True, help="hidden effect id (see model_core.effects); "
+                    "several separated by commas")
+    sy.add_argument("--temperature-rise", type=float, help="K: the recording carries a "
+                    "temperature column warming by this much (warm-up effects follow it)")
     sy.add_argument("--seed", type=int, default=1)
     sy.add_argument("--mode", default="S1")
     sy.add_argument("--size", default="small", help="tiny (42 s), small (2 min), medium (5), "
@@ -497,6 +508,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "varied) or one_speed (load steps at 2000 r/min only)")
     sy.add_argument("--engine", default="fast", help="fast (the bench's components replayed "
                     "vectorised) or bench (the bench's FMUs co-simulated; slower)")
+    sy.add_argument("--quiet", action="store_true", help="no progress bar")
     sy.set_defaults(func=cmd_synth, fmus=True)
     dg = sub.add_parser("diagnose", help="locate, explain and model the mismatch of a recording")
     dg.add_argument("recording", help="recording CSV")
@@ -514,6 +526,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("spec", help="sweep spec (TOML; see examples/sweep.toml)")
     sw.add_argument("--out", required=True, help="results file (.parquet)")
     _cluster_options(sw)
+    sw.add_argument("--quiet", action="store_true", help="no progress bar")
     sw.set_defaults(func=cmd_sweep)
     db = sub.add_parser("diagnose-batch", help="diagnose every recording (*.csv, *.mf4) in a "
                         "folder (dask)")
@@ -524,6 +537,7 @@ def build_parser() -> argparse.ArgumentParser:
     db.add_argument("--design", help="design file (TOML)")
     db.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     _cluster_options(db)
+    db.add_argument("--quiet", action="store_true", help="no progress bar")
     db.set_defaults(func=cmd_diagnose_batch)
     return p
 
