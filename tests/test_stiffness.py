@@ -77,3 +77,14 @@ def test_cli_stiffness(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "stiffness", "--rated-torque",
                           "-3"], capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and "rated-torque" in bad.stderr
+
+
+def test_sweep_stiffness_columns_are_the_catalogue_values():
+    from cyclo_fmu.sweep import stiffness_columns
+    d = DriveDesign()
+    cols = stiffness_columns(d)
+    v = st.catalogue_values(d)
+    assert cols["torsional_rigidity_Nm_arcmin"] == pytest.approx(
+        v["torsional_rigidity_Nm_per_arcmin"], rel=1e-12)
+    assert cols["lost_motion_arcmin"] == pytest.approx(v["lost_motion_arcmin"], rel=1e-12)
+    assert cols["stiffness_Nm_rad"] == pytest.approx(v["stiffness_Nm_per_rad"], rel=1e-12)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from functools import partial
 
-from .evaluate import evaluate_chunk, evaluate_design, stiffness_hook  # noqa: F401
+from .evaluate import evaluate_chunk, evaluate_design, stiffness_columns, stiffness_hook  # noqa: F401
 from .spec import SweepSpec, load_spec  # noqa: F401
 from .cluster import client, require_dask, run_tasks  # noqa: F401
 

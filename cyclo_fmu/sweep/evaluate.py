@@ -12,7 +12,9 @@ operating-point detail of any design is one ``cyclo-fmu efficiency`` or
 - ``loss_<PLk>_W``: each partial loss averaged over the envelope [W], ``loss_share_<PLk>``: its
   share of the summed losses;
 - ``stiffness_Nm_rad``: tangent torsional stiffness at the rated torque (input locked,
-  ``model_core.stiffness``; see :func:`stiffness_hook`);
+  ``model_core.stiffness``; see :func:`stiffness_hook`), ``torsional_rigidity_Nm_arcmin``
+  (catalogue secant between 50 % and 100 % of the rated torque) and ``lost_motion_arcmin``
+  (catalogue twist band at +-3 % of the rated torque), see :func:`stiffness_columns`;
 - ``error``: empty, or the one-line reason the design could not be built or run (a row is
   never dropped).
 """
@@ -36,6 +38,25 @@ def stiffness_hook(design):
         return math.nan
 
 
+def stiffness_columns(design) -> dict:
+    """The sweep's stiffness columns for one design (NaN where the contact model cannot give
+    them): ``stiffness_Nm_rad`` (:func:`stiffness_hook`), ``torsional_rigidity_Nm_arcmin`` and
+    ``lost_motion_arcmin`` as a catalogue defines them (``model_core.stiffness``)."""
+    from model_core import stiffness as st
+    cols = {"stiffness_Nm_rad": stiffness_hook(design),
+            "torsional_rigidity_Nm_arcmin": math.nan, "lost_motion_arcmin": math.nan}
+    try:
+        TR = st.rated_torque(design)
+        a, b = st.RIGIDITY_SHARES
+        phi_a, phi_b, phi_lm = st.twist(design, [a * TR, b * TR, st.LOST_MOTION_SHARE * TR])
+        cols["torsional_rigidity_Nm_arcmin"] = float((b - a) * TR
+                                                     / ((phi_b - phi_a) * st.RAD_TO_ARCMIN))
+        cols["lost_motion_arcmin"] = float(2 * phi_lm * st.RAD_TO_ARCMIN)
+    except (ValueError, FloatingPointError, ZeroDivisionError):
+        pass
+    return cols
+
+
 def evaluate_design(spec, design_id: int, values: dict) -> list:
     """Rows (one per mode) for one design of ``spec``."""
     rows = []
@@ -44,10 +65,10 @@ def evaluate_design(spec, design_id: int, values: dict) -> list:
         design = spec.build(values)
     except CycloidInputError as exc:
         return [{**base, "mode": m, "error": str(exc)} for m in spec.modes]
-    stiff = stiffness_hook(design)
+    stiff = stiffness_columns(design)
     env = spec.envelope
     for mode in spec.modes:
-        row = {**base, "mode": mode, "stiffness_Nm_rad": stiff}
+        row = {**base, "mode": mode, **stiff}
         try:
             m = efficiency_map(design, mode, env.speeds(), env.torques())
         except CycloidInputError as exc:
