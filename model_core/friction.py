@@ -77,3 +77,63 @@ def skf_frictional_moment(radial_load, speed, d, D, nu, friction):
     mu_sl = phi_bl * fr.skf_mu_bl + (1 - phi_bl) * fr.skf_mu_ehl
     M_sl = fr.skf_S2 * dm * F * mu_sl
     return (M_rr + M_sl) * 1e-3
+
+
+#: Upper bound of any sliding coefficient the Stribeck law may return [1]: dry clean steel on
+#: steel (about 0.6, Bhushan 2013, Table 9.1); reaching it means the film model has broken down,
+#: and every such point is reported (StribeckMu.clamped).
+MU_DRY_STEEL = 0.6
+
+
+def hersey_number(eta, omega_rel, normal_force, width, diameter):
+    """Hersey number H = eta N / p of a journal contact (dimensionless in SI).
+
+    eta dynamic viscosity [Pa*s], omega_rel relative angular speed of roller and pin [rad/s]
+    (N = |omega_rel|/(2 pi) in rev/s), p = F/(b d) the projected pressure [Pa] of the normal
+    force F [N] on the pin of width b [m] and diameter d [m] (Shigley, Sec. 12-3).
+    """
+    F = np.maximum(np.asarray(normal_force, float), 1e-12)
+    p = F / (width * diameter)
+    return eta * np.abs(np.asarray(omega_rel, float)) / (2 * np.pi) / p
+
+
+def stribeck_pin_mu(hersey, mu_boundary, hersey_transition, clearance_ratio):
+    """Friction coefficient of a plain roller on its greased pin over the Stribeck curve.
+
+    .. math::
+
+        \\mu = \\mu_{bl} \\exp(-H / H_t) + 2 \\pi^2 H (r/c)
+
+    The boundary term fades as the Hersey number H = eta N/p passes the thick-film limit H_t
+    (McKee's journal tests, Shigley Fig. 12-4); the second is Petroff's law of a concentric
+    journal (Shigley Eq. 12-6), the viscous shear of the full film with radial clearance c over
+    radius r. The sum has the Stribeck curve's shape: boundary value at standstill or high load,
+    a minimum near H_t, rising with H in the full film. Bounded above by MU_DRY_STEEL.
+
+    Returns (mu, clamped) where clamped marks the points where the upper bound binds.
+
+    References: R. Stribeck, Z. VDI 46 (1902); M. D. Hersey, J. Wash. Acad. Sci. 4 (1914);
+    R. G. Budynas, J. K. Nisbett, Shigley's Mechanical Engineering Design, 10th ed., Sec. 12-3
+    to 12-8.
+    """
+    H = np.asarray(hersey, float)
+    mu = mu_boundary * np.exp(-H / hersey_transition) + 2 * np.pi ** 2 * H / clearance_ratio
+    clamped = mu > MU_DRY_STEEL
+    return np.minimum(mu, MU_DRY_STEEL), clamped
+
+
+def roll_or_skid(mu_tooth, mu_pin, r_pin, r_roller):
+    """Whether a plain roller rolls on the tooth (True) or skids (False).
+
+    A roller turning on its pin needs the friction moment mu_pin F r_pin from the tooth's
+    traction, at most mu_tooth F r_roller. It rolls (and its bore slides on the pin) where
+
+    .. math:: \\mu_{tooth} r_{roller} > \\mu_{pin} r_{pin}
+
+    and otherwise stays nearly still on its pin and skids on the tooth. Each regime dissipates
+    mu F v of its own sliding contact; the roller settles in the one of lower dissipation,
+    so the loss is F v_s min(mu_tooth, mu_pin r_pin / r_roller) with v_s the tooth sliding
+    speed of a fixed roller (derived; Sensinger 2013, J. Mech. Des. 135:071006, for the
+    fixed-versus-rolling pin comparison).
+    """
+    return np.asarray(mu_tooth) * r_roller > np.asarray(mu_pin) * r_pin
