@@ -49,7 +49,11 @@ class ModeMap:
             # forward: the load absorbs power, tau_out * w_out < 0
             op = operating_point(design, self.mode, WW, T_out=(-sign_b if forward else sign_b) * TT)
             shares = np.stack([getattr(op.losses, n) for n in LOSS_NAMES], -1)
-            shares = shares / np.maximum(shares.sum(-1, keepdims=True), 1e-300)
+            # shares of the gear's whole loss (load-independent losses included, which have no
+            # output of their own: the shares then sum to less than one)
+            shares = shares / np.maximum(shares.sum(-1, keepdims=True) + op.losses.idle[..., None]
+                                         if np.ndim(op.losses.idle) else
+                                         shares.sum(-1, keepdims=True), 1e-300)
             table = np.concatenate([op.eta0[..., None], shares], -1)
             # below the lightest load that runs (losses above the power, or locked with the
             # torque on S) hold the values of the lightest running load along the torque axis
@@ -66,7 +70,10 @@ class ModeMap:
             self._arrays = getattr(self, "_arrays", {})
             self._arrays[forward] = table
             w1p = (self.ratio[0] - self.ratio[2]) * WW
-            self._wdir[forward] = 1 if float((op.torques["1"] * w1p).flat[0]) >= 0 else -1
+            # the relative flow direction follows from the known torque's sign alone: read it at
+            # a point that runs (the lightest points may not, with load-independent losses)
+            p1 = (op.torques["1"] * w1p)[valid]
+            self._wdir[forward] = 1 if float(p1.flat[0]) >= 0 else -1
         self._lt = [math.log(t) for t in T]
         self._lw = [math.log(w) for w in W]
         self.torque_range = (float(T[0]), float(T[-1]))
