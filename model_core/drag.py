@@ -8,8 +8,11 @@ theory and experiment on these (Section 5). Each is a named partial loss in W:
   load-independent moment M0 = 1e-7 f0 (nu n)^(2/3) d_m^3 [N*mm; nu mm^2/s, n r/min, d_m mm],
   or 160e-7 f0 d_m^3 for nu n < 2000 (Palmgren, Ball and Roller Bearing Engineering, 1959;
   Harris & Kotzalas, Rolling Bearing Analysis, 5th ed., Sec. 9.4).
-- ``PL_churn``: the same M0 for the grease-packed eccentric (needle) bearings of both gears at
-  their relative speed |w2 - wS|: the drag of the grease they churn.
+- ``PL_churn``: the grease sheared between the orbiting cycloid gears' faces and their
+  neighbours (disc, housing, the other gear): Couette flow P = eta v^2 A / h per face, with v =
+  e |w2 - wS| the gear's translation speed relative to the disc (Petroff's film argument; the
+  eccentric bearings' own viscous rolling loss is already in PL1 through SKF's M_rr, and SKF
+  neglects M_drag for grease lubrication).
 - ``PL_seal``: radial lip seals on the input and output shafts, frictional power
   P = SEAL_POWER_COEFF d^2 n [W; d mm, n r/min] (the rule of thumb of the seal makers'
   catalogues, e.g. Freudenberg Simrit, Technical Manual, radial shaft seals, frictional power
@@ -29,7 +32,7 @@ IDLE_NAMES = ("PL_support", "PL_seal", "PL_churn")
 IDLE_DESCRIPTIONS = {
     "PL_support": "support bearings of the shafts (load-independent)",
     "PL_seal": "shaft lip seals",
-    "PL_churn": "grease drag of the eccentric bearings",
+    "PL_churn": "grease sheared at the orbiting gears' faces",
 }
 
 #: Support bearings per rotating shaft: (bore, outside diameter) [m], two each.
@@ -39,9 +42,11 @@ SUPPORT_BEARINGS = {"S": (0.020, 0.042), "1": (0.030, 0.055), "2": (0.030, 0.055
 #: Palmgren's f0 of a grease-lubricated deep-groove ball bearing [1]. **Assumption**: 0.75
 #: (Harris & Kotzalas Table 9.x: 0.7-1 for greased deep-groove ball bearings).
 F0_BALL_GREASE = 0.75
-#: Palmgren's f0 of a grease-lubricated needle bearing [1]. **Assumption**: 3 (Harris &
-#: Kotzalas: drawn-cup and caged needle bearings 2-4 greased).
-F0_NEEDLE_GREASE = 3.0
+#: Gap between a gear face and its neighbour [m]. **Assumption**: 0.5 mm, an axial play
+#: typical of small reducers.
+FACE_GAP = 0.5e-3
+#: Gear faces running in grease [1]. **Assumption**: 4, both faces of both gears.
+N_FACES = 4
 #: Shaft diameters at the lip seals [m]. **Assumption**: one seal on S at 20 mm, one on each
 #: output shaft at 30 mm (the held shaft's seal does not move).
 SEAL_DIAMETERS = {"S": 0.020, "1": 0.030, "2": 0.030}
@@ -70,8 +75,10 @@ def idle_losses(design, speeds, nu):
         sup = sup + 2 * M0 * 1e-3 * w
         seal = seal + SEAL_POWER_COEFF * (SEAL_DIAMETERS[shaft] * 1e3) ** 2 * rad_s_to_rpm(w)
     w_rel = np.abs(np.asarray(speeds["2"], float) - np.asarray(speeds["S"], float))
-    dm_ecc = 0.5 * (design.d_p + design.D_p) * 1e3
-    n_gears = 2 if 0 < design.torque_share < 1 else 1
-    churn = n_gears * palmgren_idle_moment(rad_s_to_rpm(w_rel), nu_mm, dm_ecc,
-                                           F0_NEEDLE_GREASE) * 1e-3 * w_rel
+    # face area of a gear: an annulus from the eccentric bearing's seat to the tooth root
+    r_out = design.r_p - design.e - design.d_v1 / 2
+    r_in = design.D_p / 2
+    area = np.pi * (r_out ** 2 - r_in ** 2)
+    eta = design.lubricant.density * nu
+    churn = N_FACES * eta * (design.e * w_rel) ** 2 * area / FACE_GAP
     return {"PL_support": sup, "PL_seal": seal, "PL_churn": churn}

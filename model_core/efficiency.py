@@ -167,7 +167,14 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> Operat
 
     def eta0_from(eta0):
         T1 = ring_torque(eta0)
-        L = partial_losses(design, np.abs(T1), w2p, state=state)
+        # physical profile: friction in the force balance. The gear's torque balance with its
+        # losses makes the disc side carry |T2| = i0 eta0^w |T1| (less than the ring side's
+        # frictionless share when the ring drives, more when the disc drives), so the disc
+        # rollers' and the eccentric bearing's forces follow the power-flow direction
+        Td = (np.abs(T1) * i0 * np.where(wdir > 0, eta0, 1.0 / np.maximum(eta0, 1e-3))
+              if design.profile == "physical" else None)
+        L = partial_losses(design, np.abs(T1), w2p, state=state, disc_torque=Td,
+                           ring_flow=wdir if design.profile == "physical" else None)
         with np.errstate(divide="ignore", invalid="ignore"):
             x = np.where(T1 != 0, (L.total + P_idle) / (np.abs(T1) * base), 0.0)
         return np.where(wdir > 0, 1.0 - x, 1.0 / (1.0 + x)), L, T1

@@ -137,3 +137,38 @@ def roll_or_skid(mu_tooth, mu_pin, r_pin, r_roller):
     fixed-versus-rolling pin comparison).
     """
     return np.asarray(mu_tooth) * r_roller > np.asarray(mu_pin) * r_pin
+
+
+def ring_friction_arm_ratio(phi, force, mu_eff, e, z1, lam, r_c):
+    """rho_1: the moment of the tooth-contact friction forces about the ring centre over that of
+    the normal forces, for ring rollers at phi (rad from the line of centres, pitch-point side)
+    carrying normal forces ``force`` [N] with effective tangential coefficients ``mu_eff``
+    (mu_tooth when a roller skids, mu_pin r_pin/r_roller when it rolls); rollers on the last
+    axis.
+
+    Friction in the force balance (derived). With the ring centre O1 at the origin, the gear
+    centre O2 = (e, 0), the pitch point P = (e z1, 0) and a roller centre D = r_p (cos phi,
+    sin phi), the normal n = (P - D)/|DP| passes through P and the tooth contact C = D + r_c n.
+    The friction force mu N t (t perpendicular to n) opposes the gear's motion relative to the
+    ring at C, a rotation about P. Its moment about O1 is mu N (C - O1).n, that of the normal
+    force N e z1 |n_y| = N r_p sin(phi)/S_l, so
+
+    .. math::
+
+        \\rho_1 = \\frac{\\sum \\mu_i N_i (e z_1 S_l - r_c - e z_1 (1 - \\lambda \\cos\\phi)/S_l)}
+                       {\\sum N_i r_p \\sin\\phi / S_l}
+
+    A known ring torque T1 then needs the normal forces N_0/(1 - rho_1) when the ring drives
+    in the relative motion and N_0/(1 + rho_1) when it is driven (N_0 frictionless); the same
+    torque balance on the gear gives the mesh efficiency (1 - rho_2)/(1 - rho_1) driving and
+    (1 + rho_1)/(1 + rho_2) driven, and their losses equal sum mu N v_s (checked in the tests).
+    """
+    S = np.sqrt(1 + lam * lam - 2 * lam * np.cos(phi))
+    r_p = lam * e * z1
+    F = np.maximum(np.asarray(force, float), 0.0)
+    arm_f = e * z1 * S - r_c - e * z1 * (1 - lam * np.cos(phi)) / S
+    arm_n = r_p * np.sin(phi) / S
+    num = (mu_eff * F * arm_f).sum(-1)
+    den = (F * arm_n).sum(-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)

@@ -82,9 +82,14 @@ def _pin_stribeck(design, F, spin, width, d_pin, eta, diag, key):
     return mu
 
 
-def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, gear=0, diag=None):
+def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, gear=0, diag=None,
+                 disc_torque=None, ring_flow=None):
     """Losses of one gear with its roller patterns at psi_ring, psi_disc (rad from its line of
-    centres); gear_torque and w2_rel shaped (...), positions trailing."""
+    centres); gear_torque and w2_rel shaped (...), positions trailing. disc_torque: the gear's
+    torque on the disc side where friction makes it differ from the ring side (physical
+    profile); None: the same (the paper's frictionless balance). ring_flow: +1 where the ring
+    drives in the relative motion, -1 where it is driven; with it the ring rollers' normal
+    forces carry the friction's moment (friction.ring_friction_arm_ratio)."""
     fr, lub = design.friction, design.lubricant
     physical = design.profile == "physical"
     nu = thermal.lubricant_viscosity(design)
@@ -102,6 +107,7 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
         spin = v_s / r_c
         mu6 = _pin_stribeck(design, F, spin, design.b1, design.d_o1, eta, diag, "ring")
         rolls = friction.roll_or_skid(fr.mu_tooth, mu6, design.d_o1 / 2, r_c)
+        mu_eff = np.where(rolls, mu6 * design.d_o1 / design.d_v1, fr.mu_tooth)
         PL6 = np.where(rolls, friction.sliding_loss(mu6, F, design.d_o1 / design.d_v1 * v_s), 0.0)
         PL5 = np.where(rolls, PL5, friction.sliding_loss(fr.mu_tooth, F, v_s))
         if diag is not None:
@@ -118,10 +124,20 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
     else:
         spin = velocities.ring_roller_spin(phi, design.e, design.z1, design.lam, r_c, omega_r)
         M = friction.skf_frictional_moment(F, spin, design.d_o1, design.d_v1, nu, fr)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            mu_eff = np.where(F > 0, M / np.where(F > 0, F, 1.0) / r_c, 0.0)
         PL6 = (M * spin).sum(-1)
     PL5 = PL5.sum(-1)
+    if physical and ring_flow is not None:
+        # friction in the force balance: the normal forces that carry T1 with the friction's
+        # moment, N0/(1 - rho_1) (ring drives) or N0/(1 + rho_1) (ring driven)
+        rho1 = friction.ring_friction_arm_ratio(phi, F, mu_eff, design.e, design.z1, design.lam,
+                                                r_c)
+        k = 1.0 / (1.0 - np.asarray(ring_flow, float)[..., None] * rho1)
+        PL5, PL6, F = PL5 * k, PL6 * k, F * k[..., None]
     # disc rollers (k per position)
-    theta, Q = contact.disc_roller_forces(design, T, psi_disc, state, ("disc", gear))
+    T_d = T if disc_torque is None else np.asarray(disc_torque, float)
+    theta, Q = contact.disc_roller_forces(design, T_d, psi_disc, state, ("disc", gear))
     W2 = W[..., 0]
     v_r2 = velocities.disc_rolling_speed(design.D_cz, W2)[..., None]
     PL2 = friction.rolling_resistance_loss(fr.rolling_disc, Q, v_r2)
@@ -184,11 +200,16 @@ def contact_states(design, ring_torque, w2_rel, n_positions=None):
     return out
 
 
-def partial_losses_by_position(design, ring_torque, w2_rel, n_positions=None, state=None):
+def partial_losses_by_position(design, ring_torque, w2_rel, n_positions=None, state=None,
+                               disc_torque=None, ring_flow=None):
     """Partial losses of the whole drive (both gears) at each mesh position, W.
 
     ring_torque: |T1|, the torque on the ring shaft (N*m), shape (...); w2_rel = w2 - wS (rad/s).
     state: optional dict for warm-starting the contact solutions of repeated calls.
+    disc_torque: |T2| (N*m) where friction in the force balance makes the disc side's torque
+    differ from the frictionless i0*|T1| (physical profile); None: i0*|T1| (the paper).
+    ring_flow: +1/-1 where the ring drives/is driven in the relative motion (physical profile:
+    friction in the ring rollers' force balance); None: frictionless forces (the paper).
     Returns (alpha, PartialLosses with arrays shaped (..., n_alpha)).
     """
     alpha = mesh_positions(design, n_positions)
@@ -199,13 +220,16 @@ def partial_losses_by_position(design, ring_torque, w2_rel, n_positions=None, st
                                            (1.0 - design.torque_share, np.pi))):
         if share == 0:
             continue
+        Td = None if disc_torque is None else share * np.abs(np.asarray(disc_torque, float))
         parts = _gear_losses(design, share * Tc, w2_rel, alpha + shift, alpha / design.i0 + shift,
-                             state, gear)
+                             state, gear, disc_torque=Td, ring_flow=ring_flow)
         total = parts if total is None else tuple(a + b for a, b in zip(total, parts))
     return alpha, PartialLosses(*total)
 
 
-def partial_losses(design, ring_torque, w2_rel, n_positions=None, state=None) -> PartialLosses:
+def partial_losses(design, ring_torque, w2_rel, n_positions=None, state=None,
+                   disc_torque=None, ring_flow=None) -> PartialLosses:
     """Partial losses (W) averaged over a full mesh cycle; arrays shaped like the inputs."""
-    _, by_pos = partial_losses_by_position(design, ring_torque, w2_rel, n_positions, state)
+    _, by_pos = partial_losses_by_position(design, ring_torque, w2_rel, n_positions, state,
+                                           disc_torque, ring_flow)
     return PartialLosses(*(getattr(by_pos, n).mean(-1) for n in LOSS_NAMES))
