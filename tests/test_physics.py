@@ -148,8 +148,8 @@ def test_friction_feedback_makes_eta0_depend_on_the_flow():
         f = operating_point(d, "S1", 293.0, T_out=-8.0)
         b = operating_point(d, "1S", float(w["1"]), 8.0)
         return float(b.eta0) - float(f.eta0)
-    no_feedback = gap(base.replace(profile="physical"))
-    assert no_feedback > 0
+    with_feedback = gap(base.replace(profile="physical"))
+    assert with_feedback > 0
     # feedback off: same physics with the ring's friction arm removed (mu_eff = 0 limit of
     # rho_1) is the paper-like balance; the feedback widens the gap
     from model_core import losses as L
@@ -159,7 +159,7 @@ def test_friction_feedback_makes_eta0_depend_on_the_flow():
         frictionless = gap(base)
     finally:
         friction.ring_friction_arm_ratio = orig
-    assert L is not None and no_feedback > frictionless
+    assert L is not None and with_feedback > frictionless
 
 
 def test_back_driving_self_locks_from_eta0():
