@@ -445,7 +445,10 @@ def validate_design(d: DriveDesign) -> None:
     for f in dataclasses.fields(fr):
         if getattr(fr, f.name) < 0:
             raise CycloidInputError("friction." + f.name, getattr(fr, f.name), "must not be negative")
-    for name in ("mu_boundary", "mu_full_film"):
+    for name in ("hersey_transition", "pin_clearance_ratio"):
+        if not getattr(fr, name) > 0:
+            raise CycloidInputError("friction." + name, getattr(fr, name), "must be positive")
+    for name in ("mu_boundary", "mu_full_film", "mu_pin_boundary", "mu_tooth"):
         if getattr(fr, name) > MAX_FRICTION_COEFFICIENT:
             raise CycloidInputError("friction." + name, getattr(fr, name),
                                     f"a friction coefficient above {MAX_FRICTION_COEFFICIENT} is "

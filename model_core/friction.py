@@ -122,21 +122,21 @@ def stribeck_pin_mu(hersey, mu_boundary, hersey_transition, clearance_ratio):
     return np.minimum(mu, MU_DRY_STEEL), clamped
 
 
-def roll_or_skid(mu_tooth, mu_pin, r_pin, r_roller):
-    """Whether a plain roller rolls on the tooth (True) or skids (False).
+def roll_or_skid(mu_tooth, mu_pin, r_pin, r_roller, rolling_term=0.0):
+    r"""Whether a plain roller rolls on the tooth (True) or skids (False).
 
-    A roller turning on its pin needs the friction moment mu_pin F r_pin from the tooth's
+    A roller turning on its pin needs the friction moment mu_pin F r_pin (plus its rolling
+    resistance, ``rolling_term`` = mu_r r_roller v_roll/v_s in units of F) from the tooth's
     traction, at most mu_tooth F r_roller. It rolls (and its bore slides on the pin) where
 
-    .. math:: \\mu_{tooth} r_{roller} > \\mu_{pin} r_{pin}
+    .. math:: \mu_{tooth} r_{roller} > \mu_{pin} r_{pin} + \mu_r r_{roller} v_{roll}/v_s
 
-    and otherwise stays nearly still on its pin and skids on the tooth. Each regime dissipates
-    mu F v of its own sliding contact; the roller settles in the one of lower dissipation,
-    so the loss is F v_s min(mu_tooth, mu_pin r_pin / r_roller) with v_s the tooth sliding
-    speed of a fixed roller (derived; Sensinger 2013, J. Mech. Des. 135:071006, for the
-    fixed-versus-rolling pin comparison).
+    and otherwise stays still on its pin and skids on the tooth. Multiplied by v_s/r_roller
+    this is: the traction's power exceeds the rolling roller's dissipation, so the roller takes
+    the regime of lower dissipation and the loss is continuous at the switch (derived;
+    Sensinger 2013, J. Mech. Des. 135:071006, for fixed versus rolling pins).
     """
-    return np.asarray(mu_tooth) * r_roller > np.asarray(mu_pin) * r_pin
+    return np.asarray(mu_tooth) * r_roller > np.asarray(mu_pin) * r_pin + rolling_term * 1.0
 
 
 def ring_friction_arm_ratio(phi, force, mu_eff, e, z1, lam, r_c):

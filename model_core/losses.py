@@ -106,7 +106,10 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
         v_s = velocities.ring_contact_sliding(phi, design.e, design.z1, design.lam, r_c, omega_r)
         spin = v_s / r_c
         mu6 = _pin_stribeck(design, F, spin, design.b1, design.d_o1, eta, diag, "ring")
-        rolls = friction.roll_or_skid(fr.mu_tooth, mu6, design.d_o1 / 2, r_c)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rr = np.where(v_s > 0, fr.rolling_ring * r_c * np.abs(v_rt) / np.where(v_s > 0, v_s, 1.0),
+                          0.0)
+        rolls = friction.roll_or_skid(fr.mu_tooth, mu6, design.d_o1 / 2, r_c, rr)
         mu_eff = np.where(rolls, mu6 * design.d_o1 / design.d_v1, fr.mu_tooth)
         PL6 = np.where(rolls, friction.sliding_loss(mu6, F, design.d_o1 / design.d_v1 * v_s), 0.0)
         PL5 = np.where(rolls, PL5, friction.sliding_loss(fr.mu_tooth, F, v_s))
@@ -146,7 +149,8 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
         v3 = velocities.disc_pin_sliding(design.e, design.d_v2, design.d_o2, W2)[..., None]
         v_skid = velocities.disc_hole_sliding(design.e, W2)[..., None]
         mu3 = _pin_stribeck(design, Q, spin2, design.b2, design.d_o2, eta, diag, "disc")
-        rolls = friction.roll_or_skid(fr.mu_tooth, mu3, design.d_o2 / 2, design.d_v2 / 2)
+        rr2 = fr.rolling_disc * (design.d_v2 / 2) * v_r2 / np.maximum(v_skid, 1e-300)
+        rolls = friction.roll_or_skid(fr.mu_tooth, mu3, design.d_o2 / 2, design.d_v2 / 2, rr2)
         PL3 = np.where(rolls, friction.sliding_loss(mu3, Q, v3), 0.0).sum(-1)
         PL2 = np.where(rolls, PL2, friction.sliding_loss(fr.mu_tooth, Q, v_skid))
         if diag is not None:
