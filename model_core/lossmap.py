@@ -49,11 +49,10 @@ class ModeMap:
             # forward: the load absorbs power, tau_out * w_out < 0
             op = operating_point(design, self.mode, WW, T_out=(-sign_b if forward else sign_b) * TT)
             shares = np.stack([getattr(op.losses, n) for n in LOSS_NAMES], -1)
-            # shares of the gear's whole loss (load-independent losses included, which have no
-            # output of their own: the shares then sum to less than one)
-            shares = shares / np.maximum(shares.sum(-1, keepdims=True) + op.losses.idle[..., None]
-                                         if np.ndim(op.losses.idle) else
-                                         shares.sum(-1, keepdims=True), 1e-300)
+            # shares of PL1..PL6 among themselves: they sum to the whole loss (with losses =
+            # "all" the load-independent part, which has no output of its own, is spread over
+            # them in proportion; eta0 carries it exactly)
+            shares = shares / np.maximum(shares.sum(-1, keepdims=True), 1e-300)
             table = np.concatenate([op.eta0[..., None], shares], -1)
             # below the lightest load that runs (losses above the power, or locked with the
             # torque on S) hold the values of the lightest running load along the torque axis
