@@ -13,6 +13,7 @@ import numpy as np
 
 from cyclo_fmu.diagnosis import Diagnoser
 from cyclo_fmu.synth import synthesize
+from model_core.effects import EFFECTS
 
 
 def polynomial_library(w, T):
@@ -55,17 +56,26 @@ def run(effect, seed, mode="S1", size="medium"):
     half = sw <= np.median(sw[sw > 0.05 * sw.max()])
     low_rec = SimpleNamespace(**{k: (v[half] if isinstance(v, np.ndarray) else v)
                                  for k, v in vars(rec).items()})
-    found = diag.fit(low_rec)
-    P = diag.prepare(rec)
-    y, w, T = P["y"], P["w_in"], P["T_out"]
+    found = diag.fit(low_rec).diagnosis_
+    P = diag.problem(rec)
+    y, w, T = P["y"], P["blocks"]["w_in"], P["blocks"]["T_out"]
     aw = np.abs(w)
     moving = aw > 0.05 * aw.max()
     low = moving & (aw <= np.median(aw[moving]))
     high = moving & (aw > np.median(aw[moving]))
-    X = P["columns"](found.effect, found.parameters.get(
-        {"thermal_drift": "tau", "low_speed_friction": "w_s"}.get(found.effect, ""), {}).get("value"))
+    chosen = list(found.effects)
+    if found.calibration and found.effect != "friction_miscalibrated":
+        chosen.append({"id": "friction_miscalibrated", "parameters": found.calibration})
+    cols = []
+    for e in chosen:
+        eff = EFFECTS[e["id"]]
+        shape = e["parameters"][eff.shape_name]["value"] if eff.shape and eff.shape_name in \
+            e["parameters"] else None
+        cols += list(next(t for t in P["options"][e["id"]] if t.shape == shape).cols)
+    X = P["X"][:, cols]
     rmse = lambda e: float(np.sqrt(np.mean(e ** 2)))
-    out = {"diagnosed on the low half": found.effect, "no fix": rmse(y[high])}
+    out = {"diagnosed on the low half": ", ".join(e["id"] for e in found.effects) or "none",
+           "no fix": rmse(y[high])}
     if X.shape[1]:
         c, *_ = np.linalg.lstsq(X[low], y[low], rcond=None)
         out["physics fix"] = rmse(y[high] - X[high] @ c)

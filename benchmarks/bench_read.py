@@ -40,8 +40,13 @@ else:
     t_read = time.perf_counter() - t0
     t1 = time.perf_counter()
     mode, checks = check_plausibility(rec, "S1")
-    out.update(rows=rec.raw_samples, kept=rec.n, read_s=t_read, check_s=time.perf_counter() - t1,
-               mode=mode)
+    t_check = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    from cyclo_fmu.diagnosis import Diagnoser
+    d = Diagnoser(mode=mode).fit(rec).diagnosis_
+    out.update(rows=rec.raw_samples, kept=rec.n, read_s=t_read, check_s=t_check,
+               diagnose_s=time.perf_counter() - t2, mode=mode,
+               effects=[e["id"] for e in d.effects], unexplained=d.unexplained["present"])
 out["total_s"] = time.perf_counter() - t0
 out["peak_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 print(json.dumps(out))
@@ -98,7 +103,9 @@ def main():
             print(f"read_recording({'block=0.01' if what == 'block' else 'all samples'}): "
                   f"{r['rows']} samples -> {r['kept']}; read {r['read_s']:.1f} s "
                   f"({r['read_s'] / ref['total_s']:.2f} x reference), checks {r['check_s']:.2f} s, "
-                  f"peak {r['peak_MB']:.0f} MB; mode {r['mode']}")
+                  f"diagnose {r['diagnose_s']:.1f} s; total {r['total_s']:.1f} s (target <= 120 s), "
+                  f"peak {r['peak_MB']:.0f} MB (target <= 8 GB); mode {r['mode']}; effects "
+                  f"{r['effects']}, unexplained {r['unexplained']}")
 
 
 if __name__ == "__main__":

@@ -155,6 +155,15 @@ def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDe
         "brake.T_count": int(sc.T_count), "brake.hold_time": float(sc.hold),
         "brake.J_out": float(sc.J_out),
     }
+    # schedules as numbered Real parameters: every master (fmpy's SSP master, libcosim,
+    # run_fmus) sets them, unlike the String form
+    from model_core.rig import parse_schedule, schedule_parameters
+    if sc.frequency_schedule:
+        p.update(schedule_parameters("motor.", parse_schedule(sc.frequency_schedule,
+                                                               "frequency_schedule")))
+    if sc.torque_schedule:
+        p.update(schedule_parameters("brake.", parse_schedule(sc.torque_schedule,
+                                                               "torque_schedule")))
     if design is not None:
         p.update(drive_parameters(design))
     for name, scale, noise, res, gain, off in (
@@ -258,12 +267,15 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3):
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
     comps = {}
+    unpacked = {}        # one extraction and model description per FMU, shared by its instances
     try:
         for name, (fmu, connectors) in COMPONENTS.items():
             path = str(Path(fmu_dir) / f"{fmu}.fmu")
-            md = read_model_description(path)
+            if path not in unpacked:
+                unpacked[path] = (read_model_description(path), extract(path))
+            md, unzipped = unpacked[path]
             var = {v.name: v for v in md.modelVariables}
-            f = FMU2Slave(guid=md.guid, unzipDirectory=extract(path),
+            f = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
                           modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
             f.instantiate()
             f.setupExperiment(startTime=0.0)
@@ -285,32 +297,71 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3):
             ins = [(c, var[c].valueReference) for c, k in connectors if k == "input"]
             outs = [(c, var[c].valueReference) for c, k in connectors if k == "output"]
             comps[name] = (f, ins, outs)
-        value = {(n, c): 0.0 for n, (_, cons) in COMPONENTS.items() for c, _ in cons}
-        feeds = {(c, d): (a, b) for a, b, c, d in CONNECTIONS}
-        fields = [f"{n}.{c}" for n, (_, cons) in COMPONENTS.items() for c, _ in cons]
-        n_steps = int(round(stop_time / step))
-        rows = np.empty((n_steps, len(fields) + 1))
-        for k in range(n_steps):
-            t = k * step
-            for name, (f, ins, outs) in comps.items():
-                if ins:
-                    f.setReal([vr for _, vr in ins], [value[(name, c)] for c, _ in ins])
-                f.doStep(currentCommunicationPoint=t, communicationStepSize=step)
-                for (c, _), v in zip(outs, f.getReal([vr for _, vr in outs])):
-                    value[(name, c)] = v
-            for (c, d), (a, b) in feeds.items():
-                value[(c, d)] = value[(a, b)]
-            rows[k, 0] = t
-            rows[k, 1:] = [value[tuple(fl.split(".", 1))] for fl in fields]
+        rows, fields = _lean_loop(comps, stop_time, step)
     finally:
         for f, _, _ in comps.values():
             f.terminate()
             f.freeInstance()
+        import shutil
+        for _, unzipped in unpacked.values():
+            shutil.rmtree(unzipped, ignore_errors=True)
+    n_steps = len(rows)
     out = np.empty(n_steps, dtype=[("time", float)] + [(fl, float) for fl in fields])
     out["time"] = rows[:, 0]
     for i, fl in enumerate(fields):
         out[fl] = rows[:, i + 1]
     return out
+
+
+def _lean_loop(comps, stop_time, step):
+    """Fixed-step Jacobi over instantiated, initialised FMUs: every connector value starts at 0,
+    each step sets every component's inputs from the values after the previous step, steps it
+    and reads its outputs. The value references and ctypes arrays are built once, and the
+    FMI functions are called directly (what fmpy's SSP master does per step, without its
+    per-step look-ups). Returns (rows: time and every connector after each step, fields)."""
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import fmi2Real, fmi2ValueReference
+    fields = [f"{n}.{c}" for n, (_, cons) in COMPONENTS.items() for c, _ in cons]
+    index = {tuple(fl.split(".", 1)): i for i, fl in enumerate(fields)}
+    source = {(c, d): index[(a, b)] for a, b, c, d in CONNECTIONS}
+    plan = []
+    for name, (f, ins, outs) in comps.items():
+        n_in, n_out = len(ins), len(outs)
+        # fmpy's raw ctypes functions (its wrappers log and check each call in Python: a third
+        # of a step's cost); the status is checked here
+        raw = f._functions
+        plan.append((name, f.component, raw["fmi2SetReal"], raw["fmi2DoStep"], raw["fmi2GetReal"], n_in,
+                     (fmi2ValueReference * n_in)(*[vr for _, vr in ins]),
+                     [source[(name, c)] for c, _ in ins], (fmi2Real * n_in)(),
+                     n_out, (fmi2ValueReference * n_out)(*[vr for _, vr in outs]),
+                     [index[(name, c)] for c, _ in outs], (fmi2Real * n_out)()))
+    n_steps = int(round(stop_time / step))
+    rows = np.empty((n_steps, len(fields) + 1))
+    cur = [0.0] * len(fields)
+    for k in range(n_steps):
+        t = k * step
+        nxt = list(cur)
+        for (name, comp, set_real, do_step, get_real, n_in, vr_in, src, buf_in,
+             n_out, vr_out, dst, buf_out) in plan:
+            if n_in:
+                for j, i in enumerate(src):
+                    buf_in[j] = cur[i]
+                if set_real(comp, vr_in, n_in, buf_in) > 1:
+                    raise FMICallException(function=f"{name}: fmi2SetReal", status=3)
+            status = do_step(comp, t, step, 1)
+            if status > 1:
+                raise FMICallException(function=f"{name}: fmi2DoStep", status=status)
+            if get_real(comp, vr_out, n_out, buf_out) > 1:
+                raise FMICallException(function=f"{name}: fmi2GetReal", status=3)
+            for j, i in enumerate(dst):
+                nxt[i] = buf_out[j]
+        # connections: every input reads its source's value after this step
+        for (c, d), i in source.items():
+            nxt[index[(c, d)]] = nxt[i]
+        cur = nxt
+        rows[k, 0] = t
+        rows[k, 1:] = cur
+    return rows, fields
 
 
 def recording_from_result(result) -> dict:
@@ -324,12 +375,13 @@ def recording_from_result(result) -> dict:
     }
 
 
-def write_recording(path, rec: dict) -> Path:
+def write_recording(path, rec: dict, columns=None) -> Path:
     path = Path(path)
+    columns = list(columns or RECORDING_COLUMNS)
     with path.open("w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(RECORDING_COLUMNS)
-        cols = [rec[c] for c in RECORDING_COLUMNS]
+        w.writerow(columns)
+        cols = [rec[c] for c in columns]
         for row in zip(*cols):
             w.writerow([f"{row[0]:.6f}"] + [f"{v:.6g}" for v in row[1:]])
     return path
@@ -368,13 +420,26 @@ class BenchRun:
     result: object = field(repr=False)
 
 
+MASTERS = ("lean", "fmpy")
+
+
 def run_bench(sc: Scenario, fmu_dir, out_dir=None, sensors: Sensors = Sensors(),
-              step: float = 1e-3, design: DriveDesign = None) -> BenchRun:
-    """Build the SSP, simulate it, and (with ``out_dir``) write recording, windows and plots."""
+              step: float = 1e-3, design: DriveDesign = None, master: str = "lean") -> BenchRun:
+    """Build the SSP, simulate it, and (with ``out_dir``) write recording, windows and plots.
+
+    ``master``: ``"lean"`` runs the SSP's components, connections and parameters in this
+    package's fixed-step Jacobi master (``run_fmus``: cached value references, direct FMI
+    calls; the same numbers as fmpy's SSP master, a test), ``"fmpy"`` in fmpy's SSP master."""
     parse_mode(sc.mode)
+    if master not in MASTERS:
+        raise ValueError(f"master = {master!r}: must be one of {', '.join(MASTERS)}")
     out = Path(out_dir) if out_dir else None
-    ssp = build_ssp((out or Path(fmu_dir)) / "TestBench.ssp", fmu_dir, sc, sensors, design)
-    result = run_ssp(ssp, sc.stop_time, step)
+    if master == "fmpy" or out is not None:     # the SSP is an output, or what fmpy runs
+        ssp = build_ssp((out or Path(fmu_dir)) / "TestBench.ssp", fmu_dir, sc, sensors, design)
+    if master == "fmpy":
+        result = run_ssp(ssp, sc.stop_time, step)
+    else:
+        result = run_fmus(fmu_dir, bench_parameters(sc, sensors, design), sc.stop_time, step)
     rec = recording_from_result(result)
     windows = steady_windows(rec, sc, design or DriveDesign())
     run = BenchRun(sc, rec, windows, result)
@@ -395,16 +460,15 @@ def plot_bench(run: BenchRun, out: Path):
     import matplotlib.pyplot as plt
     sc, rec, win = run.scenario, run.recording, run.windows
     fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
-    ax = axes[0, 0]
-    ax.plot(rec["time_s"], rec["speed_in_rpm"], lw=0.6, label="input speed / (r/min)")
-    ax.plot(rec["time_s"], 100 * rec["torque_in_Nm"], lw=0.6, label="100 x input torque / N*m")
-    ax.set(xlabel="time / s", title=f"bench recording, mode {sc.mode}, scenario {sc.name}")
-    ax.legend(fontsize=7)
-    ax = axes[0, 1]
-    ax.plot(rec["time_s"], rec["speed_out_rpm"], lw=0.6, label="output speed / (r/min)")
-    ax.plot(rec["time_s"], rec["torque_out_Nm"], lw=0.6, label="output torque / N*m")
-    ax.set(xlabel="time / s")
-    ax.legend(fontsize=7)
+    # speed and torque each on their own axis (a twin axis for the torque)
+    for ax, side, title in ((axes[0, 0], "in", f"input shaft, mode {sc.mode}, scenario {sc.name}"),
+                            (axes[0, 1], "out", "output shaft")):
+        ax.plot(rec["time_s"], rec[f"speed_{side}_rpm"], lw=0.6, color="C0")
+        ax.set(xlabel="time / s", ylabel=f"{side}put speed / (r/min)", title=title)
+        ax.yaxis.label.set_color("C0")
+        tx = ax.twinx()
+        tx.plot(rec["time_s"], rec[f"torque_{side}_Nm"], lw=0.6, color="C3")
+        tx.set_ylabel(f"{side}put torque / N*m", color="C3")
     if win:
         T = np.array([w["torque_in_Nm"] for w in win])
         n = np.array([w["speed_in_rpm"] for w in win])

@@ -9,10 +9,7 @@ import argparse
 import contextlib
 import json
 import math
-import os
-import shutil
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -38,96 +35,10 @@ def _number(name):
     return conv
 
 
-# -- shared robustness helpers: every command validates its outputs up front and writes them so
-# that a failure leaves nothing half-written --------------------------------------------------
-
-def _nearest_existing(path: Path) -> Path:
-    p = path
-    while not p.exists() and p != p.parent:
-        p = p.parent
-    return p
-
-
-def _output_dir(field: str, path, create: bool = True) -> Path:
-    """Check an output folder before any work: it may exist (a folder, writable) or be created
-    with its missing parents; an ancestor that is a file, or an unwritable one, is an error
-    naming ``field`` and the path. Returns the folder (created when ``create``)."""
-    p = Path(path)
-    if p.exists() and not p.is_dir():
-        raise CycloidInputError(field, str(path), "is a file, not a folder")
-    base = _nearest_existing(p)
-    if not base.is_dir():
-        raise CycloidInputError(field, str(path), f"{base} is a file, not a folder")
-    if not os.access(base, os.W_OK | os.X_OK):
-        raise CycloidInputError(field, str(path), f"{base} is not writable")
-    missing = [q for q in [p, *p.parents] if not q.exists()]
-    try:   # a real probe: permissions alone do not tell (root, read-only or virtual file systems)
-        p.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=p):
-            pass
-    except OSError as exc:
-        raise CycloidInputError(field, str(path), f"cannot be written ({exc.strerror})") from None
-    finally:
-        if not create:
-            for q in missing:
-                with contextlib.suppress(OSError):
-                    q.rmdir()
-    return p
-
-
-def _output_file(field: str, path) -> Path:
-    """Check an output file before any work: its folder must exist and be writable, and the
-    path must not be a folder."""
-    p = Path(path)
-    if p.is_dir():
-        raise CycloidInputError(field, str(path), "is a folder, not a file")
-    parent = p.parent
-    if not parent.exists():
-        raise CycloidInputError(field, str(path), f"folder {parent} does not exist")
-    if not parent.is_dir():
-        raise CycloidInputError(field, str(path), f"{parent} is a file, not a folder")
-    if not os.access(parent, os.W_OK | os.X_OK) or (p.exists() and not os.access(p, os.W_OK)):
-        raise CycloidInputError(field, str(path), "is not writable")
-    try:
-        with tempfile.TemporaryFile(dir=parent):
-            pass
-    except OSError as exc:
-        raise CycloidInputError(field, str(path), f"cannot be written ({exc.strerror})") from None
-    return p
-
-
-@contextlib.contextmanager
-def _staged_dir(field: str, path):
-    """Yield the output folder (validated, created); if the command fails, remove what it added:
-    the folder itself (and parents) when it did not exist, else the new entries."""
-    p = Path(path)
-    created = [] if p.exists() else [q for q in [p, *p.parents] if not q.exists()]
-    before = set(p.iterdir()) if p.exists() and p.is_dir() else set()
-    _output_dir(field, p, create=True)
-    try:
-        yield p
-    except BaseException:
-        if created:
-            shutil.rmtree(created[-1], ignore_errors=True)
-        else:
-            for q in set(p.iterdir()) - before:
-                shutil.rmtree(q, ignore_errors=True) if q.is_dir() else q.unlink(missing_ok=True)
-        raise
-
-
-@contextlib.contextmanager
-def _staged_file(field: str, path):
-    """Yield a temporary path next to the output file (validated); moved onto it on success,
-    removed on failure."""
-    p = _output_file(field, path)
-    tmp = p.with_name(f".{p.name}.partial-{os.getpid()}{p.suffix}")
-    try:
-        yield tmp
-        if tmp.exists():
-            os.replace(tmp, p)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+# -- shared robustness helpers (cyclo_fmu.outputs): every command validates its outputs up front
+# and writes them so that a failure leaves nothing half-written
+from .outputs import (output_dir as _output_dir, output_file as _output_file,  # noqa: E402
+                      staged_dir as _staged_dir, staged_file as _staged_file)
 
 
 def _check_seed(seed):
@@ -326,6 +237,35 @@ def cmd_paper(args) -> int:
         return run_paper_comparison(design, out, args.json)
 
 
+def cmd_stiffness(args) -> int:
+    from model_core import stiffness as st
+    design = _load_design(args.design, args.profile)
+    rated = args.rated_torque
+    if rated is not None and not (math.isfinite(rated) and rated > 0):
+        raise CycloidInputError("rated-torque", rated, "must be a positive number of N*m")
+    if args.out:
+        _output_dir("out", args.out, create=False)
+    values = st.catalogue_values(design, rated)
+    if args.out:
+        from .plots import plot_stiffness
+        with _staged_dir("out", args.out) as out:
+            plot_stiffness(design, values["rated_torque_Nm"], out / "stiffness.png")
+            (out / "stiffness.json").write_text(json.dumps(values, indent=2))
+    if args.json:
+        print(json.dumps(values, indent=2))
+        return 0
+    print(f"Torsional behaviour with the input locked (contact model; rated torque "
+          f"{values['rated_torque_Nm']:.3g} N*m)")
+    print(f"  torsional rigidity (50-100 % rated)   {values['torsional_rigidity_Nm_per_arcmin']:.4g} N*m/arcmin")
+    print(f"  lost motion (+-3 % rated)             {values['lost_motion_arcmin']:.4g} arcmin")
+    print(f"  backlash                              {values['backlash_arcmin']:.4g} arcmin")
+    print(f"  twist at rated torque                 {values['twist_at_rated_arcmin']:.4g} arcmin")
+    print(f"  hysteresis loss (loop width at 0)     {values['hysteresis_loss_arcmin']:.4g} arcmin")
+    if args.out:
+        print(f"  figure: {Path(args.out) / 'stiffness.png'}")
+    return 0
+
+
 def cmd_build(args) -> int:
     from .fmu_build import ALL_FMUS, build_any
     for name in args.names:
@@ -376,8 +316,16 @@ def cmd_bench(args) -> int:
 def cmd_synth(args) -> int:
     from .synth import PLANS, SIZES, synthesize, write_synth  # noqa: F401
     from model_core.effects import EFFECTS
-    if args.effect not in EFFECTS:
-        raise CycloidInputError("effect", args.effect, f"must be one of {', '.join(EFFECTS)}")
+    effects = [e.strip() for e in args.effect.split(",")]
+    for e in effects:
+        if e not in EFFECTS:
+            raise CycloidInputError("effect", e, f"must be one of {', '.join(EFFECTS)} (several "
+                                    "separated by commas)")
+    if len(set(effects)) != len(effects):
+        raise CycloidInputError("effect", args.effect, "names an effect twice")
+    rise = args.temperature_rise
+    if rise is not None and not (math.isfinite(rise) and -50.0 <= rise <= 150.0):
+        raise CycloidInputError("temperature-rise", rise, "must lie between -50 and 150 K")
     if args.size not in SIZES:
         raise CycloidInputError("size", args.size, f"must be one of {', '.join(SIZES)}")
     mode = "".join(parse_mode(args.mode)[:2])
@@ -394,9 +342,12 @@ def cmd_synth(args) -> int:
     _output_file("out", args.out)
     if truth:
         _output_file("truth", truth)
+    if args.engine == "bench" and (len(effects) > 1 or rise is not None):
+        raise CycloidInputError("engine", args.engine, "hides exactly one effect and writes no "
+                                "temperature column; use --engine fast")
     design = _load_design(None, args.profile) if args.profile else None
-    rec = synthesize(args.effect, args.seed, mode, args.size, design=design, plan=args.plan,
-                     engine=args.engine)
+    rec = synthesize(effects[0] if len(effects) == 1 else effects, args.seed, mode, args.size,
+                     design=design, plan=args.plan, engine=args.engine, temperature_rise=rise)
     with _staged_file("out", args.out) as tmp, \
             (_staged_file("truth", truth) if truth else contextlib.nullcontext()) as tmp_truth:
         write_synth(tmp, rec)
@@ -408,8 +359,9 @@ def cmd_synth(args) -> int:
 
 
 def cmd_diagnose(args) -> int:
-    from .diagnosis import Diagnoser
+    from .diagnosis import DiagnosisError
     from .io import RecordingError, load_recording
+    from .sweep.batch import diagnose_recording
     design = _load_design(args.design, args.profile)
     if args.mode.strip().lower() != "auto":
         parse_mode(args.mode)
@@ -418,31 +370,35 @@ def cmd_diagnose(args) -> int:
     try:
         rec, mode, checks = load_recording(args.recording, args.mode, design,
                                            columns=args.columns, units=args.units)
-    except RecordingError as exc:
+        d, result = diagnose_recording(rec, mode, checks, design, progress=True)
+    except (RecordingError, DiagnosisError) as exc:
         raise CycloidInputError("recording", args.recording, str(exc))
-    d = Diagnoser(design, mode).fit(rec)
-    result = d.to_json()
-    result["mode"] = mode
-    result["checks"] = list(checks)
-    result["read_notes"] = list(rec.notes)
-    result["exclusions"] = [{"reason": e.reason, "count": e.count,
-                             "first_time_s": _json_num(e.first_time)} for e in rec.exclusions]
-    result["excluded"] = result["exclusions"]
     if args.out:
-        _write_diagnosis(args.out, d, design, result)
+        from .diagnosis import write_diagnosis
+        write_diagnosis(args.out, d, design, result, source=str(args.recording))
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
-    for e in rec.exclusions:
-        print(f"excluded: {e.count} samples ({e.reason}) from t = {e.first_time:.3f} s")
+    for e in result["excluded"]:
+        print(f"excluded: {e['count']} {e.get('unit', 'samples')} ({e['reason']})")
     print(f"located: {d.located['statement']}")
-    print(f"effect: {d.effect} - {d.effect_description}")
-    for k, v in d.parameters.items():
-        ci = f" [{v['ci95'][0]:.4g}, {v['ci95'][1]:.4g}]" if v["ci95"] else ""
-        print(f"  {k} = {v['value']:.5g} {v['unit']}{ci}")
+    if not d.effects:
+        print("effects: none - " + EFFECTS_NONE)
+    for e in d.effects:
+        form = f"; fitted {e['form']}" if e.get("form", "").startswith("per") else ""
+        print(f"effect: {e['id']} - {e['description']} (explains {1e3 * e['explained_rms_Nm']:.2f}"
+              f" mN*m{form})")
+        for k, v in e["parameters"].items():
+            ci = f" [{v['ci95'][0]:.4g}, {v['ci95'][1]:.4g}]" if v["ci95"] else ""
+            print(f"  {k} = {v['value']:.5g} {v['unit']}{ci}")
+    if d.calibration and d.effect != "friction_miscalibrated":
+        v = d.calibration["mu_boundary_rel_error"]
+        print(f"friction level: mu_boundary off by {100 * v['value']:+.2f} % "
+              f"[{100 * v['ci95'][0]:+.2f}, {100 * v['ci95'][1]:+.2f}]")
     if d.indistinguishable_from:
         print(f"  cannot be told apart from: {', '.join(d.indistinguishable_from)}; "
               f"a run that would: {d.suggested_test}")
+    print(f"unexplained: {d.unexplained['statement']}")
     print(f"held-out RMSE of input torque: {1e3 * d.rmse_before_Nm:.2f} -> "
           f"{1e3 * d.rmse_after_Nm:.2f} mN*m; zeta_d (Eq. 31): {100 * d.zeta_d_before:.2f} -> "
           f"{100 * d.zeta_d_after:.2f} %; residual whiteness p: {d.whiteness_before:.2g} -> "
@@ -450,17 +406,9 @@ def cmd_diagnose(args) -> int:
     return 0
 
 
-def _write_diagnosis(out_dir, d, design, result):
-    """Write one diagnosis' folder (plots, diagnosis.json, design_updated.toml); removed again
-    if any of it fails."""
-    from model_core import design_to_toml
-    from .diagnosis import plot_diagnosis, updated_design
-    with _staged_dir("out", out_dir) as out:
-        plot_diagnosis(d, out)
-        (out / "diagnosis.json").write_text(json.dumps(result, indent=2))
-        fixed, notes = updated_design(design, d)
-        (out / "design_updated.toml").write_text(design_to_toml(fixed) + "".join(
-            f"# {n}\n" for n in notes))
+EFFECTS_NONE = "the model explains the data within its noise"
+
+
 
 
 def _workers(args):
@@ -551,6 +499,15 @@ def build_parser() -> argparse.ArgumentParser:
     pp.add_argument("--json", action="store_true", help="print one JSON object")
     _add_profile(pp)
     pp.set_defaults(func=cmd_paper)
+    sp = sub.add_parser("stiffness", help="torsional rigidity, lost motion, backlash and the "
+                        "hysteresis curve from the contact model, as a catalogue states them")
+    sp.add_argument("--design", help="design file (TOML); default: the paper's test drive")
+    sp.add_argument("--rated-torque", type=_number("rated-torque"), help="rated output torque "
+                    "N*m the catalogue values refer to (default: the paper's motor times z1-1)")
+    sp.add_argument("--json", action="store_true", help="print one JSON object")
+    sp.add_argument("--out", help="folder for stiffness.png and stiffness.json")
+    _add_profile(sp)
+    sp.set_defaults(func=cmd_stiffness)
     bp = sub.add_parser("build", help="build the FMUs (dist/CycloidDrive.fmu, "
                         "dist/CycloidDriveNative.fmu, ...)")
     bp.add_argument("--dest", default="dist", help="output folder (default: dist)")
@@ -571,7 +528,10 @@ def build_parser() -> argparse.ArgumentParser:
     _add_profile(bench)
     bench.set_defaults(func=cmd_bench, fmus=True)
     sy = sub.add_parser("synth", help="write a bench recording with one hidden effect")
-    sy.add_argument("--effect", required=True, help="hidden effect id (see model_core.effects)")
+    sy.add_argument("--effect", required=True, help="hidden effect id (see model_core.effects); "
+                    "several separated by commas")
+    sy.add_argument("--temperature-rise", type=float, help="K: the recording carries a "
+                    "temperature column warming by this much (warm-up effects follow it)")
     sy.add_argument("--seed", type=int, default=1)
     sy.add_argument("--mode", default="S1")
     sy.add_argument("--size", default="small", help="tiny (42 s), small (2 min), medium (5), "

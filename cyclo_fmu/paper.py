@@ -13,6 +13,10 @@ from model_core.drag import IDLE_DESCRIPTIONS, IDLE_NAMES
 from model_core.paper import PAPER_EXPERIMENT, PAPER_THEORY, BenchEnvelope, envelope_statistics
 
 
+#: [r/min] input speeds of the efficiency curves: the bench's test speeds
+BENCH_SPEEDS_RPM = (1000.0, 1500.0, 2000.0, 2500.0, 2800.0)
+
+
 def _figures(design, envelope, out: Path, breakdown_of=None) -> list[Path]:
     import matplotlib
     matplotlib.use("Agg")
@@ -23,10 +27,11 @@ def _figures(design, envelope, out: Path, breakdown_of=None) -> list[Path]:
     torques = np.linspace(envelope.torque_min, envelope.torque_max, 30)
     fig, axes = plt.subplots(2, 2, figsize=(10, 7.5))
     for row, mode in enumerate(("S1", "S2")):
-        m = efficiency_map(design, mode, speeds, torques)
+        # the curves at the speeds a test engineer runs on the bench
+        m = efficiency_map(design, mode, rpm_to_rad_s(np.asarray(BENCH_SPEEDS_RPM)), torques)
         ax = axes[row, 0]
-        for i in range(0, len(speeds), 2):
-            ax.plot(torques, 100 * m.eta[i], label=f"{rad_s_to_rpm(speeds[i]):.0f} r/min")
+        for i, n in enumerate(BENCH_SPEEDS_RPM):
+            ax.plot(torques, 100 * m.eta[i], label=f"{n:.0f} r/min")
         what = "experiment" if design.profile == "physical" else "theory"
         ref = (PAPER_EXPERIMENT if design.profile == "physical" else PAPER_THEORY)[mode]
         ax.axhspan(100 * ref["min"], 100 * ref["max"], color="0.85", label=f"paper {what} range")

@@ -20,26 +20,18 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from model_core import DriveDesign
-from model_core.effects import EFFECTS, switch_on
+from model_core.effects import EFFECTS, effect_signals, switch_on
 from model_core.kinematics import parse_mode, shaft_speeds
-from model_core.lossmap import ModeMap
+from model_core.lossmap import ModeMap, replay_input_torque
 
 from .bench import RECORDING_COLUMNS, write_recording
 
 SIZES = {"tiny": 42.0, "small": 120.0, "medium": 300.0, "large": 600.0}
 ENGINES = ("fast", "bench")
 
-#: hidden-effect sizes: comparable with the transducer noise (0.003 N*m), invisible by eye
-DEFAULT_EFFECTS = {
-    "load_independent_loss": ({"T_drag": 0.012}, None),
-    "thermal_drift": ({"loss_change": 0.12}, 150.0),
-    "inertia": ({"J": 1.5e-4}, None),
-    "mesh_ripple": ({"A1_sin": 0.006, "A1_cos": 0.003, "Az_sin": 0.004, "Az_cos": 0.0}, None),
-    "low_speed_friction": ({"T_stribeck": 0.025}, 40.0),
-    "torque_sensor_offset": ({"offset": 0.006}, None),
-    "friction_miscalibrated": ({}, None),
-    "none": ({}, None),
-}
+#: hidden-effect sizes (the registry's synth defaults): comparable with the transducer noise
+#: (0.003 N*m), invisible by eye
+DEFAULT_EFFECTS = {k: e.synth_default for k, e in EFFECTS.items()}
 
 
 @dataclass(frozen=True)
@@ -56,21 +48,25 @@ class SynthSettings:
     J_out: float = 2.0e-3           # kg m^2
 
 
-PLANS = ("full", "one_speed")
+PLANS = ("full", "one_speed", "four_quadrant")
 
 
 def test_plan(duration: float, rng: np.random.Generator, plan: str = "full"):
     """Setpoints [(t_start, input speed r/min, output brake torque N*m)] over ``duration``.
     ``full`` varies speed (both directions), load and time; ``one_speed`` only steps the load
-    at 2000 r/min forward, a poor plan under which some effects look alike."""
+    at 2000 r/min forward, a poor plan under which some effects look alike;
+    ``four_quadrant`` adds back-driven holds (a load machine driving the output: negative
+    brake torque), which separate a transducer gain error from a friction level."""
     if plan not in PLANS:
         raise ValueError(f"plan = {plan!r}: must be one of {', '.join(PLANS)}")
-    speeds = [300.0, 600.0, 1200.0, 2000.0, 2800.0] if plan == "full" else [2000.0]
+    speeds = [300.0, 600.0, 1200.0, 2000.0, 2800.0] if plan != "one_speed" else [2000.0]
     loads = [2.0, 4.5, 7.5]
     steps = [(n, T) for n in speeds for T in loads]
-    if plan == "full":
+    if plan in ("full", "four_quadrant"):
         steps += [(-n, T) for n in (600.0, 1600.0, 2800.0) for T in (3.0, 7.0)]
-    else:
+    if plan == "four_quadrant":
+        steps += [(n, -T) for n in (600.0, 1600.0, -1600.0, 2800.0) for T in (2.0, 5.0)]
+    if plan == "one_speed":
         steps = steps * 4
     hold = duration / len(steps)
     order = rng.permutation(len(steps))
@@ -86,24 +82,40 @@ def _first_order(x, dt, tau):
 
 
 def signals_for_effects(t, w_in, loss_in, mode, z1, temperature=None):
-    """The signal dict model_core.effects expects, from time, input speed and model loss."""
-    alpha = np.gradient(w_in, t)
-    theta = np.concatenate([[0.0], np.cumsum(0.5 * (w_in[1:] + w_in[:-1]) * np.diff(t))])
-    w = shaft_speeds(mode, 1.0, z1)
-    a = parse_mode(mode)[0]
-    # roller pass: z1 per turn of the ring relative to the carrier, per turn of the input
-    order = z1 * abs(float(w["1"] - w["S"])) / abs(float(w[a]))
-    return {"t": t, "w_in": w_in, "alpha_in": alpha, "theta_in": theta, "loss_in": loss_in,
-            "order_roller": order, "temperature": temperature}
+    """The signal dict model_core.effects expects (``model_core.effects.effect_signals``)."""
+    return effect_signals(t, w_in, loss_in, mode, z1, temperature)
 
 
-def synthesize(effect: str, seed: int, mode: str = "S1", size: str = "small",
+def _hidden(effect, effect_values, shape) -> dict:
+    """{effect id: (values, shape)} of the hidden effects, defaults from the registry."""
+    if isinstance(effect, str):
+        effect = {effect: (effect_values, shape)}
+    elif not isinstance(effect, dict):
+        effect = {e: (None, None) for e in effect}
+    out = {}
+    for eid, spec in effect.items():
+        if eid not in EFFECTS:
+            raise ValueError(f"effect = {eid!r}: must be one of {', '.join(EFFECTS)}")
+        values, sh = spec if spec is not None else (None, None)
+        d_values, d_shape = EFFECTS[eid].synth_default
+        out[eid] = (dict(d_values, **(values or {})), sh if sh is not None else d_shape)
+    return out
+
+
+def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
                design: DriveDesign = None, settings: SynthSettings = SynthSettings(),
                friction_error: float = None, effect_values: dict = None, shape=None,
-               plan: str = "full", engine: str = "fast", fmu_dir=None) -> dict:
-    """A recording dict (schema columns, SI-free edge units r/min and N*m) plus ``truth``."""
-    if effect not in EFFECTS:
-        raise ValueError(f"effect = {effect!r}: must be one of {', '.join(EFFECTS)}")
+               plan: str = "full", engine: str = "fast", fmu_dir=None, added_torque=None,
+               temperature_rise: float = None, duration: float = None) -> dict:
+    """A recording dict (schema columns, edge units r/min and N*m) plus ``truth``.
+
+    ``effect``: one effect id, a list of ids or {id: (values, shape)} (several hidden at
+    once; ``effect_values``/``shape`` apply to a single id). ``added_torque(signals)``: a
+    torque (N*m) at the input of physics outside the library (for tests of the diagnosis's
+    'unexplained'). ``temperature_rise`` [K]: the recording carries a temperature column
+    warming by this much with the first warm-up time constant (25 degC start), and
+    temperature-form effects follow it. ``duration`` [s] overrides the size."""
+    hidden = _hidden(effect, effect_values, shape)
     if size not in SIZES:
         raise ValueError(f"size = {size!r}: must be one of {', '.join(SIZES)}")
     a, b, h = parse_mode(mode)
@@ -113,7 +125,7 @@ def synthesize(effect: str, seed: int, mode: str = "S1", size: str = "small",
         raise ValueError(f"engine = {engine!r}: must be one of {', '.join(ENGINES)}")
     design = design or DriveDesign()
     rng = np.random.default_rng(seed)
-    duration = SIZES[size]
+    duration = duration or SIZES[size]
     dt = 1.0 / settings.sample_rate
     t = np.arange(int(round(duration * settings.sample_rate))) * dt
     plan, hold = test_plan(duration, rng, plan)
@@ -135,30 +147,52 @@ def synthesize(effect: str, seed: int, mode: str = "S1", size: str = "small",
     T_deliv = T_set * np.tanh(w_out / settings.brake_w_reg) + settings.J_out * alpha_out
     tau_out = -T_deliv
     # the true reducer: friction coefficient off by friction_error
+    ids = set(hidden)
     if friction_error is None:
-        friction_error = 0.0 if effect == "none" else float(rng.uniform(-0.15, 0.15))
-        if effect == "friction_miscalibrated" and abs(friction_error) < 0.06:
+        friction_error = 0.0 if ids <= {"none"} else float(rng.uniform(-0.15, 0.15))
+        if "friction_miscalibrated" in ids and abs(friction_error) < 0.06:
             friction_error = math.copysign(0.06 + abs(friction_error), friction_error or 1.0)
     true_design = replace(design, friction=replace(
         design.friction, mu_boundary=design.friction.mu_boundary * (1 + friction_error)))
-    values, eff_shape = DEFAULT_EFFECTS[effect]
-    values = dict(values, **(effect_values or {}))
-    eff_shape = shape if shape is not None else eff_shape
     if engine == "bench":
-        return _through_the_bench(effect, values, eff_shape, true_design, plan, hold, mode,
+        if len(hidden) != 1 or added_torque is not None or temperature_rise is not None:
+            raise ValueError("engine = 'bench' hides exactly one library effect")
+        (eid, (values, eff_shape)), = hidden.items()
+        return _through_the_bench(eid, values, eff_shape, true_design, plan, hold, mode,
                                   duration, seed, settings, friction_error, fmu_dir)
-    tmax = float(np.max(np.abs(tau_out))) * 1.05 + 1e-6
-    wmax = float(np.max(np.abs(w_in))) * 1.05 + 1e-6
-    true_map = ModeMap(true_design, mode, tmax, wmax)
-    sol = true_map.solve_arrays(w_in, tau_out)
-    tau_in = sol["tau_in"]
-    lossless = -tau_out * w_out / np.where(w_in == 0, np.inf, w_in)
-    loss_in = tau_in - lossless
-    eff = EFFECTS[effect]
-    sig = signals_for_effects(t, w_in, loss_in, mode, design.z1)
-    # friction_miscalibrated hides nothing but the friction error itself
-    extra = eff.torque(sig, [values[p.name] for p in eff.parameters], eff_shape) \
-        if effect not in ("none", "friction_miscalibrated") else np.zeros_like(t)
+    tau_in, loss_in = replay_input_torque(true_design, mode, w_in, tau_out)
+    temperature = None
+    if temperature_rise is not None:
+        tau_T = next((sh for e, (v, sh) in hidden.items() if EFFECTS[e].temperature_form),
+                     None) or 300.0
+        temperature = 25.0 + temperature_rise * (1 - np.exp(-t / tau_T))
+    sens_nu = None
+    if "viscosity_drift" in hidden:
+        from model_core.lossmap import replay_input_torque as rp
+        hi = replace(true_design, lubricant=replace(
+            true_design.lubricant, kinematic_viscosity=true_design.lubricant.kinematic_viscosity * 1.05))
+        lo = replace(true_design, lubricant=replace(
+            true_design.lubricant, kinematic_viscosity=true_design.lubricant.kinematic_viscosity * 0.95))
+        sens_nu = (rp(hi, mode, w_in, tau_out)[0] - rp(lo, mode, w_in, tau_out)[0]) / (
+            math.log(1.05) - math.log(0.95))
+    sig = effect_signals(t, w_in, loss_in, mode, design.z1, temperature, T_in_model=tau_in,
+                         sens_nu=sens_nu)
+    extra = np.zeros_like(t)
+    offset = gain = 0.0
+    for eid, (values, eff_shape) in hidden.items():
+        eff = EFFECTS[eid]
+        if eid in ("none", "friction_miscalibrated"):
+            continue      # friction_miscalibrated hides nothing but the friction error itself
+        if eid == "torque_sensor_offset":
+            offset += values["offset"]
+            continue
+        if eid == "torque_sensor_gain":
+            gain += values["gain_error"]
+            continue
+        sh = None if (eff.temperature_form and temperature is not None) else eff_shape
+        extra += eff.torque(sig, [values[p.name] for p in eff.parameters], sh)
+    if added_torque is not None:
+        extra = extra + np.asarray(added_torque(sig), float)
     tau_in_total = tau_in + extra
     # transducers: bandwidth, noise, quantisation (readings in r/min and N*m)
     def read(x, noise, res):
@@ -167,19 +201,28 @@ def synthesize(effect: str, seed: int, mode: str = "S1", size: str = "small",
     rec = {
         "time_s": t,
         "speed_in_rpm": read(w_in * 30 / math.pi, settings.speed_noise, settings.speed_resolution),
-        "torque_in_Nm": read(tau_in_total, settings.torque_noise, settings.torque_resolution),
+        "torque_in_Nm": read((1 + gain) * tau_in_total + offset, settings.torque_noise,
+                             settings.torque_resolution),
         "speed_out_rpm": read(w_out * 30 / math.pi, settings.speed_noise, settings.speed_resolution),
         "torque_out_Nm": read(T_deliv, settings.torque_noise, settings.torque_resolution),
     }
-    rec["truth"] = {"effect": effect, "values": values, "shape": eff_shape,
+    if temperature is not None:
+        rec["temperature_C"] = temperature + 0.05 * rng.standard_normal(len(t))
+    hidden_rms = (1 + gain) * tau_in_total + offset - tau_in
+    first = next(iter(hidden))
+    rec["truth"] = {"effect": first if len(hidden) == 1 else sorted(hidden),
+                    "effects": {e: {"values": v, "shape": sh} for e, (v, sh) in hidden.items()},
+                    "values": hidden[first][0], "shape": hidden[first][1],
+                    "added_torque": added_torque is not None,
                     "friction_error": friction_error, "mode": mode, "seed": seed,
-                    "extra_torque_rms_Nm": float(np.sqrt(np.mean(extra ** 2)))}
+                    "extra_torque_rms_Nm": float(np.sqrt(np.mean(hidden_rms ** 2)))}
     return rec
 
 
 def write_synth(path, rec: dict):
     """Write the recording (schema columns only; the truth stays out of the file)."""
-    return write_recording(path, {c: rec[c] for c in RECORDING_COLUMNS})
+    cols = RECORDING_COLUMNS + (["temperature_C"] if "temperature_C" in rec else [])
+    return write_recording(path, {c: rec[c] for c in cols}, cols)
 
 
 PAPER_ZETA_D = {"S1": 0.0176, "S2": 0.0192}   # the paper's mean additional-loss factors
@@ -189,7 +232,7 @@ def paper_like(mode: str = "S1", seed: int = 1, size: str = "small", **kw) -> di
     """A recording whose hidden load-independent loss is sized like the paper's discrepancy:
     zeta_d (Eq. 31, over the driven samples) equal to the paper's mean, 1.76 % in S1 and
     1.92 % in S2; as in the paper it weighs most at low input power."""
-    from .diagnosis import Diagnoser
+    from model_core.paper import additional_loss_factor
     target = PAPER_ZETA_D["".join(parse_mode(mode)[:2])]
 
     def zeta(T_drag):
@@ -197,10 +240,10 @@ def paper_like(mode: str = "S1", seed: int = 1, size: str = "small", **kw) -> di
                          effect_values={"T_drag": T_drag}, **kw)
         w_in = rec["speed_in_rpm"] * math.pi / 30
         w_out = rec["speed_out_rpm"] * math.pi / 30
-        d = Diagnoser(kw.get("design"), mode)
-        T_model, _ = d.replay(rec["time_s"], w_in, rec["torque_in_Nm"], w_out, rec["torque_out_Nm"])
-        return Diagnoser._zeta_d(w_in, rec["torque_in_Nm"], w_out, rec["torque_out_Nm"],
-                                 T_model, 10), rec
+        T_model, _ = replay_input_torque(kw.get("design") or DriveDesign(), mode, w_in,
+                                         -rec["torque_out_Nm"])
+        return additional_loss_factor(w_in, rec["torque_in_Nm"], w_out, rec["torque_out_Nm"],
+                                      T_model, 10), rec
 
     z1, _ = zeta(0.01)
     z0, _ = zeta(0.0)
@@ -231,7 +274,9 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
     pole_pairs = 1
     f_sched = "; ".join(f"{t0:.6g} {n * pole_pairs / 60:.6g}" for t0, n, _ in steps)
     T_sched = "; ".join(f"{t0:.6g} {T:.6g}" for t0, _, T in steps)
-    sc = Scenario("synth", mode=mode, frequency_schedule=f_sched, torque_schedule=T_sched,
+    # the plan has more setpoints than the numbered Real schedule parameters hold: the String
+    # form, which run_fmus sets
+    sc = Scenario("synth", mode=mode,
                   duration=duration, hold=hold, J_out=settings.J_out)
     params = bench_parameters(sc, sensors, design)
     params["motor.frequency_schedule"] = f_sched

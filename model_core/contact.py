@@ -96,6 +96,167 @@ def _roller_forces(levers, clearances, torque, law, stiffness, state=None, key=N
     return np.where((lpos > 0) & (torque[..., None] > 0), f, 0.0)
 
 
+# Distinct contact problems. Over a mesh cycle many positions present the same set of
+# (lever arm, clearance) pairs to the solver, only permuted over the rollers (the pattern of a
+# roller set repeats every roller pitch; the disc pattern is also mirror-symmetric). Each
+# distinct set is solved once and its forces are scattered back. Two rows are the same problem
+# when their pairs, sorted, agree after rounding to _KEY_DIGITS significant digits of the
+# set's largest lever (clearances on the same absolute scale as the levers' rounding times the
+# rotation, i.e. rounded in metres to _KEY_CLEARANCE_M): the rows of one class then differ by
+# floating-point noise only (~1e-16), so the shared solution is that of every member to ~1e-14.
+_KEY_DIGITS = 11          # significant digits of the lever arms kept in the key
+_KEY_CLEARANCE_M = 1e-15  # m, rounding step of the clearances in the key (far below any load)
+_ZERO_LEVER = 1e-12       # lever arms below this fraction of the largest are rounding noise
+
+
+def distinct_problems(levers, clearances):
+    """Classes of identical contact problems among the rows of (levers, clearances).
+
+    levers, clearances: arrays (m, n) over positions x rollers. Returns (rep, cls, inv):
+    ``rep`` the row index of each class's representative (n_d,), ``cls`` the class of each row
+    (m,), and ``inv`` (m, n) such that a row's roller j corresponds to the representative's
+    roller ``order[rep[cls], inv]`` after sorting, see ``scatter_forces``. Also returns the
+    sorting order of the representatives' rollers.
+    """
+    levers = np.asarray(levers, float)
+    clearances = np.broadcast_to(np.asarray(clearances, float), levers.shape)
+    scale = np.max(np.abs(levers)) or 1.0
+    # rollers with l <= 0 carry nothing whatever their values: one key (0, 0) for all of them
+    pos = levers > 0
+    kl = np.where(pos, np.round(levers / scale * 10.0 ** _KEY_DIGITS), 0.0)
+    kc = np.where(pos, np.round(clearances / _KEY_CLEARANCE_M), 0.0)
+    # sort each row's pairs by (lever key, clearance key): permutation-invariant rows
+    order = np.lexsort((kc, kl), axis=-1)
+    inv = np.argsort(order, axis=-1)
+    key = np.concatenate([np.take_along_axis(kl, order, -1),
+                          np.take_along_axis(kc, order, -1)], -1)
+    _, rep, cls = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    return rep, cls.reshape(-1), inv, order
+
+
+class _Geometry:
+    """Angles, levers and clearances of one roller set at the mesh positions, with the classes
+    of distinct contact problems (cached per design and positions)."""
+
+    __slots__ = ("angles", "levers", "clear", "rep_levers", "rep_clear", "cls", "inv", "_l", "_l2",
+                 "_c", "_l_m", "_c_m", "_no_clearance", "_sum_l2", "_sum_l19")
+
+    def __init__(self, angles, levers, clear, dedup=True):
+        # a roller at the end of the loaded half (sin = 0 up to rounding, e.g. sin(pi) = 1.2e-16)
+        # has no lever arm: zero it, so that its sign is not left to rounding noise (a force of
+        # 1e-25 N would still count in loss laws with a power of the force below one)
+        levers = np.where(np.abs(levers) <= _ZERO_LEVER * np.max(np.abs(levers)), 0.0, levers)
+        self.angles, self.levers = angles, levers
+        self.clear = np.broadcast_to(clear, levers.shape)
+        m = levers.shape[0]
+        if dedup and m > 1:
+            rep, cls, inv, order = distinct_problems(levers, self.clear)
+            o = order[rep]
+            self.rep_levers = np.take_along_axis(levers[rep], o, -1)
+            self.rep_clear = np.take_along_axis(self.clear[rep], o, -1)
+            self.cls, self.inv = cls[:, None], inv
+        else:
+            self.rep_levers, self.rep_clear = levers, self.clear
+            self.cls = np.arange(m)[:, None]
+            self.inv = np.broadcast_to(np.arange(levers.shape[1]), levers.shape)
+
+        # the distinct problems, rollers first: (n, n_d), so that the sums over the rollers in
+        # the Newton iteration add whole contiguous arrays
+        lpos = np.where(self.rep_levers > 0, self.rep_levers, 0.0)
+        self._l = np.ascontiguousarray(lpos.T)
+        self._l2 = self._l * self._l
+        self._c = np.ascontiguousarray(self.rep_clear.T)
+        m_ = np.argmax(lpos, axis=-1)
+        idx = np.arange(lpos.shape[0])
+        self._l_m, self._c_m = lpos[idx, m_], self.rep_clear[idx, m_]
+        # without clearance on any loaded roller the balance has a closed form
+        self._no_clearance = bool(np.all(self.rep_clear[lpos > 0] == 0))
+        self._sum_l2 = np.sum(lpos * lpos, axis=-1)
+        self._sum_l19 = np.sum(lpos ** (19.0 / 9.0), axis=-1)
+
+    @property
+    def n_distinct(self):
+        return self.rep_levers.shape[0]
+
+    def solve(self, torque, law, stiffness, guess=None):
+        """Rotation (rad, shape (..., n_d)) of every distinct problem at gear torque(s) T (...).
+
+        The Newton iteration of ``solve_rotation`` (same steps, same stop) on the
+        rollers-first layout, started from the free rotation of the closed form; without
+        clearance that closed form is the solution. ``guess``: (rot, T) of a previous call at
+        the same positions, shapes (..., n_d) and (..., 1).
+        """
+        T = np.asarray(torque, float)[..., None]
+        linear = law == "linear"
+        # the balance without clearance has a closed form (rigid-body rotation of the contact
+        # pattern): rot_0 = T/(K sum l^2) (linear) or (T/(K sum l^(19/9)))^(9/10) (Palmgren)
+        rot_free = T / (stiffness * self._sum_l2) if linear else \
+            (T / (stiffness * self._sum_l19)) ** 0.9
+        if self._no_clearance:
+            return rot_free
+        ex = (slice(None),) + (None,) * (T.ndim - 1)
+        l, l2, c = self._l[ex], self._l2[ex], self._c[ex]
+        l_m, c_m = self._l_m, self._c_m
+        # start: the clearance of the most loaded roller closed, then the free rotation. Any
+        # start with contact is safe: from the left of the root of this increasing convex
+        # function, Newton's first step lands right of it, then converges monotonically.
+        rot0 = np.maximum(c_m / l_m, 0.0)
+        rot = rot0 + rot_free
+        if guess is not None:
+            # warm start from the solution (rot_old, T_old): its part beyond the clearance
+            # scaled like the free rotation, keeping the cold start where it had no contact
+            rot_old, T_old = guess
+            ratio = np.where(T_old > 0, T / np.where(T_old > 0, T_old, 1.0), 0.0)
+            scaled = rot0 + (rot_old - rot0) * (ratio if linear else ratio ** 0.9)
+            rot = np.where((rot_old * l_m > c_m) & (T_old > 0), scaled, rot)
+        linear = law == "linear"
+        for _ in range(_NEWTON_ITERATIONS):
+            d = l * rot - c
+            np.maximum(d, 0.0, out=d)
+            if linear:
+                t = stiffness * np.add.reduce(l * d, axis=0)
+                dt = stiffness * np.add.reduce(l2 * (d > 0), axis=0)
+            else:
+                q = np.cbrt(np.cbrt(d))
+                t = stiffness * np.add.reduce(l * q * d, axis=0)
+                dt = (10.0 / 9.0) * stiffness * np.add.reduce(l2 * q, axis=0)
+            pos = dt > 0
+            step = np.where(pos, (t - T) / np.where(pos, dt, 1.0), 0.0)
+            rot = rot - step
+            if np.all(np.abs(step) <= _NEWTON_RTOL * np.abs(rot)):
+                break
+        return rot
+
+    def forces(self, torque, law, stiffness, state=None, key=None):
+        """Forces (N) at every position, shape (..., m, n), for gear torque(s) (...)."""
+        T = np.asarray(torque, float)
+        guess = None if state is None else state.get(key)
+        if guess is not None and guess[0].shape != T.shape + (self.n_distinct,):
+            guess = None
+        rot = self.solve(T, law, stiffness, guess)
+        if state is not None:
+            state[key] = (rot, T[..., None])
+        d = self._l[(slice(None),) + (None,) * T.ndim] * rot - self._c[
+            (slice(None),) + (None,) * T.ndim]
+        f = contact_force(d, law, stiffness)
+        f = np.where((self._l[(slice(None),) + (None,) * T.ndim] > 0) & (T[..., None] > 0),
+                     f, 0.0)
+        return np.moveaxis(f, 0, -1)[..., self.cls, self.inv]
+
+
+_GEOMETRY_CACHE: dict = {}
+_GEOMETRY_CACHE_SIZE = 64   # entries; a design and its mesh positions per roller set
+
+
+def _cached_geometry(key, make):
+    geom = _GEOMETRY_CACHE.get(key)
+    if geom is None:
+        if len(_GEOMETRY_CACHE) >= _GEOMETRY_CACHE_SIZE:
+            _GEOMETRY_CACHE.pop(next(iter(_GEOMETRY_CACHE)))
+        geom = _GEOMETRY_CACHE[key] = make()
+    return geom
+
+
 def loaded_half_angles(psi, n):
     """Angles (rad, in [0, 2 pi)) of n equally spaced rollers at mesh position(s) psi, keeping
     only the ceil(n/2) nearest the middle of the loaded half 0 < angle < pi: the others have
@@ -106,66 +267,85 @@ def loaded_half_angles(psi, n):
     return np.take_along_axis(ang, order, -1)
 
 
-def _roller_set_forces(design, gear_torque, state, key, make_geometry, width):
-    """Solve one roller set; its geometry (angles, levers, clearances) is kept in ``state``."""
-    geom = None if state is None else state.get((key, "geometry"))
-    if geom is None:
-        geom = make_geometry()
-        if state is not None:
-            state[(key, "geometry")] = geom
-    angles, levers, clear = geom
+def _roller_set_forces(design, gear_torque, state, key, geom, width, dedup):
+    """Solve the distinct problems of one roller set and scatter the forces to all positions."""
     stiff = (design.linear_stiffness if design.contact_law == "linear"
              else palmgren_stiffness(width))
-    T = np.asarray(gear_torque, float)[..., None]
-    full = T.shape[:-1] + levers.shape
+    T = np.asarray(gear_torque, float)
+    if dedup:
+        return geom.angles, geom.forces(T, design.contact_law, stiff, state, key)
+    # reference path: every position on its own, the general solver
+    levers, clear = geom.levers, geom.clear
+    full = T.shape + levers.shape
     F = _roller_forces(np.broadcast_to(levers, full), np.broadcast_to(clear, full),
-                       np.broadcast_to(T, full[:-1]), design.contact_law, stiff, state, key)
-    return angles, F
+                       np.broadcast_to(T[..., None], full[:-1]), design.contact_law, stiff,
+                       state, key)
+    return geom.angles, F
 
 
-def ring_roller_forces(design, gear_torque, psi, state=None, key="ring"):
+def _psi_key(psi):
+    psi = np.atleast_1d(np.asarray(psi, float))
+    return psi, psi.tobytes()
+
+
+def ring_roller_forces(design, gear_torque, psi, state=None, key="ring", dedup=True):
     """Normal forces F_Ni (N) between tooth and ring rollers (Eqs. 10-12).
 
     gear_torque: torque T_c (N*m) the ring rollers exert on one cycloid gear about its centre,
     shape (...); psi: mesh position(s), shape (m,). Returns (phi, F) for the rollers of the
     loaded half, shapes (m, n) and (..., m, n), n = ceil(z1/2); the other rollers carry nothing.
-    ``state``: optional dict that keeps geometry and the solved rotation under ``key``, for a
-    warm start of the next call with nearby torques at the same positions.
+    ``state``: optional dict that keeps the solved rotations under ``key``, for a warm start of
+    the next call with nearby torques at the same positions. Positions presenting the same set
+    of lever arms and clearances are solved once (``dedup=False``: every position on its own,
+    the reference path; the results agree to ~1e-14).
     """
-    def make_geometry():
+    psi, pbytes = _psi_key(psi)
+
+    def make():
         phi = loaded_half_angles(psi, design.z1)
-        return (phi, geometry.ring_roller_levers(phi, design.e, design.z1, design.lam),
-                geometry.modification_clearance(phi, design.lam, design.delta_z,
-                                                design.profile_modification))
-    return _roller_set_forces(design, gear_torque, state, key, make_geometry, design.b1)
+        return _Geometry(phi, geometry.ring_roller_levers(phi, design.e, design.z1, design.lam),
+                         geometry.modification_clearance(phi, design.lam, design.delta_z,
+                                                         design.profile_modification))
+    geom = _cached_geometry(("ring", design.z1, design.e, design.lam, design.delta_z,
+                             design.profile_modification, pbytes), make)
+    return _roller_set_forces(design, gear_torque, state, key, geom, design.b1, dedup)
 
 
-def disc_roller_forces(design, gear_torque, psi, state=None, key="disc"):
+def disc_roller_forces(design, gear_torque, psi, state=None, key="disc", dedup=True):
     """Normal forces F_Kj (N) between disc rollers and holes (Eqs. 13-16).
 
     Returns (theta, F) for the rollers of the loaded half, shapes (m, n) and (..., m, n),
-    n = ceil(k/2); every force is parallel to the line of centres.
+    n = ceil(k/2); every force is parallel to the line of centres. ``state``, ``dedup``: as in
+    ``ring_roller_forces``.
     """
-    def make_geometry():
+    psi, pbytes = _psi_key(psi)
+    c = geometry.hole_clearance(design.D_cz, design.d_v2, design.e)
+
+    def make():
         theta = loaded_half_angles(psi, design.n_disc_rollers)
         levers = geometry.disc_roller_levers(theta, design.r_w)
-        return (theta, levers,
-                np.full_like(levers, geometry.hole_clearance(design.D_cz, design.d_v2, design.e)))
-    return _roller_set_forces(design, gear_torque, state, key, make_geometry, design.b2)
+        return _Geometry(theta, levers, np.full_like(levers, c))
+    geom = _cached_geometry(("disc", design.n_disc_rollers, design.r_w, c, pbytes), make)
+    return _roller_set_forces(design, gear_torque, state, key, geom, design.b2, dedup)
 
 
-def eccentric_bearing_force(design, phi, F_ring, F_disc):
+def eccentric_bearing_force(design, phi, F_ring, F_disc, ring_index=None, disc_index=None):
     """Components (F_EV, F_EH) of the eccentric-bearing force on one gear (Eqs. 17, 18), N.
 
     F_EV is perpendicular to the line of centres (only ring forces have such a component);
     F_EH along it (ring forces plus disc forces, which all act along -x on the gear).
     Shapes: phi, F_ring (..., n1) and F_disc (..., n2) with the same leading shape.
     The bearing force balances the gear: it is minus the sum of the roller forces.
+    ring_index, disc_index: when given, F_ring and F_disc belong to distinct positions and the
+    gear's position k combines ring position ring_index[k] with disc position disc_index[k].
     """
     nx, ny = geometry.ring_roller_normals(phi, design.lam)
     F_EV = -np.sum(F_ring * ny, axis=-1)
-    F_EH = np.sum(F_ring * nx, axis=-1) - np.sum(F_disc, axis=-1)
-    return F_EV, F_EH
+    F_x = np.sum(F_ring * nx, axis=-1)
+    F_d = np.sum(F_disc, axis=-1)
+    if ring_index is not None:
+        F_EV, F_x, F_d = F_EV[..., ring_index], F_x[..., ring_index], F_d[..., disc_index]
+    return F_EV, F_x - F_d
 
 
 #: Static limit of the Hertz contact pressure [Pa]: 4000 MPa, the basic static load rating's

@@ -161,6 +161,8 @@ class ExtraPhysics:
 
     drag_torque: float = _f(0.0, "N*m", "load-independent drag at 300 rad/s of the driving "
                             "shaft, growing as (speed)^(2/3) (churning, seals, bearing drag)")
+    drag_exponent: float = _f(2.0 / 3.0, "1", "exponent p of the drag's speed law "
+                              "T_drag (|w|/300 rad/s)^p: 2/3 churning, 0 seals, 1 viscous")
     stribeck_torque: float = _f(0.0, "N*m", "extra friction at standstill of the driving shaft, "
                                 "decaying as exp(-(w/w_s)^2)")
     stribeck_speed: float = _f(40.0, "rad/s", "Stribeck speed w_s")
@@ -173,6 +175,22 @@ class ExtraPhysics:
     ripple_roller_phase: float = _f(0.0, "rad", "phase of the roller-pass ripple")
     thermal_loss_change: float = _f(0.0, "1", "relative change of the losses when warm (dynamic)")
     thermal_tau: float = _f(300.0, "s", "warm-up time constant")
+    # -- replay only (the diagnosis's replay of a recording; the FMUs do not carry these) ----
+    thermal_loss_per_10K: float = _f(0.0, "1", "relative change of the losses per 10 K of the "
+                                     "recording's temperature column (replay only)")
+    viscosity_ln_change: float = _f(0.0, "1", "change of ln(viscosity) when warm, acting through "
+                                    "the model's viscosity sensitivity (replay only)")
+    viscosity_tau: float = _f(300.0, "s", "time constant of the viscosity drift (replay only)")
+    viscosity_ln_per_10K: float = _f(0.0, "1", "change of ln(viscosity) per 10 K of the "
+                                     "recording's temperature column (replay only)")
+    torque_in_offset: float = _f(0.0, "N*m", "zero offset of the input torque transducer a "
+                                 "diagnosis found (the replay corrects the reading; not physics)")
+    torque_in_gain_error: float = _f(0.0, "1", "gain error of the input torque transducer a "
+                                     "diagnosis found (the replay corrects the reading)")
+
+    #: fields the FMUs do not carry (a diagnosis's replay uses them)
+    REPLAY_ONLY = ("thermal_loss_per_10K", "viscosity_ln_change", "viscosity_ln_per_10K",
+                   "torque_in_offset", "torque_in_gain_error")
 
     def steady_torque(self, w):
         """Drag and Stribeck torque at driving speed w (rad/s), N*m, signed with the motion:
@@ -181,7 +199,8 @@ class ExtraPhysics:
         from .effects import EFFECTS
         w = _np.asarray(w, float)
         s = {"w_in": _np.atleast_1d(w).ravel()}
-        t = self.drag_torque * EFFECTS["load_independent_loss"].basis(s)[:, 0]
+        t = self.drag_torque * EFFECTS["load_independent_loss"].basis(
+            s, self.drag_exponent)[:, 0]
         if self.stribeck_torque:
             t = t + self.stribeck_torque * EFFECTS["low_speed_friction"].basis(
                 s, self.stribeck_speed)[:, 0]
@@ -350,9 +369,12 @@ def validate_design(d: DriveDesign) -> None:
     _check_finite(d.lubricant, "lubricant.")
     _check_finite(d.friction, "friction.")
     _check_finite(d.extra, "extra.")
-    for name in ("stribeck_speed", "thermal_tau"):
+    for name in ("stribeck_speed", "thermal_tau", "viscosity_tau"):
         if not getattr(d.extra, name) > 0:
             raise CycloidInputError("extra." + name, getattr(d.extra, name), "must be positive")
+    if not 0.0 <= d.extra.drag_exponent <= 2.0:
+        raise CycloidInputError("extra.drag_exponent", d.extra.drag_exponent,
+                                "must lie between 0 and 2")
     for name in ("drag_torque", "stribeck_torque", "input_inertia"):
         if getattr(d.extra, name) < 0:
             raise CycloidInputError("extra." + name, getattr(d.extra, name),
@@ -362,6 +384,9 @@ def validate_design(d: DriveDesign) -> None:
         if int(v) != v:
             raise CycloidInputError(name, v, "must be a whole number")
         object.__setattr__(d, name, int(v))   # 15.0 -> 15: counts are used as integers
+    if not -0.5 < d.extra.torque_in_gain_error < 0.5:
+        raise CycloidInputError("extra.torque_in_gain_error", d.extra.torque_in_gain_error,
+                                "must lie between -0.5 and 0.5")
     if d.z1 < 3:
         raise CycloidInputError("z1", d.z1, "a cycloid drive needs at least 3 ring rollers")
     if d.n_disc_rollers < 3:
@@ -492,7 +517,10 @@ def _section_to_dict(obj, only=None, skip=()) -> dict:
             continue
         v = getattr(obj, f.name)
         if isinstance(v, float):
-            v = float(f"{_from_si(v, f.metadata.get('scale', 1.0)):.12g}")
+            scale = f.metadata.get('scale', 1.0)
+            x = _from_si(v, scale)
+            short = float(f"{x:.12g}")      # 12 digits hide the unit conversion's noise,
+            v = short if _to_si(short, scale) == v else x   # unless they lose the value
         out[_toml_key(f)] = v
     return out
 

@@ -1,42 +1,70 @@
-"""Physical effects the paper's load-dependent model leaves out, as parametric torque terms.
+"""Physical effects the paper's load-dependent model leaves out: one registry entry per effect.
 
-Each effect adds a torque at the reducer's input shaft (N*m, in the sense of the input torque:
-positive = the driver must deliver more). All but ``thermal_drift`` and ``low_speed_friction``
-are linear in their parameters; those two have one shape parameter (a time constant, a
-Stribeck speed) scanned on a grid. The same terms serve the synthetic recordings (a hidden
-effect), the diagnosis (candidate library) and, once fitted, the updated model.
+Each effect adds a torque at the reducer's driving (input) shaft, in N*m and in the sense of
+the input torque (positive = the driver must deliver more). An entry carries everything the
+rest of the project needs about the effect, so that adding one touches this file only:
 
-Signals (numpy arrays over samples, SI): t (s), w_in (rad/s), alpha_in (rad/s^2), theta_in
-(rad, integral of w_in), loss_in (the model's loss torque referred to the input, N*m:
-T_in_model - T_in_lossless), order_roller (roller-pass order of the input speed),
-temperature (degC or None).
+- its torque as a combination of basis columns (``basis``), linear in its parameters, with at
+  most one nonlinear shape parameter scanned on a grid (a time constant, a Stribeck speed);
+  effects that act through the model's own parameters (the friction level, the lubricant's
+  viscosity) use the full model's sensitivity to that parameter as their column, not a proxy;
+- its parameters with units and physical bounds (a fit outside them is not that effect);
+- what it maps to in a design (``apply``: the ``[extra]`` fields, or the friction level);
+- the run that separates it from look-alikes, and the size the synthesiser hides by default.
+
+The synthesiser hides effects with these terms, the diagnosis fits them, and a design's
+``[extra]`` section switches them on in the replay (``extra_torque``); the FMUs evaluate the
+steady and dynamic terms of ``design.ExtraPhysics`` from the same formulas.
+
+Signals ``s`` (numpy arrays over samples, SI), built by :func:`effect_signals`: ``t`` (s),
+``w_in`` (rad/s), ``alpha_in`` (rad/s^2), ``theta_in`` (rad, integral of w_in), ``loss_in``
+(the model's loss torque referred to the input, N*m), ``T_in_model`` (the model's input
+torque, N*m), ``order_roller`` (roller-pass order of the input speed), ``temperature`` (degC
+or None), ``sens_mu`` and ``sens_nu`` (d T_in_model / d ln mu_boundary and / d ln nu, N*m;
+only where a model replay provides them).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .kinematics import parse_mode, shaft_speeds
+
 W_REF = 300.0   # rad/s, reference input speed of the drag law (about 2860 r/min)
+#: exponent of the no-load drag on speed: (nu n)^(2/3) for churning and the viscous part of
+#: bearing drag (SKF M0, Niemann/Winter); the grid the diagnosis scans spans a seal's nearly
+#: constant friction (0) to a purely viscous drag (1)
+DRAG_EXPONENT = 2.0 / 3.0
+DRAG_EXPONENTS = (0.0, 1.0 / 3.0, 0.5, 2.0 / 3.0, 0.85, 1.0)
+#: [K] temperature step of the temperature form of the warm-up terms (per 10 K, as catalogue
+#: viscosity and transducer drift figures are quoted)
+T_STEP = 10.0
 
 
 @dataclass(frozen=True)
 class Parameter:
     name: str
     unit: str
-    lower: float
+    lower: float       # physical bounds: a fit outside them is not this effect
     upper: float
     description: str
 
 
 @dataclass(frozen=True)
 class Effect:
+    """One candidate effect (see the module docstring)."""
+
     id: str
     description: str
     parameters: tuple          # linear parameters (Parameter), in basis-column order
     shape: tuple = ()          # grid of the nonlinear shape parameter, () if none
     shape_name: str = ""
     shape_unit: str = ""
+    separating_run: str = ""   # the run that tells it apart from its look-alikes
+    synth_default: tuple = ({}, None)   # (values, shape) the synthesiser hides by default
+    requires: tuple = ()       # signals it needs (e.g. "sens_nu")
+    temperature_form: bool = False   # with a temperature column the shape becomes (T - T0)
 
     def basis(self, s: dict, shape=None) -> np.ndarray:
         """Columns (n_samples, n_params) whose combination with the parameters is the torque."""
@@ -47,17 +75,39 @@ class Effect:
         B = self.basis(s, shape)
         return B @ np.asarray(values, float) if B.shape[1] else np.zeros(len(s["t"]))
 
+    def shapes(self, s: dict) -> tuple:
+        """The shape values to scan for these signals (``(None,)`` for a linear effect or the
+        temperature form)."""
+        if self.temperature_form and s.get("temperature") is not None:
+            return (None,)
+        return self.shape or (None,)
+
+    def apply(self, design, values: dict, shape=None, temperature=False):
+        """``design`` with the effect switched on at fitted values; returns (design, notes)."""
+        return _APPLY.get(self.id, _apply_nothing)(design, values, shape, temperature)
+
+
+# -- the terms --------------------------------------------------------------------------------
+def _warm(s, shape):
+    """Warm-up shape: (T - T0)/10 K with a temperature column, else 1 - exp(-(t - t0)/tau)."""
+    if s.get("temperature") is not None and shape is None:
+        T = s["temperature"]
+        return (T - T[0]) / T_STEP
+    return 1.0 - np.exp(-(s["t"] - s["t"][0]) / shape)
+
 
 def _drag(s, shape):
     w = s["w_in"]
-    return (np.sign(w) * (np.abs(w) / W_REF) ** (2.0 / 3.0))[:, None]
+    p = DRAG_EXPONENT if shape is None else shape
+    return (np.sign(w) * (np.abs(w) / W_REF) ** p)[:, None]
 
 
 def _thermal(s, shape):
-    if s.get("temperature") is not None:
-        T = s["temperature"]
-        return (s["loss_in"] * (T - T[0]) / 10.0)[:, None]
-    return (s["loss_in"] * (1.0 - np.exp(-(s["t"] - s["t"][0]) / shape)))[:, None]
+    return (s["loss_in"] * _warm(s, shape))[:, None]
+
+
+def _viscosity(s, shape):
+    return (s["sens_nu"] * _warm(s, shape))[:, None]
 
 
 def _inertia(s, shape):
@@ -79,65 +129,140 @@ def _offset(s, shape):
     return np.ones((len(s["t"]), 1))
 
 
+def _gain(s, shape):
+    return s["T_in_model"][:, None]
+
+
 def _friction(s, shape):
-    return s["loss_in"][:, None]
+    return s["sens_mu"][:, None]
 
 
 def _none(s, shape):
     return np.zeros((len(s["t"]), 0))
 
 
-_BASIS = {"load_independent_loss": _drag, "thermal_drift": _thermal, "inertia": _inertia,
-          "mesh_ripple": _ripple, "low_speed_friction": _stribeck,
-          "torque_sensor_offset": _offset, "friction_miscalibrated": _friction, "none": _none}
+_BASIS = {"load_independent_loss": _drag, "thermal_drift": _thermal,
+          "viscosity_drift": _viscosity, "inertia": _inertia, "mesh_ripple": _ripple,
+          "low_speed_friction": _stribeck, "torque_sensor_offset": _offset,
+          "torque_sensor_gain": _gain, "friction_miscalibrated": _friction, "none": _none}
+
+TAU_GRID = (60.0, 150.0, 300.0, 600.0, 1200.0)    # s, warm-up time constants scanned
 
 EFFECTS = {
+    "friction_miscalibrated": Effect(
+        "friction_miscalibrated", "the model's friction level is off: the pins' boundary "
+        "friction coefficient differs (the full model's sensitivity to mu_boundary)",
+        (Parameter("mu_boundary_rel_error", "1", -0.9, 2.0,
+                   "relative error of the model's boundary friction coefficient"),),
+        separating_run="a load sweep at constant speed, and back-driven runs",
+        requires=("sens_mu",)),
     "load_independent_loss": Effect(
         "load_independent_loss",
         "no-load drag (grease churning, seals, bearing drag): a torque that grows with speed as "
-        "(nu n)^(2/3) and does not depend on load",
-        (Parameter("T_drag", "N*m", 0.0, 0.5, f"drag torque at the input at {W_REF:.0f} rad/s"),)),
+        "n^p (p = 2/3 for churning, (nu n)^(2/3); 0 for seal friction; 1 for viscous drag) and "
+        "does not depend on load",
+        (Parameter("T_drag", "N*m", 0.0, 0.5, f"drag torque at the input at {W_REF:.0f} rad/s"),),
+        shape=DRAG_EXPONENTS, shape_name="p", shape_unit="1",
+        separating_run="a speed sweep at light load, in both directions",
+        synth_default=({"T_drag": 0.012}, None)),
     "thermal_drift": Effect(
         "thermal_drift",
-        "the lubricant's viscosity changes as the drive warms, so the losses drift with time "
-        "(first order) or with temperature",
-        (Parameter("loss_change", "1", -0.5, 0.5, "relative change of the losses when warm "
+        "the losses drift as the drive warms (first order in time, or with the temperature "
+        "column): every loss scaled",
+        (Parameter("loss_change", "1", -0.9, 1.0, "relative change of the losses when warm "
                    "(or per 10 K with a temperature column)"),),
-        shape=(60.0, 150.0, 300.0, 600.0, 1200.0), shape_name="tau", shape_unit="s"),
+        shape=TAU_GRID, shape_name="tau", shape_unit="s",
+        separating_run="a cold start held at one operating point, with a temperature channel",
+        synth_default=({"loss_change": 0.12}, 150.0), temperature_form=True),
+    "viscosity_drift": Effect(
+        "viscosity_drift",
+        "the lubricant's viscosity changes as the drive warms (first order in time, or with the "
+        "temperature column), acting through the model's own viscosity dependence",
+        (Parameter("ln_viscosity_change", "1", -3.0, 1.0, "change of ln(viscosity) when warm "
+                   "(or per 10 K with a temperature column)"),),
+        shape=TAU_GRID, shape_name="tau", shape_unit="s",
+        separating_run="a cold start with a temperature channel at several speeds (viscosity "
+                       "losses change sign with speed, a friction level does not)",
+        synth_default=({"ln_viscosity_change": -0.8}, 300.0), requires=("sens_nu",),
+        temperature_form=True),
     "inertia": Effect(
         "inertia", "unmodelled rotating inertia on the input side: torque J dw/dt",
-        (Parameter("J", "kg*m^2", -1e-2, 1e-2, "inertia referred to the input shaft"),)),
+        (Parameter("J", "kg*m^2", 0.0, 1e-2, "inertia referred to the input shaft"),),
+        separating_run="slow and fast ramps up and down",
+        synth_default=({"J": 1.5e-4}, None)),
     "mesh_ripple": Effect(
         "mesh_ripple", "torque ripple at orders of the shaft speed: eccentric (1x) and "
         "roller pass",
         (Parameter("A1_sin", "N*m", -0.5, 0.5, "1x ripple, sine"),
          Parameter("A1_cos", "N*m", -0.5, 0.5, "1x ripple, cosine"),
          Parameter("Az_sin", "N*m", -0.5, 0.5, "roller-pass ripple, sine"),
-         Parameter("Az_cos", "N*m", -0.5, 0.5, "roller-pass ripple, cosine"))),
+         Parameter("Az_cos", "N*m", -0.5, 0.5, "roller-pass ripple, cosine")),
+        separating_run="an order analysis at several constant speeds",
+        synth_default=({"A1_sin": 0.006, "A1_cos": 0.003, "Az_sin": 0.004, "Az_cos": 0.0},
+                       None)),
     "low_speed_friction": Effect(
         "low_speed_friction", "boundary / Stribeck friction rising at low sliding speed: "
         "T_s exp(-(w/w_s)^2)",
         (Parameter("T_stribeck", "N*m", 0.0, 0.5, "extra friction torque at standstill"),),
-        shape=(20.0, 40.0, 80.0, 150.0), shape_name="w_s", shape_unit="rad/s"),
+        shape=(20.0, 40.0, 80.0, 150.0), shape_name="w_s", shape_unit="rad/s",
+        separating_run="a low-speed sweep at constant load",
+        synth_default=({"T_stribeck": 0.025}, 40.0)),
     "torque_sensor_offset": Effect(
         "torque_sensor_offset", "a zero offset of the input torque transducer",
-        (Parameter("offset", "N*m", -0.5, 0.5, "zero offset of the input torque reading"),)),
-    "friction_miscalibrated": Effect(
-        "friction_miscalibrated", "nothing is missing: the model's friction coefficient is off "
-        "(losses scaled)",
-        (Parameter("loss_scale_error", "1", -0.5, 0.5, "relative error of the model's losses"),)),
+        (Parameter("offset", "N*m", -0.5, 0.5, "zero offset of the input torque reading"),),
+        separating_run="a zero reading at standstill and runs in both directions",
+        synth_default=({"offset": 0.006}, None)),
+    "torque_sensor_gain": Effect(
+        "torque_sensor_gain", "a gain (span) error of the input torque transducer: the "
+        "reading is (1 + g) times the torque",
+        # bounds: +-5 %, ten times the accuracy class (0.5 %) of the paper's HBM T22; a larger
+        # span error is a wrong transducer setting, which the plausibility checks catch
+        (Parameter("gain_error", "1", -0.05, 0.05, "relative gain error of the input torque "
+                   "reading"),),
+        separating_run="back-driven runs (the losses change side, a gain error does not) or an "
+                       "in-situ calibration with a lever and weights",
+        synth_default=({"gain_error": 0.02}, None), requires=("T_in_model",)),
     "none": Effect("none", "the model explains the data within its noise", ()),
 }
 
+#: effects that are faults of the measurement, not physics of the drive
+SENSOR_EFFECTS = ("torque_sensor_offset", "torque_sensor_gain")
 
+
+# -- signals ----------------------------------------------------------------------------------
+def roller_pass_order(mode: str, z1: int) -> float:
+    """Roller-pass order of the driving speed: z1 passes per turn of the ring relative to the
+    carrier, per turn of the driving shaft."""
+    w = shaft_speeds(mode, 1.0, z1)
+    a = parse_mode(mode)[0]
+    return z1 * abs(float(w["1"] - w["S"])) / abs(float(w[a]))
+
+
+def effect_signals(t, w_in, loss_in, mode, z1, temperature=None, T_in_model=None,
+                   sens_mu=None, sens_nu=None) -> dict:
+    """The signal dict the effects' terms read (see the module docstring)."""
+    t = np.asarray(t, float)
+    w_in = np.asarray(w_in, float)
+    alpha = np.gradient(w_in, t) if len(t) > 1 else np.zeros_like(w_in)
+    theta = np.concatenate([[0.0], np.cumsum(0.5 * (w_in[1:] + w_in[:-1]) * np.diff(t))])
+    return {"t": t, "w_in": w_in, "alpha_in": alpha, "theta_in": theta, "loss_in": loss_in,
+            "order_roller": roller_pass_order(mode, z1), "temperature": temperature,
+            "T_in_model": T_in_model, "sens_mu": sens_mu, "sens_nu": sens_nu}
+
+
+# -- a design's extra physics in a replay ---------------------------------------------------------
 def extra_torque(extra, s: dict) -> np.ndarray:
     """Torque (N*m) at the driving shaft of a design's ``extra`` physics (design.ExtraPhysics),
-    from the same terms the diagnosis fits; steady (drag, Stribeck) and dynamic (inertia,
-    ripple, warm-up) parts."""
+    from the same terms the diagnosis fits; steady (drag, Stribeck), dynamic (inertia, ripple,
+    warm-up) and, in a replay, the temperature-form warm-up and the viscosity drift.
+
+    The transducer corrections of ``extra`` are not torque of the drive: see
+    :func:`reading_model`."""
     n = len(s["t"])
     total = np.zeros(n)
     if extra.drag_torque:
-        total += EFFECTS["load_independent_loss"].torque(s, [extra.drag_torque])
+        total += EFFECTS["load_independent_loss"].torque(s, [extra.drag_torque],
+                                                         extra.drag_exponent)
     if extra.stribeck_torque:
         total += EFFECTS["low_speed_friction"].torque(s, [extra.stribeck_torque],
                                                      extra.stribeck_speed)
@@ -145,27 +270,107 @@ def extra_torque(extra, s: dict) -> np.ndarray:
             or extra.thermal_loss_change):
         total += extra.dynamic_torque(s["alpha_in"], s["theta_in"], s["order_roller"],
                                       s["t"] - s["t"][0], s["loss_in"])
+    temp = s.get("temperature")
+    if extra.thermal_loss_per_10K and temp is not None:
+        total += EFFECTS["thermal_drift"].torque(s, [extra.thermal_loss_per_10K], None)
+    if extra.viscosity_ln_change and s.get("sens_nu") is not None:
+        total += EFFECTS["viscosity_drift"].torque(s, [extra.viscosity_ln_change],
+                                                   extra.viscosity_tau)
+    if extra.viscosity_ln_per_10K and temp is not None and s.get("sens_nu") is not None:
+        total += EFFECTS["viscosity_drift"].torque(s, [extra.viscosity_ln_per_10K], None)
     return total
 
 
-def switch_on(extra, effect: str, values: dict, shape=None):
-    """``extra`` (design.ExtraPhysics) with an effect's fitted or hidden parameter values
-    switched on; effects that are not physics of the drive (a transducer offset, a friction
-    level, none) leave it unchanged."""
-    from dataclasses import replace
-    v = values
-    if effect == "load_independent_loss":
-        return replace(extra, drag_torque=max(v["T_drag"], 0.0))
-    if effect == "low_speed_friction":
-        return replace(extra, stribeck_torque=max(v["T_stribeck"], 0.0), stribeck_speed=shape)
-    if effect == "inertia":
-        return replace(extra, input_inertia=max(v["J"], 0.0))
-    if effect == "mesh_ripple":
-        # A sin(th + phi) = A cos(phi) sin(th) + A sin(phi) cos(th)
-        return replace(extra, ripple_1x=float(np.hypot(v["A1_sin"], v["A1_cos"])),
+def reading_model(extra, torque_in):
+    """What the input torque transducer reads for a true input torque (N*m), with the
+    transducer corrections a diagnosis wrote to ``extra``: (1 + gain_error) T + offset."""
+    return (1.0 + extra.torque_in_gain_error) * torque_in + extra.torque_in_offset
+
+
+# -- what each effect maps to in a design ------------------------------------------------------
+def _apply_nothing(design, v, shape, temperature):
+    return design, []
+
+
+def _with_extra(design, **kw):
+    return replace(design, extra=replace(design.extra, **kw))
+
+
+def _apply_friction(design, v, shape, temperature):
+    fr = design.friction
+    mu = fr.mu_boundary * (1 + v["mu_boundary_rel_error"])
+    return replace(design, friction=replace(fr, mu_boundary=mu)), [
+        f"friction.mu_boundary {fr.mu_boundary:.6g} -> {mu:.6g} (diagnosed friction level)"]
+
+
+def _apply_thermal(design, v, shape, temperature):
+    if temperature:
+        return _with_extra(design, thermal_loss_per_10K=v["loss_change"]), [
+            "extra.thermal_loss_per_10K: losses change with the temperature column "
+            "(replay only: the FMUs have no temperature input)"]
+    return _with_extra(design, thermal_loss_change=v["loss_change"], thermal_tau=shape), []
+
+
+def _apply_viscosity(design, v, shape, temperature):
+    note = ("viscosity drift acts through the model's viscosity sensitivity: replay only, the "
+            "FMUs do not carry it (their map is built at the catalogue viscosity)")
+    if temperature:
+        return _with_extra(design, viscosity_ln_per_10K=v["ln_viscosity_change"]), [note]
+    return _with_extra(design, viscosity_ln_change=v["ln_viscosity_change"],
+                       viscosity_tau=shape), [note]
+
+
+def _apply_drag(design, v, shape, temperature):
+    ex = design.extra
+    p = DRAG_EXPONENT if shape is None else shape
+    if ex.drag_torque and abs(ex.drag_exponent - p) > 1e-12:
+        # a second drag term of another exponent: keep the larger one's exponent, add at W_REF
+        p = ex.drag_exponent
+    return _with_extra(design, drag_torque=ex.drag_torque + max(v["T_drag"], 0.0),
+                       drag_exponent=p), []
+
+
+def _apply_ripple(design, v, shape, temperature):
+    # A sin(th + phi) = A cos(phi) sin(th) + A sin(phi) cos(th)
+    return _with_extra(design, ripple_1x=float(np.hypot(v["A1_sin"], v["A1_cos"])),
                        ripple_1x_phase=float(np.arctan2(v["A1_cos"], v["A1_sin"])),
                        ripple_roller=float(np.hypot(v["Az_sin"], v["Az_cos"])),
-                       ripple_roller_phase=float(np.arctan2(v["Az_cos"], v["Az_sin"])))
-    if effect == "thermal_drift":
-        return replace(extra, thermal_loss_change=v["loss_change"], thermal_tau=shape)
-    return extra
+                       ripple_roller_phase=float(np.arctan2(v["Az_cos"], v["Az_sin"]))), []
+
+
+def _apply_offset(design, v, shape, temperature):
+    return _with_extra(design, torque_in_offset=design.extra.torque_in_offset + v["offset"]), [
+        f"diagnosed: input torque transducer zero offset {v['offset']:.6g} N*m (a sensor fault, "
+        "not physics of the drive: re-zero the transducer; the replay corrects the reading)"]
+
+
+def _apply_gain(design, v, shape, temperature):
+    g = (1 + design.extra.torque_in_gain_error) * (1 + v["gain_error"]) - 1
+    return _with_extra(design, torque_in_gain_error=g), [
+        f"diagnosed: input torque transducer gain error {100 * v['gain_error']:+.3g} % (a sensor "
+        "fault: re-calibrate; the replay corrects the reading)"]
+
+
+_APPLY = {
+    "friction_miscalibrated": _apply_friction,
+    "load_independent_loss": _apply_drag,
+    "low_speed_friction": lambda d, v, sh, T: (
+        _with_extra(d, stribeck_torque=max(v["T_stribeck"], 0.0), stribeck_speed=sh), []),
+    "inertia": lambda d, v, sh, T: (
+        _with_extra(d, input_inertia=d.extra.input_inertia + max(v["J"], 0.0)), []),
+    "mesh_ripple": _apply_ripple,
+    "thermal_drift": _apply_thermal,
+    "viscosity_drift": _apply_viscosity,
+    "torque_sensor_offset": _apply_offset,
+    "torque_sensor_gain": _apply_gain,
+}
+
+
+def switch_on(extra, effect: str, values: dict, shape=None):
+    """``extra`` (design.ExtraPhysics) with an effect's values switched on (the synthesiser's
+    hidden physics); effects that act elsewhere (friction level, none) leave it unchanged."""
+    from .design import DriveDesign
+    if effect in ("none", "friction_miscalibrated"):
+        return extra
+    d, _ = EFFECTS[effect].apply(DriveDesign(extra=extra), values, shape)
+    return d.extra

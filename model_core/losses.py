@@ -10,6 +10,13 @@ and the disc rollers by alpha/i0 relative to the line of centres. Both patterns 
 n_cycle = (z1-1)/gcd(z1-1, k) ring pitches (two for the paper's 15 and 7), so losses are
 averaged over that joint cycle, ``design.n_positions`` positions per ring pitch. The second gear
 sits half a turn away: its rollers are seen at angles shifted by pi.
+
+Distinct positions. A gear at a mesh position is fully described by the angles of its rollers
+relative to its line of centres; positions (of either gear, when both carry the same torque)
+whose roller angles coincide as sets give the same losses. Each such class is evaluated once,
+ring and disc rollers separately (for the paper's drive 8 ring and 16 disc classes of the 32
+gear positions of a cycle), and the contact solver further solves each distinct set of lever
+arms and clearances once (8 and 9). ``dedup=False`` is the straightforward per-position path.
 """
 from __future__ import annotations
 
@@ -82,14 +89,20 @@ def _pin_stribeck(design, F, spin, width, d_pin, eta, diag, key):
     return mu
 
 
-def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, gear=0, diag=None,
-                 disc_torque=None, ring_flow=None):
+def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, gear=0,
+                 ring_index=None, disc_index=None, dedup=True, diag=None, disc_torque=None,
+                 ring_flow=None):
     """Losses of one gear with its roller patterns at psi_ring, psi_disc (rad from its line of
-    centres); gear_torque and w2_rel shaped (...), positions trailing. disc_torque: the gear's
-    torque on the disc side where friction makes it differ from the ring side (physical
-    profile); None: the same (the paper's frictionless balance). ring_flow: +1 where the ring
-    drives in the relative motion, -1 where it is driven; with it the ring rollers' normal
-    forces carry the friction's moment (friction.ring_friction_arm_ratio)."""
+    centres); gear_torque and w2_rel shaped (...), positions trailing.
+
+    ring_index, disc_index: when given, psi_ring and psi_disc are distinct classes and the
+    returned losses are gathered to the positions ``ring_index`` / ``disc_index`` (same length).
+    disc_torque: the gear's torque on the disc side where friction makes it differ from the
+    ring side (physical profile); None: the same (the paper's frictionless balance).
+    ring_flow: +1 where the ring drives in the relative motion, -1 where it is driven; with it
+    the ring rollers' normal forces carry the friction's moment
+    (friction.ring_friction_arm_ratio). diag: a dict collecting roller states (contact_states).
+    """
     fr, lub = design.friction, design.lubricant
     physical = design.profile == "physical"
     nu = thermal.lubricant_viscosity(design)
@@ -97,7 +110,8 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
     T = np.asarray(gear_torque, float)
     W = np.asarray(w2_rel, float)[..., None, None]
     # ring rollers (z1 per position)
-    phi, F = contact.ring_roller_forces(design, T, psi_ring, state, ("ring", gear))
+    phi, F = contact.ring_roller_forces(design, T, psi_ring, state, ("ring", gear),
+                                           dedup=dedup)
     omega_r = velocities.relative_ring_speed(W, design.z1)
     r_c = design.d_v1 / 2
     v_rt = velocities.profile_velocity(phi, design.e, design.z1, design.lam, r_c, omega_r)
@@ -140,7 +154,8 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
         PL5, PL6, F = PL5 * k, PL6 * k, F * k[..., None]
     # disc rollers (k per position)
     T_d = T if disc_torque is None else np.asarray(disc_torque, float)
-    theta, Q = contact.disc_roller_forces(design, T_d, psi_disc, state, ("disc", gear))
+    theta, Q = contact.disc_roller_forces(design, T_d, psi_disc, state, ("disc", gear),
+                                          dedup=dedup)
     W2 = W[..., 0]
     v_r2 = velocities.disc_rolling_speed(design.D_cz, W2)[..., None]
     PL2 = friction.rolling_resistance_loss(fr.rolling_disc, Q, v_r2)
@@ -168,7 +183,10 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
         PL3 = (M * spin2).sum(-1)
     PL2 = PL2.sum(-1)
     # eccentric bearing: relative speed of its rings is |w_p - w_S| = |w2 - wS| (Eq. 21)
-    F_EV, F_EH = contact.eccentric_bearing_force(design, phi, F, Q)
+    F_EV, F_EH = contact.eccentric_bearing_force(design, phi, F, Q, ring_index, disc_index)
+    if ring_index is not None:
+        PL5, PL6 = PL5[..., ring_index], PL6[..., ring_index]
+        PL2, PL3 = PL2[..., disc_index], PL3[..., disc_index]
     F_E = np.hypot(F_EV, F_EH)
     Om = np.abs(W2)
     PL1 = friction.skf_frictional_moment(F_E, Om, design.d_p, design.D_p, nu, fr) * Om
@@ -191,7 +209,7 @@ def contact_states(design, ring_torque, w2_rel, n_positions=None):
                                            (1.0 - design.torque_share, np.pi))):
         if share:
             _gear_losses(design, share * Tc, w2_rel, alpha + shift, alpha / design.i0 + shift,
-                         None, gear, diag)
+                         None, ("states", gear), dedup=False, diag=diag)
     out = {}
     for key in ("ring", "disc"):
         r = diag.get(key + "_rolling")
@@ -204,12 +222,48 @@ def contact_states(design, ring_torque, w2_rel, n_positions=None):
     return out
 
 
+def _angle_classes(psi, n):
+    """Classes of positions psi whose n equally spaced rollers sit at the same angles (as a set,
+    mod 2 pi, to 1e-9 of a turn). Returns (representative positions, class of each position)."""
+    turn = 10 ** 9
+    u = np.round(np.mod(psi[:, None] / (2 * np.pi) + np.arange(n) / n, 1.0) * turn) % turn
+    _, rep, cls = np.unique(np.sort(u, -1), axis=0, return_index=True, return_inverse=True)
+    return psi[rep], cls.reshape(-1)
+
+
+_CLASS_CACHE: dict = {}
+
+
+def _mesh_entries(design, n_positions, gears, dedup):
+    """Ring and disc positions of the given gears over one mesh cycle (gear-major), reduced to
+    distinct classes when ``dedup``: (psi_ring, ring_index, psi_disc, disc_index)."""
+    key = (design.z1, design.n_disc_rollers, int(n_positions or design.n_positions), gears, dedup)
+    hit = _CLASS_CACHE.get(key)
+    if hit is not None:
+        return hit
+    alpha = mesh_positions(design, n_positions)
+    psi_ring = np.concatenate([alpha + np.pi * g for g in gears])
+    psi_disc = np.concatenate([alpha / design.i0 + np.pi * g for g in gears])
+    if dedup:
+        psi_ring, ring_index = _angle_classes(psi_ring, design.z1)
+        psi_disc, disc_index = _angle_classes(psi_disc, design.n_disc_rollers)
+        hit = (psi_ring, ring_index, psi_disc, disc_index)
+    else:
+        hit = (psi_ring, None, psi_disc, None)
+    if len(_CLASS_CACHE) > 64:
+        _CLASS_CACHE.clear()
+    _CLASS_CACHE[key] = hit
+    return hit
+
+
 def partial_losses_by_position(design, ring_torque, w2_rel, n_positions=None, state=None,
-                               disc_torque=None, ring_flow=None):
+                               dedup=True, disc_torque=None, ring_flow=None):
     """Partial losses of the whole drive (both gears) at each mesh position, W.
 
     ring_torque: |T1|, the torque on the ring shaft (N*m), shape (...); w2_rel = w2 - wS (rad/s).
     state: optional dict for warm-starting the contact solutions of repeated calls.
+    dedup: evaluate each distinct gear position and contact problem once (default); False is
+    the straightforward per-position path (same results to ~1e-13, slower).
     disc_torque: |T2| (N*m) where friction in the force balance makes the disc side's torque
     differ from the frictionless i0*|T1| (physical profile); None: i0*|T1| (the paper).
     ring_flow: +1/-1 where the ring drives/is driven in the relative motion (physical profile:
@@ -217,23 +271,34 @@ def partial_losses_by_position(design, ring_torque, w2_rel, n_positions=None, st
     Returns (alpha, PartialLosses with arrays shaped (..., n_alpha)).
     """
     alpha = mesh_positions(design, n_positions)
+    m = alpha.size
     T1 = np.abs(np.asarray(ring_torque, float))
     Tc = T1 * design.z_c / design.z1
+    # gears carrying the same torque are evaluated together (one set of classes)
+    shares = (design.torque_share, 1.0 - design.torque_share)
+    groups = {}
+    for gear, share in enumerate(shares):
+        if share != 0:
+            groups.setdefault(share if dedup else gear, []).append(gear)
     total = None
-    for gear, (share, shift) in enumerate(((design.torque_share, 0.0),
-                                           (1.0 - design.torque_share, np.pi))):
-        if share == 0:
-            continue
+    for gears in groups.values():
+        gears = tuple(gears)
+        psi_ring, ring_index, psi_disc, disc_index = _mesh_entries(design, n_positions, gears,
+                                                                   dedup)
+        share = shares[gears[0]]
         Td = None if disc_torque is None else share * np.abs(np.asarray(disc_torque, float))
-        parts = _gear_losses(design, share * Tc, w2_rel, alpha + shift, alpha / design.i0 + shift,
-                             state, gear, disc_torque=Td, ring_flow=ring_flow)
-        total = parts if total is None else tuple(a + b for a, b in zip(total, parts))
+        parts = _gear_losses(design, share * Tc, w2_rel, psi_ring, psi_disc, state,
+                             gears, ring_index, disc_index, dedup, disc_torque=Td,
+                             ring_flow=ring_flow)
+        for g in range(len(gears)):
+            sl = tuple(p[..., g * m:(g + 1) * m] for p in parts)
+            total = sl if total is None else tuple(a + b for a, b in zip(total, sl))
     return alpha, PartialLosses(*total)
 
 
 def partial_losses(design, ring_torque, w2_rel, n_positions=None, state=None,
-                   disc_torque=None, ring_flow=None) -> PartialLosses:
+                   dedup=True, disc_torque=None, ring_flow=None) -> PartialLosses:
     """Partial losses (W) averaged over a full mesh cycle; arrays shaped like the inputs."""
     _, by_pos = partial_losses_by_position(design, ring_torque, w2_rel, n_positions, state,
-                                           disc_torque, ring_flow)
+                                           dedup, disc_torque, ring_flow)
     return PartialLosses(*(getattr(by_pos, n).mean(-1) for n in LOSS_NAMES))

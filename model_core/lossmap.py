@@ -171,3 +171,36 @@ class ModeMap:
         h_ = _SHAFT_INDEX[self.h]
         return {"w_out": speeds[k], "tau_in": torques[a_], "tau_housing": torques[h_],
                 "P_loss": p_loss, "eta0": eta0, "forward": forward}
+
+
+#: [1] headroom of a replay's map over the recording's largest torque and speed
+REPLAY_MARGIN = 1.05
+
+
+def replay_input_torque(design, mode, w_in, tau_out):
+    """The input torque the model predicts along a recording, and its loss part (both N*m).
+
+    Parameters
+    ----------
+    design : DriveDesign
+    mode : str
+        Operating mode, e.g. ``"S1"``.
+    w_in : array_like
+        Measured driving speed [rad/s].
+    tau_out : array_like
+        Torque the load applies on the driven shaft [N*m] (minus the delivered output torque).
+
+    Returns
+    -------
+    tau_in, loss_in : ndarray
+        Model input torque [N*m] and its part beyond the lossless torque
+        ``-tau_out * w_out / w_in`` [N*m], from a ``ModeMap`` spanning the recording.
+    """
+    w_in = np.asarray(w_in, float)
+    tau_out = np.asarray(tau_out, float)
+    tmax = float(np.max(np.abs(tau_out))) * REPLAY_MARGIN + 1e-6
+    wmax = float(np.max(np.abs(w_in))) * REPLAY_MARGIN + 1e-6
+    m = ModeMap(design, mode, tmax, wmax)
+    tau_in = m.solve_arrays(w_in, tau_out)["tau_in"]
+    lossless = -tau_out * m.ratio[m._k]
+    return tau_in, tau_in - lossless

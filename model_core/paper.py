@@ -62,3 +62,37 @@ def calibrate_mu_boundary(design, envelope=BenchEnvelope(), target=PAPER_THEORY[
         d = replace(design, friction=replace(design.friction, mu_boundary=mu))
         return envelope_statistics(d, "S1", envelope)["mean"] - target
     return brentq(gap, 0.02, 0.3, xtol=1e-6)
+
+
+def additional_loss_factor(w_in, T_in, w_out, T_out, T_in_model, block=1):
+    r"""The paper's additional-loss factor, Eq. (31), over a recording's driven blocks.
+
+    .. math:: \zeta_d = (P_t - P_e) / P_{in,e} = \eta_{model} - \eta_{measured}
+
+    at the measured input power, where P_t is the model's output power.
+
+    Parameters
+    ----------
+    w_in, T_in, w_out, T_out : array_like
+        Measured speeds [rad/s] and torques [N*m] (T_out delivered to the load).
+    T_in_model : array_like
+        The model's input torque at the measured speed and load [N*m].
+    block : int
+        Samples per block mean; blocks with at least 10 % of the peak input power count.
+
+    Returns
+    -------
+    float
+        zeta_d [1]; NaN without driven blocks.
+    """
+    def bm(x):
+        x = np.asarray(x, float)
+        n = (len(x) // block) * block
+        return x[:n].reshape(-1, block).mean(1)
+    p_in, p_out = bm(np.multiply(T_in, w_in)), bm(np.multiply(T_out, w_out))
+    p_in_model = bm(np.multiply(T_in_model, w_in))
+    sel = (p_in > 0.1 * np.max(p_in)) & (p_out > 0) & (p_in_model > 0)
+    if not sel.any():
+        return float("nan")
+    return float(p_out[sel].sum() / p_in_model[sel].sum() - p_out[sel].sum() / p_in[sel].sum())
+

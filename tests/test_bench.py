@@ -138,3 +138,76 @@ def test_bench_runs_an_updated_design(fmu_dir, tmp_path):
     assert abs(w["eta"] - w["eta_core"]) < 0.002
     plain = run_bench(sc, fmu_dir, tmp_path, Sensors(ideal=True))
     assert plain.windows[0]["eta"] - w["eta"] > 0.01       # the drag costs efficiency
+
+
+# -- scenarios run as written, in every master -------------------------------------------------
+@pytest.fixture(scope="module")
+def reversal_run(fmu_dir, tmp_path_factory):
+    from cyclo_fmu.bench import scenario
+    return run_bench(scenario("reversal", "S1"), fmu_dir)
+
+
+def test_reversal_reverses_and_back_drives(reversal_run):
+    """fmpy's SSP master sets the motor's schedule (numbered Real parameters): +40 Hz, then
+    -40 Hz; while the regulator decelerates, the output flywheel drives the reducer backwards."""
+    rec = reversal_run.recording
+    assert rec["speed_in_rpm"].min() < -1500
+    assert rec["speed_in_rpm"][rec["time_s"] < 3.0].max() > 1500
+    p_in = rec["torque_in_Nm"] * rec["speed_in_rpm"] / RPM_PER_RAD_S   # W, into the reducer
+    assert np.count_nonzero(p_in < -1.0) > 100       # power flows from the output to the motor
+
+
+def test_loadstep_reaches_its_levels(fmu_dir):
+    from cyclo_fmu.bench import scenario
+    rec = run_bench(scenario("loadstep", "S1"), fmu_dir).recording
+    t, T = rec["time_s"], rec["torque_out_Nm"]
+    assert np.mean(T[(t > 2.5) & (t < 3.0)]) == pytest.approx(2.0, rel=0.05)
+    assert np.mean(T[(t > 5.5) & (t < 6.0)]) == pytest.approx(7.0, rel=0.05)
+
+
+def test_runup_reaches_speed(fmu_dir):
+    """50 Hz with a 5 N*m brake: near the motor's rated 2800 r/min (slip under load)."""
+    from cyclo_fmu.bench import scenario
+    rec = run_bench(scenario("runup", "S1"), fmu_dir).recording
+    n_end = np.mean(rec["speed_in_rpm"][rec["time_s"] > 3.5])
+    assert 2700 < n_end < 3000
+
+
+def test_libcosim_sets_the_schedule(fmu_dir, tmp_path):
+    """libcosim applies the per-component parameter sets: the motor reverses there too."""
+    pytest.importorskip("libcosimpy")
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+    sc = Scenario("rev", mode="S1", frequency_schedule="0 40; 0.5 -40", T_first=0.5,
+                  T_last=0.5, T_count=1, hold=2.0, duration=2.0)
+    ssp = build_ssp(tmp_path / "TestBench.ssp", fmu_dir, sc, Sensors(ideal=True))
+    log_output_level(CosimLogLevel.ERROR)
+    ex = CosimExecution.from_ssp_file(ssp_path=str(ssp), step_size=1_000_000)
+    idx = {i.name.decode(): i.index for i in ex.slave_infos()}
+    obs = CosimObserver.create_last_value()
+    ex.add_observer(obs)
+    ex.simulate_until(target_time=2_000_000_000)
+    ref = {v.name.decode(): v.reference for v in ex.slave_variables(idx["motor"])}["frequency"]
+    assert obs.last_real_values(idx["motor"], [ref])[0] < -10.0      # reversed, ramping
+
+
+def test_schedule_given_two_ways_is_an_error():
+    with pytest.raises(ValueError, match="more than 8 setpoints"):
+        rig.schedule_parameters("motor.", [(float(k), 1.0) for k in range(9)])
+    p = rig.schedule_parameters("brake.", rig.parse_schedule("0 2; 3 7"))
+    assert p == {"brake.schedule_points": 2, "brake.schedule_time_1": 0.0,
+                 "brake.schedule_value_1": 2.0, "brake.schedule_time_2": 3.0,
+                 "brake.schedule_value_2": 7.0}
+
+
+def test_lean_master_gives_fmpys_numbers(fmu_dir):
+    """The package's master (cached value references, raw FMI calls) and fmpy's SSP master run
+    the same SSP to the same numbers, schedules included."""
+    from cyclo_fmu.bench import scenario
+    sc = scenario("loadstep", "S2")
+    lean = run_bench(sc, fmu_dir, master="lean").result
+    ref = run_bench(sc, fmu_dir, master="fmpy").result
+    n = min(len(lean), len(ref))
+    for name in lean.dtype.names:
+        np.testing.assert_allclose(lean[name][:n], ref[name][:n], rtol=1e-9, atol=1e-9)

@@ -28,6 +28,7 @@ OUTPUT_COMMANDS = {
     "diagnose": (["diagnose", "missing-recording.csv", "--mode", "S1"], "--out", "dir"),
     "sweep": (["sweep", "{spec}"], "--out", "file"),
     "diagnose-batch": (["diagnose-batch", "{recdir}", "--mode", "S1"], "--out", "dir"),
+    "stiffness": (["stiffness"], "--out", "dir"),
 }
 
 # name: argv that takes ``--design`` and would otherwise run
@@ -38,6 +39,7 @@ DESIGN_COMMANDS = {
     "diagnose": ["diagnose", "missing-recording.csv", "--mode", "S1"],
     "diagnose-batch": ["diagnose-batch", "{recdir}", "--mode", "S1", "--out", "{tmp}/batch"],
     "build": ["build", "--dest", "{tmp}/build_out", "CycloidDriveNative"],
+    "stiffness": ["stiffness"],
 }
 
 SEED_COMMANDS = {

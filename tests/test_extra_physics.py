@@ -44,10 +44,10 @@ def test_updated_design_explains_the_recording(effect):
     rec = SimpleNamespace(time=r["time_s"], speed_in=r["speed_in_rpm"] * np.pi / 30,
                           torque_in=r["torque_in_Nm"], speed_out=r["speed_out_rpm"] * np.pi / 30,
                           torque_out=r["torque_out_Nm"], temperature=None)
-    d = Diagnoser(mode="S1").fit(rec)
+    d = Diagnoser(mode="S1").fit(rec).diagnosis_
     assert d.effect == effect
     fixed, notes = updated_design(DriveDesign(), d)
-    again = Diagnoser(fixed, "S1").fit(rec)
+    again = Diagnoser(fixed, "S1").fit(rec).diagnosis_
     if effect == "thermal_drift" and again.effect == effect:
         # the warm-up term multiplies the model's losses, which the friction correction changed:
         # a remainder of a few per cent of the first fit can be left

@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 
+from model_core.effects import EFFECTS
 from cyclo_fmu.bench import RECORDING_COLUMNS, write_recording
 from cyclo_fmu.recordings import (Exclusion, Recording, RecordingError, parse_column_map,
                                   read_recording, recording_from_arrays)
@@ -275,7 +276,11 @@ def test_cli_synth_and_diagnose(tmp_path):
         assert key in out
     assert out["effect"] == json.loads(truth.read_text())["effect"] == "torque_sensor_offset"
     assert out["parameters"]["offset"]["unit"] == "N*m"
-    assert len(out["evidence"]) == 8 and "statement" in out["located"]
+    assert len(out["evidence"]) == len(EFFECTS) and "statement" in out["located"]
+    for key in ("effects", "unexplained", "checks", "excluded"):
+        assert key in out
+    assert out["effects"][0]["id"] == out["effect"] and out["unexplained"]["present"] is False
+    assert (tmp_path / "d" / "report.html").read_text().startswith("<!DOCTYPE html>")
     assert (tmp_path / "d" / "design_updated.toml").exists()
     bad = tmp_path / "bad.csv"
     bad.write_text("time_s,speed_in_rpm\n0,1\n")

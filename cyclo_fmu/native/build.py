@@ -68,6 +68,8 @@ EXTRA = (
     ("thermal_loss_change", "1", None, None, False,
      "relative change of the losses when warm"),
     ("thermal_tau", "s", "Time", 0.0, True, "warm-up time constant (> 0)"),
+    ("drag_exponent", "1", None, 0.0, False, "exponent p of the drag's speed law "
+     "(|w|/300 rad/s)^p (0 to 2)"),
 )
 
 #: Outputs, in the order of the C state's out[] (value references 10..21), then ``locked``.

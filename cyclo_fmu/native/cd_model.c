@@ -119,7 +119,7 @@ static double sign(double w) { return w > 0 ? 1.0 : (w < 0 ? -1.0 : 0.0); }
 
 double cd_steady_torque(const CDExtra *x, double w)
 {
-    double t = x->drag_torque * (sign(w) * pow(fabs(w) / CD_W_REF, 2.0 / 3.0));
+    double t = x->drag_torque * (sign(w) * pow(fabs(w) / CD_W_REF, x->drag_exponent));
     if (x->stribeck_torque != 0) {
         double q = w / x->stribeck_speed;
         t = t + x->stribeck_torque * (sign(w) * exp(-(q * q)));

@@ -40,10 +40,10 @@ typedef struct {
 typedef struct {
     double drag_torque, stribeck_torque, stribeck_speed, input_inertia;
     double ripple_1x, ripple_1x_phase, ripple_roller, ripple_roller_phase;
-    double thermal_loss_change, thermal_tau;
+    double thermal_loss_change, thermal_tau, drag_exponent;
 } CDExtra;
 
-#define CD_N_EXTRA 10
+#define CD_N_EXTRA 11
 
 typedef struct {
     double speeds[3], torques[3], losses[CD_N_LOSSES];

@@ -39,7 +39,7 @@ enum { O_W_OUT, O_TAU_IN, O_TAU_HOUSING, O_P_LOSS, O_PL1, O_PL2, O_PL3, O_PL5, O
 static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "drag_torque", "stribeck_torque", "stribeck_speed", "input_inertia", "ripple_1x",
     "ripple_1x_phase", "ripple_roller", "ripple_roller_phase", "thermal_loss_change",
-    "thermal_tau"};
+    "thermal_tau", "drag_exponent"};
 
 enum { PH_INSTANTIATED = 1, PH_INIT, PH_STEP, PH_TERMINATED };
 
@@ -142,7 +142,7 @@ static double *extra_field(CDExtra *x, int i)
     f[0] = &x->drag_torque; f[1] = &x->stribeck_torque; f[2] = &x->stribeck_speed;
     f[3] = &x->input_inertia; f[4] = &x->ripple_1x; f[5] = &x->ripple_1x_phase;
     f[6] = &x->ripple_roller; f[7] = &x->ripple_roller_phase; f[8] = &x->thermal_loss_change;
-    f[9] = &x->thermal_tau;
+    f[9] = &x->thermal_tau; f[10] = &x->drag_exponent;
     return f[i];
 }
 
@@ -155,6 +155,8 @@ static const char *extra_problem(int i, double v)
         return v < 0 ? "must not be negative" : NULL;
     case 2: case 9:
         return v > 0 ? NULL : "must be positive";
+    case 10:
+        return (v >= 0 && v <= 2) ? NULL : "must lie between 0 and 2";
     default:
         return NULL;
     }

@@ -27,6 +27,7 @@ UNITS = {
     "rad": dict(rad=1),
     "Hz": dict(s=-1),
     "N.m.s/rad": dict(kg=1, m=2, s=-1, rad=-1),
+    "N.m/rad": dict(kg=1, m=2, s=-2, rad=-1),
 }
 
 
@@ -46,6 +47,38 @@ class UnitSlave(Fmi2Slave):
                                     variability=Fmi2Variability.fixed, description=description))
         if unit:
             self._units[name] = unit
+
+    def schedule_parameters(self, unit, what):
+        """Numbered Real parameters carrying a schedule of at most SCHEDULE_POINTS setpoints
+        (every master can set them): ``schedule_points`` (0: none), ``schedule_time_k`` [s] and
+        ``schedule_value_k`` [unit]."""
+        from model_core.rig import SCHEDULE_POINTS
+        self.parameter("schedule_points", 0, None, f"number of {what} setpoints carried by "
+                       f"schedule_time_k/schedule_value_k (0: none; at most {SCHEDULE_POINTS})",
+                       Integer)
+        for k in range(1, SCHEDULE_POINTS + 1):
+            self.parameter(f"schedule_time_{k}", 0.0, "s", f"time of {what} setpoint {k}")
+            self.parameter(f"schedule_value_{k}", 0.0, unit, f"{what} setpoint {k}, held until "
+                           "the next")
+
+    def schedule_from_parameters(self, text_name):
+        """The schedule of the String parameter ``text_name`` or of the numbered parameters
+        (not both), or None."""
+        from model_core.rig import SCHEDULE_POINTS, parse_schedule, schedule_from_points
+        text = getattr(self, text_name).strip()
+        n = int(self.schedule_points)
+        if text and n:
+            raise ValueError(f"{text_name} and schedule_points = {n}: give the schedule one way")
+        if text:
+            return parse_schedule(text, text_name)
+        if n:
+            k = range(1, SCHEDULE_POINTS + 1)
+            return schedule_from_points(n, [getattr(self, f"schedule_time_{i}") for i in k],
+                                        [getattr(self, f"schedule_value_{i}") for i in k],
+                                        "schedule")
+        if not 0 <= n <= SCHEDULE_POINTS:
+            raise ValueError(f"schedule_points = {n}: must be 0 to {SCHEDULE_POINTS}")
+        return None
 
     def input(self, name, value, unit, description=""):
         setattr(self, name, value)

@@ -1,9 +1,13 @@
-"""FMI slave: felt friction brake with the output-side inertia.
+"""FMI slave: felt friction brake on a compliant coupling, with the output-side inertia.
 
 Takes the output shaft speed and gives the torque the load applies on the reducer's output
-shaft: tau_out = -(T_set tanh(w/w_reg) + J_out dw/dt). The inertia of brake drum, coupling and
-output transducer is carried here as a torque from the speed's backward difference over the
-last step (the reducer is massless, the motor integrates the drive train).
+shaft: the torque of the coupling between the output shaft and the brake drum,
+T_s = k twist + c (w - w_drum), where the drum (inertia of drum, coupling half and the output
+transducer's rotor) is integrated here with its own sub-steps against the felt brake's
+friction T_set tanh(w_drum/w_reg). The twist is the integral of the speed the FMU receives, so
+no co-simulation input is differentiated: an earlier version took J_out dw/dt from a backward
+difference of the input speed, which made a +-1.5 N*m oscillation that moved with the
+communication step.
 """
 from __future__ import annotations
 
@@ -25,51 +29,67 @@ class FeltBrake(UnitSlave):
         self.parameter("hold_time", 1.0, "s", "time each setpoint is held")
         self.parameter("torque_schedule", "", None, "instead of the series: setpoints "
                        "'t0 T0; t1 T1; ...' (s, N*m), each held until the next", String)
+        self.schedule_parameters("N.m", "brake torque")
         self.parameter("w_reg", 0.5, "rad/s", "speed below which the Coulomb torque is "
                        "regularised (tanh)")
         self.parameter("J_out", 2.0e-3, "kg.m2", "output-side inertia: brake drum, coupling, "
                        "output transducer rotor. Assumption")
+        self.parameter("k_coupling", 500.0, "N.m/rad", "torsional stiffness of the coupling "
+                       "between output shaft and brake drum. Assumption: a small bellows or "
+                       "jaw coupling (catalogues: 100-2000 N*m/rad)")
+        self.parameter("zeta_coupling", 0.3, "1", "damping ratio of the coupling with the drum "
+                       "(c = 2 zeta sqrt(k J_out)). Assumption: an elastomer insert")
         self.input("w", 0.0, "rad/s", "speed of the output shaft")
         self.output("tau_out", 0.0, "N.m", "torque the brake applies on the reducer's output shaft",
                     depends=("w",))
         self.output("torque_shaft", 0.0, "N.m", "torque the output shaft delivers to the brake",
                     depends=("w",))
         self.output("T_brake", 0.0, "N.m", "friction torque of the felt brake", depends=("w",))
-        self._w_last = None
-        self._time = 0.0
+        self._twist = 0.0
+        self._w_drum = 0.0
 
     def exit_initialization_mode(self):
         try:
-            self._schedule = (core.rig.parse_schedule(self.torque_schedule, "torque_schedule")
-                              if self.torque_schedule.strip() else None)
+            self._schedule = self.schedule_from_parameters("torque_schedule")
             if self.T_count < 1:
                 raise ValueError(f"T_count = {self.T_count!r}: must be at least 1")
             if min(self.T_first, self.T_last) < 0:
                 raise ValueError("T_first, T_last: a brake torque setpoint must not be negative")
-            for name in ("w_reg", "J_out"):
+            for name in ("w_reg", "J_out", "k_coupling", "zeta_coupling"):
                 v = getattr(self, name)
                 if not (math.isfinite(v) and v > 0):
                     raise ValueError(f"{name} = {v!r}: must be positive")
             if self._schedule and any(v < 0 for _, v in self._schedule):
-                raise ValueError(f"torque_schedule = {self.torque_schedule!r}: a brake torque "
-                                 "setpoint must not be negative")
+                raise ValueError("torque schedule: a brake torque setpoint must not be negative")
         except ValueError as exc:
             self.fail(f"invalid parameter: {exc}")
+        self._w_drum = float(self.w)          # the drum starts with the shaft, untwisted
+        self._twist = 0.0
+        self._c = 2 * self.zeta_coupling * math.sqrt(self.k_coupling * self.J_out)
         self._update(0.0, 0.0)
+
+    def _setpoint(self, t):
+        return (core.rig.schedule_value(self._schedule, t) if self._schedule is not None
+                else core.rig.series_value(t, self.T_first, self.T_last, self.T_count,
+                                           self.hold_time))
 
     def _update(self, t, dt):
         w = self.w
         if not math.isfinite(w):
             self.require_finite(w=w)
-        alpha = 0.0 if (self._w_last is None or dt <= 0) else (w - self._w_last) / dt
-        setpoint = (core.rig.schedule_value(self._schedule, t) if self._schedule is not None
-                    else core.rig.series_value(t, self.T_first, self.T_last, self.T_count,
-                                               self.hold_time))
-        self.T_brake = core.rig.felt_brake_torque(w, setpoint, self.w_reg)
-        self.torque_shaft = self.T_brake + self.J_out * alpha
-        self.tau_out = -self.torque_shaft
+        setpoint = self._setpoint(t)
+        if dt > 0:
+            self._twist, self._w_drum, Ts, Tb = core.rig.coupled_drum_step(
+                self._twist, self._w_drum, w, dt, setpoint, self.w_reg, self.J_out,
+                self.k_coupling, self._c)
+        else:
+            Ts = self.k_coupling * self._twist + self._c * (w - self._w_drum)
+            Tb = core.rig.felt_brake_torque(self._w_drum, setpoint, self.w_reg)
+        self.T_brake = Tb
+        self.torque_shaft = Ts
+        self.tau_out = -Ts
 
     def do_step(self, current_time, step_size):
-        self._update(current_time + step_size, step_size)
-        self._w_last = self.w
+        # the setpoint of the step's start (a step in the setpoint acts from its time on)
+        self._update(current_time, step_size)
         return True

@@ -65,6 +65,8 @@ DESIGN_PARAMETERS = [
     ("thermal_loss_change", "extra", "thermal_loss_change", "1",
      "relative change of the losses when warm", Real),
     ("thermal_tau", "extra", "thermal_tau", "s", "warm-up time constant", Real),
+    ("drag_exponent", "extra", "drag_exponent", "1",
+     "exponent p of the drag's speed law (|w|/300 rad/s)^p", Real),
 ]
 
 OUTPUT_LOSSES = ("PL1", "PL2", "PL3", "PL5", "PL6")

@@ -42,6 +42,7 @@ class Transducer(UnitSlave):
                                           self.noise, self.resolution)
         self._rng = random.Random(int(self.seed))
         self._filtered = self.scale * self.x
+        self._dt, self._a = None, 0.0
         self._read()
 
     def _read(self):
@@ -54,6 +55,9 @@ class Transducer(UnitSlave):
         x = self.x
         if not math.isfinite(x):
             self.require_finite(x=x)
-        self._filtered = self._model.filter_step(self._filtered, self.scale * x, step_size)
+        if step_size != self._dt:        # the filter coefficient of this step size, once
+            self._dt, self._a = step_size, self._model.filter_coefficient(step_size)
+        a = self._a
+        self._filtered = a * self._filtered + (1 - a) * self.scale * x
         self._read()
         return True

@@ -14,23 +14,35 @@ from pathlib import Path
 SUFFIXES = (".csv", ".mf4")
 
 
-def diagnose_one(path, design, mode, columns=None):
-    """Read and diagnose one recording: ``(diagnoser, result dict)``. The one place that calls
-    the reader and the diagnosis, so that their reworked APIs are adapted here only."""
+def diagnose_recording(rec, mode, checks, design, progress=False):
+    """Diagnose a loaded recording: ``(diagnosis, result dict)`` with the JSON contract's
+    keys (the diagnosis's own, ``mode``, ``checks``, ``read_notes``, ``excluded``)."""
     from cyclo_fmu.diagnosis import Diagnoser
-    from cyclo_fmu.io import load_recording
-    rec, mode, checks = load_recording(path, mode, design, columns=columns)
-    d = Diagnoser(design, mode).fit(rec)
+    est = Diagnoser(design, mode, progress=progress).fit(rec)
+    d = est.diagnosis_
+    d.updated = est.updated_design()      # (design, notes), checked against the recording
     result = d.to_json()
     result["mode"] = mode
     result["checks"] = list(checks)
     result["read_notes"] = list(rec.notes)
-    first = [e.first_time for e in rec.exclusions]
-    result["exclusions"] = [{"reason": e.reason, "count": e.count,
-                             "first_time_s": t if t == t else None}
-                            for e, t in zip(rec.exclusions, first)]
-    result["excluded"] = result["exclusions"]
+    excluded = [{"reason": e.reason, "count": e.count, "unit": "samples",
+                 "first_time_s": e.first_time if e.first_time == e.first_time else None}
+                for e in rec.exclusions]
+    if d.excluded_blocks:
+        from cyclo_fmu.diagnosis.residual import SPIKE_SIGMA
+        excluded.append({"reason": f"residual spikes beyond {SPIKE_SIGMA:g} robust standard "
+                         "deviations", "count": d.excluded_blocks, "unit": "blocks",
+                         "first_time_s": None})
+    result["exclusions"] = excluded
+    result["excluded"] = excluded
     return d, result
+
+
+def diagnose_one(path, design, mode, columns=None):
+    """Read and diagnose one recording: ``(diagnosis, result dict)``."""
+    from cyclo_fmu.io import load_recording
+    rec, mode, checks = load_recording(path, mode, design, columns=columns)
+    return diagnose_recording(rec, mode, checks, design)
 
 
 def find_recordings(folder) -> list:
@@ -47,11 +59,11 @@ def _folder_names(paths) -> dict:
 
 def _task(design, mode, columns, out, item):
     path, name = item
-    from cyclo_fmu.cli import _write_diagnosis
+    from cyclo_fmu.diagnosis import write_diagnosis
     row = {"recording": path.name, "folder": name, "effect": "", "error": ""}
     try:
         d, result = diagnose_one(path, design, mode, columns)
-        _write_diagnosis(Path(out) / name, d, design, result)
+        write_diagnosis(Path(out) / name, d, design, result, source=path.name)
     except (ValueError, OSError) as exc:     # RecordingError, CycloidInputError, unreadable
         row["error"] = " ".join(str(exc).split())
         return row

@@ -11,8 +11,8 @@ operating-point detail of any design is one ``cyclo-fmu efficiency`` or
   runs (not locked, finite), ``n_points`` of them, ``n_locked`` self-locking points;
 - ``loss_<PLk>_W``: each partial loss averaged over the envelope [W], ``loss_share_<PLk>``: its
   share of the summed losses;
-- ``stiffness_Nm_rad``: torsional stiffness once ``model_core.stiffness`` exists (see
-  :func:`stiffness_hook`), else NaN;
+- ``stiffness_Nm_rad``: tangent torsional stiffness at the rated torque (input locked,
+  ``model_core.stiffness``; see :func:`stiffness_hook`);
 - ``error``: empty, or the one-line reason the design could not be built or run (a row is
   never dropped).
 """
@@ -27,20 +27,13 @@ from model_core.maps import efficiency_map
 
 
 def stiffness_hook(design):
-    """Torsional stiffness [N*m/rad] of a design, or NaN. The hook for ``model_core.stiffness``
-    (written in parallel): adapt this one function to its API when it lands."""
+    """Torsional stiffness [N*m/rad] at the rated torque (``model_core.stiffness``), or NaN
+    when the contact model cannot give it for this design."""
+    from model_core import stiffness as st
     try:
-        from model_core import stiffness as st
-    except ImportError:
+        return float(st.torsional_stiffness(design))
+    except (ValueError, FloatingPointError, ZeroDivisionError):
         return math.nan
-    for name in ("torsional_stiffness", "output_stiffness", "stiffness"):
-        fn = getattr(st, name, None)
-        if callable(fn):
-            try:
-                return float(fn(design))
-            except Exception:       # noqa: BLE001 - an unknown API: leave the column empty
-                return math.nan
-    return math.nan
 
 
 def evaluate_design(spec, design_id: int, values: dict) -> list:

@@ -1,0 +1,172 @@
+"""What a diagnosis writes: the figures, a self-contained ``report.html`` and the updated design."""
+from __future__ import annotations
+
+import base64
+import html
+import io
+import math
+
+import numpy as np
+
+from model_core import DriveDesign
+from model_core.effects import EFFECTS
+
+from .estimator import Diagnosis
+
+
+def updated_design(design: DriveDesign, d: Diagnosis):
+    """The design with every selected effect switched on, in the form it was fitted in (time
+    constant or per 10 K of the temperature column), and the friction level corrected; notes
+    for what is not physics of the drive (transducer faults)."""
+    notes = [f"updated by cyclo-fmu diagnose: {', '.join(e['id'] for e in d.effects) or 'none'}"]
+    fixed = design
+    done = set()
+    for e in ([{"id": "friction_miscalibrated", "parameters": d.calibration}]
+              if d.calibration else []) + d.effects:
+        if e["id"] in done or e["id"] == "none":
+            continue
+        done.add(e["id"])
+        eff = EFFECTS[e["id"]]
+        values = {k: v["value"] for k, v in e["parameters"].items()}
+        shape = values.get(eff.shape_name) if eff.shape else None
+        form = e.get("form", "").startswith("per 10 K")
+        fixed, more = eff.apply(fixed, values, shape, temperature=form)
+        notes += more
+    if d.unexplained.get("present"):
+        notes.append("a mismatch remains that no library effect explains: "
+                     + d.unexplained["statement"])
+    return fixed, notes
+
+
+def _figure(d: Diagnosis):
+    import matplotlib.pyplot as plt
+    s = d.series
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
+    ax = axes[0, 0]
+    ax.plot(s["t"], 1e3 * s["residual_before"], lw=0.4, label="model as given")
+    label = ", ".join(e["id"] for e in d.effects) or "none"
+    ax.plot(s["t"][:len(s["residual_after"])], 1e3 * s["residual_after"], lw=0.4,
+            label=f"with {label}")
+    ax.set(xlabel="time / s", ylabel="input torque residual / mN*m",
+           title="measured - model input torque (block means)")
+    ax.legend(fontsize=7)
+    lim = float(np.nanpercentile(np.abs(1e3 * s["residual_before"]), 99)) or 1.0
+    n = len(s["residual_after"])
+    for ax, key, title in ((axes[0, 1], "residual_before", "model as given"),
+                           (axes[1, 0], "residual_after", f"with {label}")):
+        sc = ax.scatter(s["speed_in"][:n] * 30 / math.pi, s["torque_out"][:n],
+                        c=1e3 * s[key][:n], s=2, cmap="coolwarm", vmin=-lim, vmax=lim)
+        fig.colorbar(sc, ax=ax, label="residual / mN*m")
+        ax.set(xlabel="input speed / (r/min)", ylabel="output torque / N*m",
+               title=f"residual over the operating map, {title}")
+    ax = axes[1, 1]
+    ev = d.evidence
+    ax.barh([e["id"] + (" *" if e.get("selected") else "") for e in ev],
+            [e["bic"] - ev[0]["bic"] for e in ev])
+    ax.set(xlabel="BIC - best BIC (with the selection)", title="evidence (* selected)")
+    fig.tight_layout()
+    return fig
+
+
+def plot_diagnosis(d: Diagnosis, out) -> list:
+    """Residual over time and over the operating map, before and after (PNG)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from pathlib import Path
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    fig = _figure(d)
+    f = out / "diagnosis.png"
+    fig.savefig(f, dpi=100)
+    plt.close(fig)
+    return [f]
+
+
+def _png(fig) -> str:
+    import matplotlib.pyplot as plt
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=90)
+    plt.close(fig)
+    return base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _fmt(v):
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return html.escape(str(v))
+
+
+def write_report(d: Diagnosis, path, result: dict, source: str = "") -> None:
+    """A self-contained HTML report (figures embedded) an engineer can attach to a test report:
+    the statement, the effects with their parameters and intervals, what remains, the checks,
+    the evidence table and the residual before and after, over time and over the map."""
+    import matplotlib
+    matplotlib.use("Agg")
+    e = html.escape
+    rows = []
+    for eff in d.effects:
+        ps = "<br>".join(
+            f"{e(k)} = {_fmt(v['value'])} {e(v['unit'])}"
+            + (f" [{_fmt(v['ci95'][0])}, {_fmt(v['ci95'][1])}]" if v.get("ci95") else "")
+            for k, v in eff["parameters"].items())
+        rows.append(f"<tr><td>{e(eff['id'])}</td><td>{e(eff['description'])}</td><td>{ps}</td>"
+                    f"<td>{1e3 * eff['explained_rms_Nm']:.3g}</td>"
+                    f"<td>{100 * eff.get('stability', 1):.0f} %</td>"
+                    f"<td>{e(', '.join(eff.get('indistinguishable_from', [])))}</td></tr>")
+    ev = "".join(f"<tr><td>{e(r['id'])}{' (selected)' if r.get('selected') else ''}</td>"
+                 f"<td>{r['bic'] - d.evidence[0]['bic']:.1f}</td>"
+                 f"<td>{1e3 * r['cv_rmse_Nm']:.3g}</td><td>{'yes' if r['admissible'] else 'no'}"
+                 f"</td></tr>" for r in d.evidence)
+    checks = "".join(f"<li>{e(str(c.get('status', '')))}: {e(str(c.get('message', c)))}</li>"
+                     if isinstance(c, dict) else f"<li>{e(str(c))}</li>"
+                     for c in result.get("checks", []))
+    excl = "".join(f"<li>{e(str(x.get('reason')))}: {x.get('count')}</li>"
+                   for x in result.get("excluded", []))
+    u = d.unexplained
+    cal = "".join(f"<li>{e(k)} = {_fmt(v['value'])} {e(v['unit'])}</li>"
+                  for k, v in d.calibration.items())
+    img = _png(_figure(d))
+    text = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>cyclo-fmu diagnosis: {e(source)}</title>
+<style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;line-height:1.4}}
+table{{border-collapse:collapse}}td,th{{border:1px solid #bbb;padding:4px 8px;vertical-align:top}}
+.warn{{background:#fff3cd;padding:8px}}</style></head><body>
+<h1>Diagnosis of {e(source) or 'a recording'}</h1>
+<p>Mode {e(str(result.get('mode', '')))}. Held-out RMS of the input torque residual
+{1e3 * d.rmse_before_Nm:.3g} &rarr; {1e3 * d.rmse_after_Nm:.3g} mN*m; additional-loss factor
+zeta_d (paper Eq. 31) {100 * d.zeta_d_before:.2f} &rarr; {100 * d.zeta_d_after:.2f} %.</p>
+<h2>Statement</h2><p>{e(d.located.get('statement', ''))}</p>
+<h2>Effects the data supports</h2>
+{('<table><tr><th>effect</th><th>what</th><th>parameters [95 % interval]</th>'
+  '<th>explained RMS / mN*m</th><th>stable across folds</th><th>cannot be told apart from</th>'
+  '</tr>' + ''.join(rows) + '</table>') if rows else '<p>none</p>'}
+{f'<p>Friction level (model calibration):</p><ul>{cal}</ul>' if cal else ''}
+<h2>What remains</h2>
+<p class="{'warn' if u.get('present') else ''}">{e(u.get('statement', ''))}</p>
+{f"<p>A run that would separate look-alikes: {e(d.suggested_test)}</p>" if d.suggested_test else ''}
+<h2>Checks before fitting</h2><ul>{checks or '<li>none</li>'}</ul>
+<h2>Left out</h2><ul>{excl or '<li>nothing</li>'}
+<li>{d.excluded_blocks} blocks excluded as spikes</li></ul>
+<h2>Residual</h2><img alt="residual before and after" src="data:image/png;base64,{img}">
+<h2>Evidence</h2><table><tr><th>candidate (with the selection)</th><th>BIC - best</th>
+<th>held-out RMS / mN*m</th><th>inside bounds</th></tr>{ev}</table>
+<p><small>cyclo-fmu diagnose; notes: {e('; '.join(d.notes)) or 'none'}</small></p>
+</body></html>"""
+    from pathlib import Path
+    Path(path).write_text(text, encoding="utf-8")
+
+
+def write_diagnosis(out_dir, d, design, result, source=""):
+    """Write one diagnosis' folder (diagnosis.png, report.html, diagnosis.json,
+    design_updated.toml); removed again if any of it fails."""
+    import json
+    from model_core import design_to_toml
+    from ..outputs import staged_dir
+    with staged_dir("out", out_dir) as out:
+        plot_diagnosis(d, out)
+        write_report(d, out / "report.html", result, source)
+        (out / "diagnosis.json").write_text(json.dumps(result, indent=2))
+        fixed, notes = d.updated or updated_design(design, d)
+        (out / "design_updated.toml").write_text(design_to_toml(fixed) + "".join(
+            f"# {n}\n" for n in notes))

@@ -1,0 +1,336 @@
+"""What remains: robust weights, the structure test of a residual, shaft orders and spectral
+peaks, and where a mismatch sits on the operating map.
+
+The structure test fits the residual left by the selected effects with a *generic* basis that
+no library term is: smooth functions of the operating point (odd in the direction of motion,
+as a loss is, and even, as a reading error is), of time, of acceleration and of the
+temperature column. When that basis explains a held-out RMS above the practical threshold
+with very strong evidence, physics is missing that the library does not hold, and the
+diagnosis says where it sits and what it follows instead of naming the nearest library term.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: Huber's tuning constant (95 % efficiency under Gaussian noise), in robust standard deviations
+HUBER_C = 1.345
+#: [robust standard deviations] a block this far from the all-candidates fit is a spike: excluded
+SPIKE_SIGMA = 8.0
+#: [1] at most this share of blocks is excluded as spikes; beyond it the tails are structure
+MAX_SPIKE_SHARE = 0.02
+#: [1] a block-mean speed below this share of the recording's peak speed is standstill
+MOVING_SHARE = 0.05
+
+
+def robust_sigma(r) -> float:
+    """Standard deviation from the median absolute deviation (1.4826 MAD)."""
+    r = np.asarray(r, float)
+    return float(1.4826 * np.median(np.abs(r - np.median(r)))) if len(r) else 0.0
+
+
+def robust_weights(X, y, iterations=4):
+    """Spike exclusion and Huber weights from the fit of every candidate column at once.
+
+    Returns (weights, n_spikes, sigma): weight 0 for blocks beyond ``SPIKE_SIGMA`` robust
+    standard deviations (when they are at most ``MAX_SPIKE_SHARE`` of the blocks), Huber
+    weights min(1, c sigma / |r|) for the others; sigma is the robust scale of the residual."""
+    n = len(y)
+    w = np.ones(n)
+    Xs = X / np.maximum(np.sqrt((X * X).mean(0)), 1e-300)
+    spikes = np.zeros(n, bool)
+    sigma = 0.0
+    for _ in range(iterations):
+        Xw = Xs * w[:, None]
+        b = np.linalg.lstsq(Xw.T @ Xs, Xw.T @ y, rcond=1e-12)[0]   # normal equations
+        r = y - Xs @ b
+        sigma = robust_sigma(r[~spikes]) or float(np.std(r)) or 1e-12
+        out = np.abs(r) > SPIKE_SIGMA * sigma
+        spikes = out if out.mean() <= MAX_SPIKE_SHARE else np.zeros(n, bool)
+        w = np.minimum(1.0, HUBER_C * sigma / np.maximum(np.abs(r), 1e-300))
+        w[spikes] = 0.0
+    return w, int(spikes.sum()), sigma
+
+
+def _legendre(x, deg):
+    """Legendre polynomials P1..Pdeg of x in [-1, 1]."""
+    from numpy.polynomial import legendre
+    return np.stack([legendre.legval(x, [0] * k + [1]) for k in range(1, deg + 1)], -1)
+
+
+def generic_basis(blocks: dict) -> tuple:
+    """Columns of the generic structure basis and their group names.
+
+    Groups: ``operating point (losses)`` sign(w) P(u, v) with u = |w|/max|w|, v = |T_out|/max,
+    total degree <= 3; ``operating point (reading)`` the even terms (u, v, u v, u^2, v^2);
+    ``time`` Legendre P1..P5 of time; ``acceleration`` u dw/dt and v dw/dt; the library's
+    exact signatures (a constant, dw/dt) are left out: the basis holds what the library does not;
+    ``temperature`` (T - T0) and its square, with a temperature column."""
+    w, T = blocks["w_in"], blocks["T_out"]
+    u = np.abs(w) / max(np.max(np.abs(w)), 1e-12)
+    v = np.abs(T) / max(np.max(np.abs(T)), 1e-12)
+    s = np.sign(w)
+    odd = [s * u ** i * v ** j for i in range(4) for j in range(4) if i + j <= 3]
+    # no constant: a zero offset is a library term (the basis holds what the library does not)
+    even = [u, v, u * v, u * u, v * v]
+    t = blocks["t"]
+    tn = 2 * (t - t[0]) / max(t[-1] - t[0], 1e-12) - 1
+    cols, groups = [], []
+    for name, arr in (("operating point (losses)", odd), ("operating point (reading)", even)):
+        cols += arr
+        groups += [name] * len(arr)
+    P = _legendre(tn, 5)
+    cols += list(P.T)
+    groups += ["time"] * P.shape[1]
+    # acceleration beyond a plain inertia (J dw/dt is a library term): growing with speed or
+    # with load
+    a = blocks["alpha"]
+    cols += [a * u, a * v]
+    groups += ["acceleration"] * 2
+    if blocks.get("temperature") is not None:
+        dT = blocks["temperature"] - blocks["temperature"][0]
+        cols += [dT, dT * dT]
+        groups += ["temperature"] * 2
+    return np.stack(cols, -1), groups
+
+
+#: [1] an order is analysed only where its frequency stays below this share of the sampling
+#: rate (below Nyquist with margin: an aliased order looks like a slow signal or another order)
+ORDER_NYQUIST_SHARE = 0.4
+
+
+def order_amplitudes(r, sig, orders, dt) -> dict:
+    """Amplitudes (N*m) of the sample-level residual ``r`` at orders of the input speed, by
+    least squares on sin/cos of the shaft angle over the moving samples where the order's
+    frequency stays below ``ORDER_NYQUIST_SHARE`` of the sampling rate, with the standard error
+    of one amplitude: {name: (amplitude, se)}."""
+    th = sig["theta_in"]
+    w = np.abs(sig["w_in"])
+    moving = w > MOVING_SHARE * max(np.max(w), 1e-12)
+    out = {}
+    for name, k in orders.items():
+        sel = moving & (k * w / (2 * math.pi) < ORDER_NYQUIST_SHARE / dt)
+        if sel.sum() < 100:
+            continue
+        B = np.stack([np.ones(sel.sum()), np.sin(k * th[sel]), np.cos(k * th[sel])], -1)
+        rr = r[sel]
+        coef, *_ = np.linalg.lstsq(B, rr, rcond=None)
+        sigma = float(np.std(rr - B @ coef))
+        out[name] = (math.hypot(coef[1], coef[2]), sigma * math.sqrt(2.0 / len(rr)))
+    return out
+
+
+def held_speeds(w, share=0.02, bin_rpm=10.0) -> np.ndarray:
+    """Input speeds [rad/s] the recording dwells at: 10 r/min bins holding at least ``share`` of
+    the samples."""
+    n = np.abs(w) * 30 / math.pi
+    if not len(n):
+        return np.zeros(0)
+    edges = np.arange(0, n.max() + 2 * bin_rpm, bin_rpm)
+    h, e = np.histogram(n, edges)
+    idx = np.digitize(n, e) - 1
+    return np.array([np.median(n[idx == i]) for i in np.flatnonzero(h >= share * len(n))]) \
+        * math.pi / 30
+
+
+def order_frequencies(orders, speeds, dt) -> np.ndarray:
+    """Frequencies [Hz] at which the given orders appear at the given speeds after sampling
+    (folded about the Nyquist frequency)."""
+    fs = 1.0 / dt
+    f = np.array([k * w / (2 * math.pi) for k in orders for w in speeds])
+    return np.abs((f + fs / 2) % fs - fs / 2)
+
+
+#: [1] a fixed-frequency peak stands in at least this share of the recording's quarters (a shaft
+#: order held at one speed appears in one quarter only)
+PEAK_PERSISTENCE = 0.75
+
+
+def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=1.0, exclude=()) -> list:
+    """Narrow peaks of the residual's spectrum at fixed frequencies (Welch, 2 s segments):
+    bins standing ``factor`` times above the local median level (+-5 Hz) over the whole
+    recording, with an amplitude of at least ``min_amplitude`` N*m, that also stand at least
+    half as high in ``PEAK_PERSISTENCE`` of the recording's quarters (a fixed frequency
+    persists; a shaft order moves with the speed); peaks within 1 Hz of a frequency in
+    ``exclude`` (shaft orders at held speeds) are left to the order analysis. Returns
+    [(frequency Hz, amplitude N*m)], largest first."""
+    from scipy.signal import welch
+    from scipy.ndimage import median_filter
+    n = len(r)
+    fs = 1.0 / dt
+    nper = int(round(2.0 * fs))
+    if n < 8 * nper or nper < 64:
+        return []
+
+    def psd(x):
+        f, P = welch(x - np.mean(x), fs=fs, nperseg=nper, window="hann")
+        df = f[1] - f[0]
+        width = max(3, int(round(10.0 / df)) | 1)
+        return f, P, median_filter(P, size=width, mode="nearest"), df
+    f, P, base, df = psd(r)
+    quarters = [psd(q)[1:3] for q in np.array_split(r, 4)]
+    peaks = []
+    for i in range(1, len(f) - 1):
+        if f[i] < f_min or not (P[i] >= P[i - 1] and P[i] >= P[i + 1]):
+            continue
+        if P[i] > factor * base[i]:
+            # amplitude of a sinusoid from the power in the peak's bins (Hann: 1.5 bins wide)
+            power = (P[i - 1] + P[i] + P[i + 1] - 3 * base[i]) * df / 1.5
+            amp = math.sqrt(max(2 * power, 0.0))
+            seen = np.mean([max(Pq[i - 1:i + 2]) > 0.5 * factor * bq[i] for Pq, bq in quarters])
+            near = len(exclude) and np.min(np.abs(np.asarray(exclude) - f[i])) < 1.0
+            if amp >= min_amplitude and seen >= PEAK_PERSISTENCE and not near:
+                peaks.append((float(f[i]), amp))
+    return sorted(peaks, key=lambda p: -p[1])[:5]
+
+
+#: [s] a residual burst within this time of an event (a reversal, a step) belongs to it: the
+#: transients of backlash and compliance last tens of milliseconds
+EVENT_WINDOW = 0.1
+#: [1] share of the peak speed or torque below which a sign is not judged (noise about zero)
+SIGN_SHARE = 0.02
+#: binomial tail probability below which bursts are tied to events, not chance
+BURST_P = 1e-6
+
+
+def _near(t, events, window):
+    if not len(events):
+        return np.zeros(len(t), bool)
+    i = np.searchsorted(events, t)
+    lo = np.abs(t - events[np.clip(i - 1, 0, len(events) - 1)])
+    hi = np.abs(events[np.clip(i, 0, len(events) - 1)] - t)
+    return np.minimum(lo, hi) <= window
+
+
+def _reversals(t, x):
+    """Times where x changes sign (ignoring values within SIGN_SHARE of its peak of zero)."""
+    big = np.abs(x) > SIGN_SHARE * max(np.max(np.abs(x)), 1e-300)
+    tt, sx = t[big], np.sign(x[big])
+    k = np.flatnonzero(sx[1:] != sx[:-1])
+    return 0.5 * (tt[k] + tt[k + 1])
+
+
+def _steps(t, x, factor=20.0):
+    """Times of steps: block-to-block changes ``factor`` times the median change."""
+    d = np.abs(np.diff(x))
+    ref = np.median(d) or 1e-300
+    return t[1:][d > factor * ref]
+
+
+def bursts(t, spikes, w, T_out) -> dict:
+    """Where the excluded spike blocks sit: at speed reversals, at torque reversals, at steps of
+    load or speed, or elsewhere; ``tied``: the events whose bursts are too many for chance
+    (binomial tail below ``BURST_P``)."""
+    n = int(spikes.sum())
+    out = {"count": n, "at": {}, "tied": []}
+    if n == 0:
+        return out
+    left = spikes.copy()
+    for name, events in (("speed reversals", _reversals(t, w)),
+                         ("torque reversals", _reversals(t, T_out)),
+                         ("load or speed steps", np.union1d(_steps(t, T_out), _steps(t, w)))):
+        near = _near(t, np.sort(events), EVENT_WINDOW)
+        k = int((left & near).sum())
+        out["at"][name] = k
+        if k >= 3:
+            from scipy.stats import binom
+            p0 = max(float(near.mean()), 1e-12)
+            if binom.sf(k - 1, n, p0) < BURST_P:
+                out["tied"].append(name)
+        left &= ~near
+    out["at"]["elsewhere"] = int(left.sum())
+    return out
+
+
+def locate(t, r, w, T_out, T_in, alpha, temperature=None) -> dict:
+    """Where the residual (measured - model input torque, N*m, block means) concentrates and
+    what it follows; a plain statement with the numbers behind it."""
+    aw, aT = np.abs(w), np.abs(T_out)
+    p = np.abs(T_in * w)
+
+    def corr(a, b):
+        if len(a) < 3 or np.std(a) == 0 or np.std(b) == 0:
+            return 0.0
+        return float(np.corrcoef(a, b)[0, 1])
+    moving = aw > MOVING_SHARE * max(aw.max(), 1e-12)
+    if moving.sum() < 10:
+        return {"statement": "the recording hardly moves: no operating region to locate."}
+    rs = np.where(w >= 0, r, -r)       # residual in the sense of the motion (a loss > 0)
+    c_speed = corr(rs[moving], aw[moving])
+    c_load = corr(rs[moving], aT[moving])
+    c_time = corr(r, t)
+    c_acc = corr(r, alpha)
+    c_temp = corr(r, temperature) if temperature is not None else 0.0
+    fwd, rev = moving & (w > 0), moving & (w < 0)
+    mean_fwd = float(np.mean(r[fwd])) if fwd.any() else 0.0
+    mean_rev = float(np.mean(r[rev])) if rev.any() else 0.0
+    qs, qt = np.quantile(aw[moving], [1 / 3, 2 / 3]), np.quantile(aT[moving], [1 / 3, 2 / 3])
+    cells = {}
+    for i, sl in enumerate(("low", "mid", "high")):
+        for j, tl in enumerate(("low", "mid", "high")):
+            sel = moving & (np.digitize(aw, qs) == i) & (np.digitize(aT, qt) == j)
+            if sel.sum() > 5:
+                cells[f"speed {sl}, load {tl}"] = float(np.mean(rs[sel]))
+    worst = max(cells, key=lambda c: abs(cells[c])) if cells else ""
+    light, heavy = [], []
+    for i in range(3):
+        sp = moving & (np.digitize(aw, qs) == i)
+        if sp.sum() > 10:
+            lo_t, hi_t = np.quantile(aT[sp], [1 / 3, 2 / 3])
+            for sel, acc in ((sp & (aT <= lo_t), light), (sp & (aT >= hi_t), heavy)):
+                if sel.any():
+                    acc.append(np.mean(rs[sel]) / max(np.mean(np.abs(T_in[sel])), 1e-12))
+    rel_light = float(np.mean(light)) if light else float("nan")
+    rel_heavy = float(np.mean(heavy)) if heavy else float("nan")
+    low_p = moving & (p < np.quantile(p[moving], 0.33))
+    high_p = moving & (p > np.quantile(p[moving], 0.67))
+    rel_low = float(np.mean(rs[low_p]) / max(np.mean(np.abs(T_in[low_p])), 1e-12)) \
+        if low_p.any() else float("nan")
+    rel_high = float(np.mean(rs[high_p]) / max(np.mean(np.abs(T_in[high_p])), 1e-12)) \
+        if high_p.any() else float("nan")
+    parts = []
+    under = np.mean(rs[moving]) > 0
+    parts.append(f"the model {'under' if under else 'over'}-predicts the input torque, most "
+                 f"at {worst}" if worst else "no operating region stands out")
+    parts.append(f"relative to the input torque the mismatch is {100 * rel_low:+.1f} % at low "
+                 f"and {100 * rel_high:+.1f} % at high input power")
+    if math.isfinite(rel_light) and abs(rel_light) > 1.5 * abs(rel_heavy):
+        parts.append(f"at a given speed it is larger at light load ({100 * rel_light:+.1f} % "
+                     f"against {100 * rel_heavy:+.1f} % at heavy load)")
+    parts.append(("the missing torque grows with speed" if c_speed > 0.3 else
+                  "it falls with speed" if c_speed < -0.3 else "it does not follow speed")
+                 + (", scales with load" if abs(c_load) > 0.3 else ", does not scale with load"))
+    if abs(c_time) > 0.3:
+        parts.append("it drifts with time")
+    if abs(c_temp) > 0.3:
+        parts.append("it follows the temperature")
+    if abs(c_acc) > 0.3:
+        parts.append("it follows acceleration")
+    if fwd.any() and rev.any():
+        parts.append("it keeps its sign when the rotation reverses (like an offset)"
+                     if mean_fwd * mean_rev > 0 else
+                     "it flips with the rotation (like friction)")
+    return {"statement": "; ".join(parts) + ".",
+            "corr_speed": c_speed, "corr_load": c_load, "corr_time": c_time,
+            "corr_acceleration": c_acc, "corr_temperature": c_temp,
+            "mean_forward_Nm": mean_fwd,
+            "mean_reverse_Nm": mean_rev, "by_region_Nm": cells, "worst_region": worst,
+            "relative_low_power": rel_low, "relative_high_power": rel_high,
+            "relative_light_load_same_speed": rel_light,
+            "relative_heavy_load_same_speed": rel_heavy}
+
+
+def ljung_box_p(x, lags=20):
+    """p-value of the Ljung-Box test that x is white (small p: structure left)."""
+    from scipy.stats import chi2
+    x = np.asarray(x, float) - np.mean(x)
+    n = len(x)
+    denom = np.dot(x, x)
+    if denom == 0 or n <= lags + 1:
+        return 1.0
+    q = 0.0
+    for k in range(1, lags + 1):
+        r = np.dot(x[k:], x[:-k]) / denom
+        q += r * r / (n - k)
+    return float(chi2.sf(n * (n + 2) * q, lags))
