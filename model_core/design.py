@@ -614,3 +614,24 @@ def design_from_toml(source) -> DriveDesign:
     except tomllib.TOMLDecodeError as exc:
         raise CycloidInputError("design file", str(source)[:60], f"is not valid TOML ({exc})")
     return design_from_dict(data)
+
+
+def scale_friction_level(design: DriveDesign, factor: float) -> DriveDesign:
+    """The design with its sliding-friction level scaled by ``factor`` (a diagnosis' friction
+    level): mu_boundary in the paper profile; in the physical profile also the pin's boundary
+    coefficient and the tooth traction (mu_pin_boundary, mu_tooth), which set its sliding
+    losses."""
+    fr = design.friction
+    changes = {"mu_boundary": fr.mu_boundary * factor}
+    if design.profile == "physical":
+        changes.update(mu_pin_boundary=fr.mu_pin_boundary * factor, mu_tooth=fr.mu_tooth * factor)
+    return dataclasses.replace(design, friction=dataclasses.replace(fr, **changes))
+
+
+def scale_viscosity(design: DriveDesign, factor: float) -> DriveDesign:
+    """The design with its grease's viscosity scaled by ``factor`` at every temperature (both
+    catalogue viscosities, so the Walther line keeps its slope approximately)."""
+    lub = design.lubricant
+    return dataclasses.replace(design, lubricant=dataclasses.replace(
+        lub, kinematic_viscosity=lub.kinematic_viscosity * factor,
+        kinematic_viscosity_100=lub.kinematic_viscosity_100 * factor))
