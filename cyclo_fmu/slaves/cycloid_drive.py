@@ -43,6 +43,7 @@ DESIGN_PARAMETERS = [
     ("delta_z", None, "delta_z", "m", "profile correction", Real),
     ("ring_rollers", None, "ring_rollers", None, "ring rollers: plain or needle", String),
     ("disc_rollers", None, "disc_rollers", None, "disc rollers: plain or needle", String),
+    ("profile", None, "profile", None, "model profile: physical or paper", String),
     ("nu", "lubricant", "kinematic_viscosity", "m2/s", "lubricant kinematic viscosity", Real),
     ("rho_oil", "lubricant", "density", "kg/m3", "lubricant density", Real),
     ("mu_boundary", "friction", "mu_boundary", "1",
