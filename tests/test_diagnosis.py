@@ -394,10 +394,8 @@ def test_locates_ripple_at_shaft_orders():
 def test_names_the_effect_hidden_in_the_fmu_dir(fmu_dir, effect, mode):
     """The same proof through the bench's co-simulated FMUs (motor, reducer with the hidden
     physics switched on, brake, transducers), not only the vectorised replay."""
-    # the paper profile: the reducer FMU exposes the friction level as mu_boundary only
-    paper = DriveDesign(profile="paper")
-    r = synthesize(effect, 3, mode, "tiny", engine="bench", fmu_dir=fmu_dir, design=paper)
-    d = diagnose(r, mode, paper)
+    r = synthesize(effect, 3, mode, "tiny", engine="bench", fmu_dir=fmu_dir)
+    d = diagnose(r, mode)
     assert d.effect == effect
     if effect != "none":
         assert d.rmse_after_Nm <= 0.5 * d.rmse_before_Nm
