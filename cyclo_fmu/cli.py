@@ -278,6 +278,37 @@ def cmd_build(args) -> int:
     return 0
 
 
+def cmd_export_modelica(args) -> int:
+    from .modelica_export import export_modelica
+    a, b, _ = parse_mode(args.mode)
+    design = _load_design(args.design)
+    with _staged_dir("out", args.out) as out:
+        path = export_modelica(a + b, out, design,
+                               design_name=Path(args.design).name if args.design else None)
+    print(Path(args.out) / path.name)
+    return 0
+
+
+def _progress_on(args) -> bool:
+    """Progress bars (tqdm, stderr) unless --quiet or stderr is not a terminal."""
+    return not getattr(args, "quiet", False) and sys.stderr.isatty()
+
+
+def _bench_step(text) -> float:
+    """--step in ms ('steady': bench.STEADY_STEP) -> s; one line naming the field if bad."""
+    from .bench import STEADY_STEP
+    if str(text).strip().lower() == "steady":
+        return STEADY_STEP
+    try:
+        ms = float(text)
+    except ValueError:
+        ms = float("nan")
+    if not (math.isfinite(ms) and 0.01 <= ms <= 100):
+        raise CycloidInputError("step", text, "must be a step in ms from 0.01 to 100, or "
+                                "'steady'")
+    return ms * 1e-3
+
+
 def cmd_bench(args) -> int:
     from .bench import Sensors, run_bench, scenario
     from .fmu_build import SLAVES, build_fmu
@@ -286,6 +317,7 @@ def cmd_bench(args) -> int:
         raise CycloidInputError("mode", args.mode, "the bench drives the eccentric shaft S: "
                                 "S1 or S2")
     _check_seed(args.seed)
+    step = _bench_step(args.step)
     try:
         sc = scenario(args.scenario, mode)
     except ValueError as exc:
@@ -298,7 +330,7 @@ def cmd_bench(args) -> int:
             build_fmu(name, fmu_dir)
         try:
             run = run_bench(sc, fmu_dir, out, Sensors(ideal=args.ideal_sensors, seed=args.seed),
-                            design=design)
+                            step=step, design=design, progress=_progress_on(args))
         except CycloidInputError:
             raise
         except ValueError as exc:
@@ -346,13 +378,20 @@ def cmd_synth(args) -> int:
         raise CycloidInputError("engine", args.engine, "hides exactly one effect and writes no "
                                 "temperature column; use --engine fast")
     design = _load_design(None, args.profile) if args.profile else None
+    from tqdm import tqdm
+    bar = tqdm(total=2, desc="synth", unit="stage", disable=not _progress_on(args), leave=False)
     rec = synthesize(effects[0] if len(effects) == 1 else effects, args.seed, mode, args.size,
-                     design=design, plan=args.plan, engine=args.engine, temperature_rise=rise)
+                     design=design, plan=args.plan, engine=args.engine, temperature_rise=rise,
+                     progress=_progress_on(args))
+    bar.update()
+    bar.set_description("synth: writing")
     with _staged_file("out", args.out) as tmp, \
             (_staged_file("truth", truth) if truth else contextlib.nullcontext()) as tmp_truth:
         write_synth(tmp, rec)
         if truth:
             Path(tmp_truth).write_text(json.dumps(rec["truth"], indent=2))
+    bar.update()
+    bar.close()
     path = Path(args.out)
     print(f"wrote {path}: {len(rec['time_s'])} samples, {rec['time_s'][-1]:.0f} s, mode {mode}")
     return 0
@@ -431,7 +470,8 @@ def cmd_sweep(args) -> int:
         raise CycloidInputError("out", args.out, "must end in .parquet")
     _workers(args)
     n = len(spec.designs())
-    df = run_sweep(spec, scheduler=args.scheduler, workers=args.workers, serial=args.serial)
+    df = run_sweep(spec, scheduler=args.scheduler, workers=args.workers, serial=args.serial,
+                   progress=_progress_on(args))
     with _staged_file("out", args.out) as tmp:
         df.to_parquet(tmp, index=False)
     bad = int((df["error"] != "").sum())
@@ -458,7 +498,8 @@ def cmd_diagnose_batch(args) -> int:
     _workers(args)
     with _staged_dir("out", args.out) as out:
         df = diagnose_batch(folder, out, design, mode, columns=columns,
-                            scheduler=args.scheduler, workers=args.workers, serial=args.serial)
+                            scheduler=args.scheduler, workers=args.workers, serial=args.serial,
+                            progress=_progress_on(args))
     bad = int((df["error"] != "").sum())
     print(f"diagnose-batch: {len(df)} recordings -> {args.out}/summary.csv"
           f"{f'; {bad} could not be diagnosed (column error)' if bad else ''}")
@@ -516,6 +557,12 @@ def build_parser() -> argparse.ArgumentParser:
     bp.add_argument("names", nargs="*", help="FMUs to build (default: all)")
     _add_profile(bp)
     bp.set_defaults(func=cmd_build)
+    mx = sub.add_parser("export-modelica", help="a Modelica package: the mode as MSL LossyGear "
+                        "with a loss table fitted to the core over the bench envelope")
+    mx.add_argument("--mode", required=True, help=f"operating mode, one of {', '.join(MODES)}")
+    mx.add_argument("--design", help="design file (TOML); default: the paper's test drive")
+    mx.add_argument("--out", required=True, help="output folder (writes CycloidDrive_<mode>.mo)")
+    mx.set_defaults(func=cmd_export_modelica)
     bench = sub.add_parser("bench", help="simulate the motor - reducer - brake test bench (SSP)")
     bench.add_argument("--mode", default="S1", help="operating mode of the reducer (S1, S2, ...)")
     bench.add_argument("--scenario", default="paper",
@@ -523,6 +570,10 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--out", default="out/bench", help="output folder (default: out/bench)")
     bench.add_argument("--ideal-sensors", action="store_true", help="switch transducer errors off")
     bench.add_argument("--seed", type=int, default=1, help="noise seed of the transducers")
+    bench.add_argument("--step", default="1", help="communication step in ms (default 1, the "
+                       "recording's rate); 'steady': the step the convergence check chose for "
+                       "steady scenarios (README)")
+    bench.add_argument("--quiet", action="store_true", help="no progress bar")
     bench.add_argument("--design", help="design file (TOML) for the reducer, e.g. the "
                        "design_updated.toml a diagnosis wrote")
     _add_profile(bench)
@@ -542,6 +593,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "varied) or one_speed (load steps at 2000 r/min only)")
     sy.add_argument("--engine", default="fast", help="fast (the bench's components replayed "
                     "vectorised) or bench (the bench's FMUs co-simulated; slower)")
+    sy.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_profile(sy)
     sy.set_defaults(func=cmd_synth, fmus=True)
     dg = sub.add_parser("diagnose", help="locate, explain and model the mismatch of a recording")
@@ -561,6 +613,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("spec", help="sweep spec (TOML; see examples/sweep.toml)")
     sw.add_argument("--out", required=True, help="results file (.parquet)")
     _cluster_options(sw)
+    sw.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_profile(sw)
     sw.set_defaults(func=cmd_sweep)
     db = sub.add_parser("diagnose-batch", help="diagnose every recording (*.csv, *.mf4) in a "
@@ -572,6 +625,7 @@ def build_parser() -> argparse.ArgumentParser:
     db.add_argument("--design", help="design file (TOML)")
     db.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     _cluster_options(db)
+    db.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_profile(db)
     db.set_defaults(func=cmd_diagnose_batch)
     return p

@@ -9,6 +9,7 @@ the host interpreter's environment (see README, limits).
 from __future__ import annotations
 
 import argparse
+import os
 import shutil
 import sys
 import tempfile
@@ -69,6 +70,10 @@ def build_fmu(name: str = "CycloidDrive", dest="dist") -> Path:
         ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
         shutil.copytree(HERE / "slaves", pkg, ignore=ignore)
         shutil.copytree(HERE.parent / "model_core", pkg / "_bundled_core", ignore=ignore)
+        front = _have_compiler() and not os.environ.get("CYCLOFMU_NO_SHIM")
+        if front:   # the slaves report failures to the C front (slaves.base.STATUS_FRONT)
+            (pkg / "_status_front").write_text("linux64 binary: cyclo_fmu/native/"
+                                               "fmi2_status_shim.c\n")
         script = stage / f"{BUNDLE}_{name}.py"
         script.write_text(SCRIPT_TEMPLATE.format(name=name, version=__version__, bundle=BUNDLE,
                                                  module=SLAVES[name]))
@@ -81,7 +86,63 @@ def build_fmu(name: str = "CycloidDrive", dest="dist") -> Path:
             for mod in [m for m in sys.modules if m == BUNDLE or m.startswith(BUNDLE + ".")
                         or m == script.stem]:
                 del sys.modules[mod]
-    return Path(out)
+    out = Path(out)
+    if front:
+        _install_status_shim(out, name)
+    return out
+
+
+def _have_compiler() -> bool:
+    from .native.build import find_compiler
+    try:
+        find_compiler()
+        return True
+    except Exception:   # noqa: BLE001
+        print("note: no C compiler: the Python FMUs keep pythonfmu's binary, which answers "
+              "errors with fmi2Fatal", file=sys.stderr)
+        return False
+
+
+#: the front library in C that turns pythonfmu's fmi2Fatal into fmi2Error (see its header)
+SHIM_SOURCE = HERE / "native" / "fmi2_status_shim.c"
+
+
+def _install_status_shim(fmu: Path, name: str) -> None:
+    """Put the status front (compiled here) in place of pythonfmu's linux64 binary, which goes
+    next to it as ``<name>.pythonfmu.so``. Without a C compiler the FMU keeps pythonfmu's
+    binary (and its fmi2Fatal), with a note on stderr."""
+    import subprocess
+    import zipfile
+
+    from .native.build import find_compiler, fmi_header_dir
+
+    so = f"binaries/linux64/{name}.so"
+    cc = find_compiler()
+    with zipfile.ZipFile(fmu) as z:
+        md = z.read("modelDescription.xml").decode()
+    import re
+    vr = re.search(r'name="_failed" valueReference="(\d+)"', md)
+    if vr is None:
+        raise RuntimeError(f"{fmu.name}: no variable _failed for the status front")
+    with tempfile.TemporaryDirectory(prefix="cyclofmu_shim_") as tmp:
+        lib = Path(tmp) / "shim.so"
+        r = subprocess.run([cc, "-std=c99", "-O2", "-fPIC", "-shared", f"-I{fmi_header_dir()}",
+                            f"-DFAILED_VR={vr.group(1)}",
+                            "-o", str(lib), str(SHIM_SOURCE), "-ldl"],
+                           capture_output=True, text=True)
+        if r.returncode != 0:
+            raise RuntimeError(f"compiling {SHIM_SOURCE.name} failed: {r.stderr.strip()[:300]}")
+        tmp_fmu = Path(tmp) / fmu.name
+        with zipfile.ZipFile(fmu) as zin, zipfile.ZipFile(tmp_fmu, "w",
+                                                         zipfile.ZIP_DEFLATED) as zout:
+            for item in zin.infolist():
+                data = zin.read(item.filename)
+                if item.filename == so:
+                    zout.writestr(f"binaries/linux64/{name}.pythonfmu.so", data)
+                    zout.write(lib, so)
+                else:
+                    zout.writestr(item, data)
+        shutil.move(str(tmp_fmu), fmu)
 
 
 def build_any(name: str, dest="dist", design=None) -> Path:

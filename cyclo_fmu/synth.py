@@ -106,7 +106,7 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
                design: DriveDesign = None, settings: SynthSettings = SynthSettings(),
                friction_error: float = None, effect_values: dict = None, shape=None,
                plan: str = "full", engine: str = "fast", fmu_dir=None, added_torque=None,
-               temperature_rise: float = None, duration: float = None) -> dict:
+               temperature_rise: float = None, duration: float = None, progress=False) -> dict:
     """A recording dict (schema columns, edge units r/min and N*m) plus ``truth``.
 
     ``effect``: one effect id, a list of ids or {id: (values, shape)} (several hidden at
@@ -159,7 +159,7 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
             raise ValueError("engine = 'bench' hides exactly one library effect")
         (eid, (values, eff_shape)), = hidden.items()
         return _through_the_bench(eid, values, eff_shape, true_design, plan, hold, mode,
-                                  duration, seed, settings, friction_error, fmu_dir)
+                                  duration, seed, settings, friction_error, fmu_dir, progress)
     tau_in, loss_in = replay_input_torque(true_design, mode, w_in, tau_out)
     temperature = None
     if temperature_rise is not None:
@@ -255,7 +255,7 @@ def paper_like(mode: str = "S1", seed: int = 1, size: str = "small", **kw) -> di
 
 
 def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, duration, seed,
-                       settings, friction_error, fmu_dir):
+                       settings, friction_error, fmu_dir, progress=False):
     """The recording from the bench's FMUs (motor, reducer, brake, transducers): the hidden
     effect switched on in the reducer FMU's extra physics (or the transducer's zero offset),
     the setpoints of the plan as the motor's and brake's schedules."""
@@ -286,7 +286,7 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
         if fmu_dir is None:
             for name in sorted({f for f, _ in COMPONENTS.values()}):
                 build_fmu(name, d)
-        res = run_fmus(d, params, duration, 1.0 / settings.sample_rate)
+        res = run_fmus(d, params, duration, 1.0 / settings.sample_rate, progress=progress)
     rec = recording_from_result(res)
     rec["truth"] = {"effect": effect, "values": values, "shape": shape,
                     "friction_error": friction_error, "mode": mode, "seed": seed,

@@ -180,7 +180,7 @@ class ModeMap:
 REPLAY_MARGIN = 1.05
 
 
-def replay_input_torque(design, mode, w_in, tau_out):
+def replay_input_torque(design, mode, w_in, tau_out, grid=None):
     """The input torque the model predicts along a recording, and its loss part (both N*m).
 
     Parameters
@@ -193,6 +193,9 @@ def replay_input_torque(design, mode, w_in, tau_out):
     tau_out : array_like
         Torque the load applies on the driven shaft [N*m] (minus the delivered output torque).
 
+    grid : (int, int), optional
+        Points of the map over torque and speed (default: ModeMap's 36 x 28).
+
     Returns
     -------
     tau_in, loss_in : ndarray
@@ -203,7 +206,8 @@ def replay_input_torque(design, mode, w_in, tau_out):
     tau_out = np.asarray(tau_out, float)
     tmax = float(np.max(np.abs(tau_out))) * REPLAY_MARGIN + 1e-6
     wmax = float(np.max(np.abs(w_in))) * REPLAY_MARGIN + 1e-6
-    m = ModeMap(design, mode, tmax, wmax)
+    m = ModeMap(design, mode, tmax, wmax) if grid is None else \
+        ModeMap(design, mode, tmax, wmax, n_torque=grid[0], n_speed=grid[1])
     tau_in = m.solve_arrays(w_in, tau_out)["tau_in"]
     lossless = -tau_out * m.ratio[m._k]
     return tau_in, tau_in - lossless

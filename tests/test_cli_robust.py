@@ -28,6 +28,7 @@ OUTPUT_COMMANDS = {
     "diagnose": (["diagnose", "missing-recording.csv", "--mode", "S1"], "--out", "dir"),
     "sweep": (["sweep", "{spec}"], "--out", "file"),
     "diagnose-batch": (["diagnose-batch", "{recdir}", "--mode", "S1"], "--out", "dir"),
+    "export-modelica": (["export-modelica", "--mode", "S1"], "--out", "dir"),
     "stiffness": (["stiffness"], "--out", "dir"),
 }
 
@@ -39,6 +40,7 @@ DESIGN_COMMANDS = {
     "diagnose": ["diagnose", "missing-recording.csv", "--mode", "S1"],
     "diagnose-batch": ["diagnose-batch", "{recdir}", "--mode", "S1", "--out", "{tmp}/batch"],
     "build": ["build", "--dest", "{tmp}/build_out", "CycloidDriveNative"],
+    "export-modelica": ["export-modelica", "--mode", "S1", "--out", "{tmp}/mo_out"],
     "stiffness": ["stiffness"],
 }
 
@@ -177,6 +179,12 @@ def test_bench_mode_checked_before_the_fmus_run(tmp_path, mode):
     r = _run(["bench", "--mode", mode, "--out", str(tmp_path / "b")], tmp_path)
     _assert_one_line(r, "mode", mode)
     assert not (tmp_path / "b").exists()
+
+
+def test_export_modelica_mode_checked(tmp_path):
+    r = _run(["export-modelica", "--mode", "X3", "--out", str(tmp_path / "m")], tmp_path)
+    _assert_one_line(r, "mode", "X3")
+    assert not (tmp_path / "m").exists()
 
 
 @pytest.mark.parametrize("torque,words", [("0", "no power flows"), ("1e30", "rating"),

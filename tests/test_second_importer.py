@@ -52,3 +52,13 @@ def test_libcosim_matches_fmpy(fmu, mode):
     w_in = np.array([s[0] for s in schedule])
     tau_out = np.array([s[1] for s in schedule])
     np.testing.assert_allclose(cosim[:, 1] * w_in + tau_out * cosim[:, 0], cosim[:, 3], rtol=1e-9)
+
+
+def test_native_fmu_in_libcosim(fmu, tmp_path):
+    """CycloidDriveNative.fmu in libcosim (which reads every variable, the constants too) gives
+    the Python FMU's numbers (README, Use it in your tool)."""
+    from cyclo_fmu.native import build_native_fmu
+    native = str(build_native_fmu(dest=tmp_path))
+    schedule = [(300.0, -10.0), (-150.0, 4.0), (80.0, 12.0)]
+    np.testing.assert_allclose(run_libcosim(native, "S2", schedule),
+                               run_libcosim(fmu, "S2", schedule), rtol=1e-9, atol=1e-12)

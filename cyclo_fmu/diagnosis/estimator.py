@@ -52,6 +52,10 @@ MIN_MOVING_S = 2.0
 MIN_SPEED = 1.0
 #: [N*m] below this output torque the recording carries no load (load-dependent terms dropped)
 MIN_LOAD = 0.05
+#: [1] share of the moving blocks that must be back-driven (input power below
+#: -MIN_BACKDRIVEN_POWER_SHARE of the peak) before a transducer gain error can be selected
+MIN_BACKDRIVEN_SHARE = 0.05
+MIN_BACKDRIVEN_POWER_SHARE = 0.02
 #: [standard errors] an order amplitude below this is noise
 ORDER_SE = 8.0
 
@@ -290,22 +294,33 @@ class Diagnoser:
         noise = R.robust_sigma(np.diff(rec.torque_in)) / math.sqrt(2 * P["m"])
         min_expl = max(MIN_EXPLAINED_NM, MIN_EXPLAINED_NOISE * noise)
         opts = {k: v for k, v in options.items() if v}
+        # a transducer gain error is told from a friction level only where the power flows
+        # backwards (the losses change side, a gain error does not): without back-driven
+        # blocks it is not selected, only reported as the friction level's look-alike
+        b = P["blocks"]
+        p_in = b["T_in"] * b["w_in"]
+        moving = np.abs(b["w_in"]) > R.MOVING_SHARE * max(np.max(np.abs(b["w_in"])), 1e-12)
+        back = np.count_nonzero(moving & (p_in < -MIN_BACKDRIVEN_POWER_SHARE
+                                          * np.max(np.abs(p_in))))
+        backdriven = back >= MIN_BACKDRIVEN_SHARE * max(np.count_nonzero(moving), 1)
+        selectable = {k: v for k, v in opts.items()
+                      if backdriven or k != "torque_sensor_gain"}
         forced_terms = tuple(self._best_shape(prob, (), opts[f]) for f in forced if f in opts)
-        sel = self._select(prob, opts, min_expl, forced_terms)
+        sel = self._select(prob, selectable, min_expl, forced_terms)
         S = sel.fit
         self._stage("stability")
         # stability: the selection with one fold left out at a time (BIC rule only)
         counts = {}
         for f in range(self.n_folds):
             keep = [g for g in range(self.n_folds) if g != f]
-            s = self._select(prob, opts, min_expl, forced_terms, folds=keep, cv=False).fit
+            s = self._select(prob, selectable, min_expl, forced_terms, folds=keep, cv=False).fit
             for i in s.ids:
                 counts[i] = counts.get(i, 0) + 1
         stability = {i: counts.get(i, 0) / self.n_folds for i in S.ids}
         unstable = [i for i in S.ids if stability[i] < MIN_STABILITY and
                     i not in forced]
         if unstable:      # select again without them
-            sel = self._select(prob, opts, min_expl, forced_terms, exclude=unstable)
+            sel = self._select(prob, selectable, min_expl, forced_terms, exclude=unstable)
             S = sel.fit
         self._stage("structure")
         # the honest unknown: what the generic basis still explains next to the selection

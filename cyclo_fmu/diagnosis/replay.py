@@ -23,6 +23,10 @@ from model_core.lossmap import replay_input_torque
 #: of mu_boundary or of the viscosity: large against the map's interpolation error, small
 #: against the curvature of the losses in ln mu)
 SENSITIVITY_STEP = 0.05
+#: map points (torque x speed) of the sensitivity replays: a quarter of the base replay's
+#: 36 x 28; a sensitivity is smooth over the map, and both sides of its difference share the
+#: grid, so their interpolation errors cancel to first order
+SENSITIVITY_GRID = (18, 14)
 #: [s] window of the moving mean of the measured speed before it is differentiated (20 ms:
 #: the transducer noise of a 0.1 r/min encoder differentiated at 1 kHz would swamp J dw/dt)
 SPEED_SMOOTHING = 0.02
@@ -77,10 +81,15 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
     if sensitivities is None:
         h = SENSITIVITY_STEP
         dln = math.log(1 + h) - math.log(1 - h)
-        sens_mu = (replay_input_torque(_scaled(design, mu=1 + h), mode, w_in, tau_out)[0]
-                   - replay_input_torque(_scaled(design, mu=1 - h), mode, w_in, tau_out)[0]) / dln
-        sens_nu = (replay_input_torque(_scaled(design, nu=1 + h), mode, w_in, tau_out)[0]
-                   - replay_input_torque(_scaled(design, nu=1 - h), mode, w_in, tau_out)[0]) / dln
+        g = SENSITIVITY_GRID
+
+        def diff(**k):
+            up = {n: 1 + h for n in k}
+            dn = {n: 1 - h for n in k}
+            return (replay_input_torque(_scaled(design, **up), mode, w_in, tau_out, g)[0]
+                    - replay_input_torque(_scaled(design, **dn), mode, w_in, tau_out, g)[0]) / dln
+        sens_mu = diff(mu=1)
+        sens_nu = diff(nu=1)
     else:
         sens_mu, sens_nu = sensitivities
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0

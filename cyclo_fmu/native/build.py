@@ -72,12 +72,12 @@ EXTRA = (
      "(|w|/300 rad/s)^p (0 to 2)"),
 )
 
-#: Outputs, in the order of the C state's out[] (value references 10..21), then ``locked``.
+#: Outputs, in the order of the C state's out[] (value references 10..22), then ``locked``.
 OUTPUTS = (
     ("w_out", "rad/s", "AngularVelocity", "speed of the driven shaft"),
     ("tau_in", "N.m", "Torque", "torque the driver applies on the driving shaft"),
     ("tau_housing", "N.m", "Torque", "torque the support applies on the held shaft"),
-    ("P_loss", "W", "Power", "total power loss tau_in*w_in + tau_out*w_out"),
+    ("P_loss", "W", "Power", "total power loss tau_in*w_in + tau_out*w_out - P_stored (>= 0)"),
     ("PL1", "W", "Power", "partial loss PL1: eccentric (cycloid-gear) bearing"),
     ("PL2", "W", "Power", "partial loss PL2: disc rollers rolling in the holes"),
     ("PL3", "W", "Power", "partial loss PL3: disc rollers sliding on their pins"),
@@ -87,6 +87,8 @@ OUTPUTS = (
     ("eta0", "1", None, "basic efficiency (carrier held)"),
     ("P_extra", "W", "Power", "power of the physics beyond the paper (drag, Stribeck, inertia, "
      "ripple, warm-up) at the driving shaft"),
+    ("P_stored", "W", "Power", "power into stored energy at the driving shaft: kinetic energy of "
+     "input_inertia and the ripples' zero-mean exchange (part of P_extra, not a loss)"),
 )
 
 #: SI base-unit exponents and display units (name, factor: display = factor * SI value)
@@ -234,6 +236,8 @@ def generate_data_c(design, lt, lw, modes, constants, guid, torque_max, speed_ma
     for kind, ctype, fmt in (("Real", "CDConstReal", _hex), ("Integer", "CDConstInteger", str),
                              ("String", "CDConstString", _c_string)):
         rows = [f"    {{{vr}u, {fmt(c[2])}}}" for c, vr in zip(constants, vrs) if c[1] == kind]
+        if kind == "Real":   # map_torque_max, map_speed_max (value references 200, 201)
+            rows += [f"    {{200u, {_hex(torque_max)}}}", f"    {{201u, {_hex(speed_max)}}}"]
         n = len(rows)
         if not rows:   # C forbids empty initialisers
             rows = ["    {0u, 0}"]
@@ -325,7 +329,7 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
               "ripple_1x_phase", "ripple_roller", "ripple_roller_phase"]
     both = ["w_in", "tau_out"]
     deps = {"w_out": (["w_in"], ["w_in"] + mode_p)}
-    for name in ("tau_in", "P_loss", "eta", "P_extra"):
+    for name in ("tau_in", "P_loss", "eta", "P_extra", "P_stored"):
         deps[name] = (both, both + mode_p + steady)
     for name in ("tau_housing", "PL1", "PL2", "PL3", "PL5", "PL6", "eta0", "locked"):
         deps[name] = (both, both + mode_p)

@@ -27,14 +27,14 @@
 #define VR_W_IN 0
 #define VR_TAU_OUT 1
 #define VR_OUT0 10
-#define N_OUT 12
+#define N_OUT 13
 #define VR_EXTRA0 30
 #define VR_MODE_NUMBER 0
 #define VR_LOCKED 10
 #define VR_MODE 0
 
 enum { O_W_OUT, O_TAU_IN, O_TAU_HOUSING, O_P_LOSS, O_PL1, O_PL2, O_PL3, O_PL5, O_PL6, O_ETA,
-       O_ETA0, O_P_EXTRA };
+       O_ETA0, O_P_EXTRA, O_P_STORED };
 
 static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "drag_torque", "stribeck_torque", "stribeck_speed", "input_inertia", "ripple_1x",
@@ -169,7 +169,8 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     CDState *s = &c->s;
     const CDMode *m;
     CDSolution r;
-    double tau_in, tau_in_gear, p_in, p_out, w_in = s->w_in, tau_out = s->tau_out;
+    double tau_in, tau_in_gear, p_in, p_out, p_stored = 0.0, w_in = s->w_in,
+           tau_out = s->tau_out;
     int mode = commit || s->phase == PH_STEP ? s->mode_eff : resolve_mode(s);
     int steady = s->extra.drag_torque != 0 || s->extra.stribeck_torque != 0;
     int dynamic = s->extra.input_inertia != 0 || s->extra.ripple_1x != 0
@@ -206,10 +207,13 @@ static void evaluate(Instance *c, double t, double dt, int commit)
         }
         loss_in = tau_in_gear + tau_out * m->ratio_out;   /* minus the lossless torque */
         tau_in += cd_dynamic_torque(&s->extra, alpha, theta, m->order, t - s->t_start, loss_in);
+        /* the conservative part (inertia, ripples: d/dt of an energy), not a loss */
+        p_stored = cd_dynamic_torque(&s->extra, alpha, theta, m->order, 0.0, 0.0) * w_in;
     }
     s->out[O_TAU_IN] = tau_in;
     s->out[O_P_EXTRA] = (tau_in - tau_in_gear) * w_in;
-    s->out[O_P_LOSS] = tau_in * w_in + tau_out * s->out[O_W_OUT];
+    s->out[O_P_STORED] = p_stored;
+    s->out[O_P_LOSS] = tau_in * w_in + tau_out * s->out[O_W_OUT] - p_stored;
     if (steady || dynamic) {
         double pa = tau_in * w_in, pb = tau_out * s->out[O_W_OUT];
         p_in = pa > pb ? pa : pb;

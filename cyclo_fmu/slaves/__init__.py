@@ -1,9 +1,15 @@
 """FMI 2.0 co-simulation slaves (pythonfmu). Inside a built FMU this package is bundled under a
 versioned name with the physics core next to it as ``_bundled_core``, so that nothing collides
-with a host's own imports; in the source tree the slaves use ``model_core`` directly."""
-try:  # inside an FMU
+with a host's own imports; in the source tree the slaves use ``model_core`` directly.
+
+Only the absence of ``_bundled_core`` itself selects the source tree: an import error inside the
+bundled core (numpy or scipy missing in the host's Python) is raised as it is, so the host's log
+names the module that is really missing."""
+import importlib.util
+
+if importlib.util.find_spec(__name__ + "._bundled_core") is not None:   # inside an FMU
     from . import _bundled_core as core  # type: ignore[attr-defined]
-except ImportError:  # source tree / installed package
+else:  # source tree / installed package
     import model_core as core
 
 __all__ = ["core"]

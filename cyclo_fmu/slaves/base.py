@@ -1,21 +1,61 @@
-"""Common base of our slaves: SI units, descriptions and a truthful ModelStructure.
+"""Common base of our slaves: FMI semantics and metadata that pythonfmu 0.7 does not provide.
 
-pythonfmu writes neither units nor output dependencies nor InitialUnknowns; ``to_xml`` adds
-them: <UnitDefinitions> (schema position after <CoSimulation>), a ``unit`` on every Real, and
-<Outputs>/<InitialUnknowns> with the dependencies each slave declares.
+- ``to_xml`` adds <UnitDefinitions> with display units (r/min, %, mm, ...), ``unit``,
+  ``quantity`` and ``displayUnit`` on every Real, ``min``/``max`` on parameters, the model's
+  version, license and copyright, a <DefaultExperiment>, and a truthful <ModelStructure>:
+  <Outputs> with their input dependencies (Step Mode) and <InitialUnknowns> with their input
+  *and parameter* dependencies (Initialization Mode).
+- Initialization Mode: outputs are valid there (FMI 2.0 lets a master read ``initial =
+  calculated`` outputs after setting inputs). Every get of an output in Initialization Mode
+  re-evaluates the slave (``_setup`` when a parameter changed, then ``_evaluate_init``, which
+  must not commit any dynamic state), as the native FMU does.
+- Errors: ``fail`` logs the message (category logStatusError) and raises; the pythonfmu binary
+  reports any Python exception to the host as fmi2Fatal (see README, limits).
 """
 from __future__ import annotations
 
 import math
+import sys
+from pathlib import Path
 from xml.etree.ElementTree import Element, SubElement
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability
 from pythonfmu.enums import Fmi2Status
 from pythonfmu.variables import Boolean, Integer, Real, String
 
+#: Inside an FMU whose linux64 binary is our C front (fmu_build._install_status_shim, which
+#: writes this marker): a failure is reported through the variable ``_failed`` (value
+#: reference 0), which the front reads after fmi2ExitInitializationMode and after a step that
+#: returned False (fmi2Discard from pythonfmu), and answers with fmi2Error. pythonfmu's own binary turns a raised exception into fmi2Fatal and its
+#: exception handling can corrupt the host's interpreter (a crash at a later point), so with
+#: the front no exception crosses into pythonfmu. Elsewhere (win64, source tree) we raise.
+STATUS_FRONT = (sys.platform.startswith("linux")
+                and (Path(__file__).resolve().parent / "_status_front").is_file())
+
+#: Model metadata written into every Python FMU's modelDescription.xml (as the native FMU's)
+LICENSE = "MIT"
+COPYRIGHT = "Copyright (c) the cyclo-fmu authors"
+
+#: display units per unit: (name, factor), display value = factor * SI value (FMI 2.0
+#: DisplayUnit, offset 0); the first one is the variables' ``displayUnit``
+DISPLAY_UNITS = {
+    "rad/s": (("r/min", 30.0 / math.pi),),
+    "m": (("mm", 1e3), ("um", 1e6)),
+    "m2/s": (("mm2/s", 1e6),),
+    "rad": (("deg", 180.0 / math.pi),),
+    "1": (("%", 100.0),),
+}
+#: quantity per unit, when a variable does not name its own
+QUANTITIES = {"rad/s": "AngularVelocity", "N.m": "Torque", "W": "Power", "m": "Length",
+              "m2/s": "KinematicViscosity", "kg/m3": "Density", "kg.m2": "MomentOfInertia",
+              "s": "Time", "rad": "Angle", "Hz": "Frequency", "1": "DimensionlessRatio",
+              "N.m.s/rad": "RotationalDampingConstant", "N.m/rad": "RotationalSpringConstant",
+              "rad/s2": "AngularAcceleration"}
+
 # SI base-unit exponents of the units we use (FMI 2.0 BaseUnit attributes)
 UNITS = {
     "rad/s": dict(rad=1, s=-1),
+    "rad/s2": dict(rad=1, s=-2),
     "N.m": dict(kg=1, m=2, s=-2),
     "W": dict(kg=1, m=2, s=-3),
     "m": dict(m=1),
@@ -34,25 +74,53 @@ UNITS = {
 class UnitSlave(Fmi2Slave):
     """Fmi2Slave with units, descriptions and declared output dependencies."""
 
+    #: DefaultExperiment (s): start, stop, communication step
+    default_start, default_stop, default_step = 0.0, 10.0, 1e-3
+    #: parameters the outputs do not depend on in Initialization Mode (no step yet)
+    init_independent: tuple = ()
+
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        self._failed = False
+        self.register_variable(Boolean("_failed", causality=Fmi2Causality.local,
+                                       variability=Fmi2Variability.discrete,
+                                       description="internal: the last fmi2ExitInitializationMode "
+                                       "or fmi2DoStep failed (read by the FMU's C front, which "
+                                       "returns fmi2Error)"))
+        step = self.do_step
+        self.do_step = lambda t, h: self._guarded(step, t, h)
         self._units = {}
+        self._quantity = {}      # name -> quantity (overrides QUANTITIES)
+        self._display = {}       # name -> display unit (overrides DISPLAY_UNITS' first)
+        self._limits = {}        # parameter name -> (min, max)
         self._depends = {}       # output name -> list of input names
+        self._params = []        # parameter names, in registration order
         self._error_logged = False
+        self._in_init = False
+        self._setup_key = None
 
     # -- registration helpers -----------------------------------------------------------------
-    def parameter(self, name, value, unit=None, description="", kind=Real):
+    def parameter(self, name, value, unit=None, description="", kind=Real, min=None, max=None,
+                  quantity=None, display=None):
         setattr(self, name, value)
         self.register_variable(kind(name, causality=Fmi2Causality.parameter,
                                     variability=Fmi2Variability.fixed, description=description))
+        self._params.append(name)
         if unit:
             self._units[name] = unit
+        if min is not None or max is not None:
+            self._limits[name] = (min, max)
+        if quantity:
+            self._quantity[name] = quantity
+        if display:
+            self._display[name] = display
 
     def schedule_parameters(self, unit, what):
         """Numbered Real parameters carrying a schedule of at most SCHEDULE_POINTS setpoints
         (every master can set them): ``schedule_points`` (0: none), ``schedule_time_k`` [s] and
         ``schedule_value_k`` [unit]."""
-        from model_core.rig import SCHEDULE_POINTS
+        from . import core
+        SCHEDULE_POINTS = core.rig.SCHEDULE_POINTS
         self.parameter("schedule_points", 0, None, f"number of {what} setpoints carried by "
                        f"schedule_time_k/schedule_value_k (0: none; at most {SCHEDULE_POINTS})",
                        Integer)
@@ -64,7 +132,9 @@ class UnitSlave(Fmi2Slave):
     def schedule_from_parameters(self, text_name):
         """The schedule of the String parameter ``text_name`` or of the numbered parameters
         (not both), or None."""
-        from model_core.rig import SCHEDULE_POINTS, parse_schedule, schedule_from_points
+        from . import core
+        SCHEDULE_POINTS = core.rig.SCHEDULE_POINTS
+        parse_schedule, schedule_from_points = core.rig.parse_schedule, core.rig.schedule_from_points
         text = getattr(self, text_name).strip()
         n = int(self.schedule_points)
         if text and n:
@@ -85,7 +155,12 @@ class UnitSlave(Fmi2Slave):
         self.register_variable(Real(name, causality=Fmi2Causality.input, description=description))
         self._units[name] = unit
 
-    def output(self, name, value, unit=None, description="", depends=(), kind=Real):
+    def output(self, name, value, unit=None, description="", depends=(), kind=Real,
+               quantity=None, display=None):
+        if quantity:
+            self._quantity[name] = quantity
+        if display:
+            self._display[name] = display
         setattr(self, name, value)
         variability = Fmi2Variability.discrete if kind is Boolean else None
         self.register_variable(kind(name, causality=Fmi2Causality.output, variability=variability,
@@ -96,34 +171,148 @@ class UnitSlave(Fmi2Slave):
 
     # -- errors -------------------------------------------------------------------------------
     def fail(self, message: str):
-        """Log an error and raise, which pythonfmu turns into fmi2Error (the host survives)."""
+        """Log an error and raise; ``_guarded`` turns it into fmi2Error (through the C front)."""
         self.log(message, Fmi2Status.error, "logStatusError")
-        raise ValueError(message)
+        raise _Failure(message)
+
+    def _guarded(self, fn, *args):
+        """Run an FMI callback; with the C front, a failure sets ``_failed`` instead of raising."""
+        self._failed = False
+        try:
+            result = fn(*args)
+            return True if result is None else result
+        except Exception as exc:   # noqa: BLE001 - reported as fmi2Error, never lost
+            if not isinstance(exc, _Failure):
+                self.log(f"{type(exc).__name__}: {exc}", Fmi2Status.error, "logStatusError")
+            if not STATUS_FRONT:
+                raise
+            self._failed = True
+            return False        # do_step: fmi2Discard from pythonfmu, which the front reads
 
     def require_finite(self, **values):
         for name, v in values.items():
             if not (isinstance(v, (int, float)) and math.isfinite(v)):
                 self.fail(f"{name} = {v!r}: input must be a finite number")
 
+    def check_limits(self):
+        """Every parameter against its declared min/max (the modelDescription's), as
+        ValueError naming the parameter and value."""
+        for name, (lo, hi) in self._limits.items():
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                continue
+            if not math.isfinite(v) or (lo is not None and v < lo) or (hi is not None and v > hi):
+                raise ValueError(f"{name} = {v!r}: must be a finite number in "
+                                 f"[{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}]")
+
+    # -- Initialization Mode ------------------------------------------------------------------
+    def _setup(self):
+        """Validate the parameters and prepare the run (raise via ``fail``). Subclasses."""
+
+    def _evaluate_init(self):
+        """Outputs from the current inputs and parameters, committing no dynamic state."""
+
+    def _parameter_key(self):
+        return tuple(repr(getattr(self, n)) for n in self._params)
+
+    def _ensure_setup(self):
+        key = self._parameter_key()
+        if key != self._setup_key:
+            self._setup()
+            self._setup_key = key
+
+    def enter_initialization_mode(self):
+        self._in_init = True
+
+    def exit_initialization_mode(self):
+        self._in_init = False
+        self._setup_key = None          # always validate at the exit
+
+        def run():
+            self._ensure_setup()
+            self._evaluate_init()
+        self._guarded(run)
+
+    def _refresh_init(self):
+        """In Initialization Mode: bring the outputs up to date (f_init). A parameter or input
+        the slave refuses leaves the outputs as they were; the message is logged once and the
+        same error is returned by fmi2ExitInitializationMode."""
+        if not self._in_init:
+            return
+        try:
+            self._ensure_setup()
+            self._evaluate_init()
+        except Exception:      # noqa: BLE001 - logged by fail(); reported at the exit
+            pass
+
+    def get_real(self, vrs):
+        self._refresh_init()
+        return super().get_real(vrs)
+
+    def get_boolean(self, vrs):
+        self._refresh_init()
+        return super().get_boolean(vrs)
+
+    def get_integer(self, vrs):
+        self._refresh_init()
+        return super().get_integer(vrs)
+
     # -- model description --------------------------------------------------------------------
     def to_xml(self, model_options=dict()) -> Element:
         root = super().to_xml(model_options)
+        root.set("version", _version())
+        root.set("license", LICENSE)
+        root.set("copyright", COPYRIGHT)
         names = [v.name for v in self.vars.values()]
         index = {n: i + 1 for i, n in enumerate(names)}
-        # units
+        # units, with display units
         used = sorted({self._units[n] for n in self._units})
         unit_defs = Element("UnitDefinitions")
         for u in used:
             el = SubElement(unit_defs, "Unit", name=u)
             SubElement(el, "BaseUnit", {k: str(v) for k, v in UNITS[u].items()})
+            for dname, factor in DISPLAY_UNITS.get(u, ()):
+                SubElement(el, "DisplayUnit", name=dname, factor=repr(float(factor)))
         children = list(root)
         pos = next(i for i, c in enumerate(children) if c.tag == "CoSimulation") + 1
         root.insert(pos, unit_defs)
+        # DefaultExperiment before ModelVariables (schema order)
+        old = root.find("DefaultExperiment")
+        if old is not None:
+            root.remove(old)
+        children = list(root)
+        pos = next(i for i, c in enumerate(children) if c.tag == "ModelVariables")
+        root.insert(pos, Element("DefaultExperiment", startTime=repr(self.default_start),
+                                 stopTime=repr(self.default_stop),
+                                 stepSize=repr(self.default_step)))
         for sv in root.find("ModelVariables"):
-            unit = self._units.get(sv.get("name"))
+            name = sv.get("name")
+            unit = self._units.get(name)
             real = sv.find("Real")
-            if unit and real is not None:
+            if real is None:
+                lim = self._limits.get(name)
+                el = sv.find("Integer")
+                if lim and el is not None:
+                    for k, v in zip(("min", "max"), lim):
+                        if v is not None:
+                            el.set(k, str(int(v)))
+                continue
+            # attribute order as the schema lists them: quantity, unit, displayUnit, ..., min, max
+            start = real.attrib.pop("start", None)
+            quantity = self._quantity.get(name) or QUANTITIES.get(unit or "1")
+            if quantity:
+                real.set("quantity", quantity)
+            if unit:
                 real.set("unit", unit)
+                disp = self._display.get(name) or next(iter(DISPLAY_UNITS.get(unit, ())),
+                                                         (None,))[0]
+                if disp and (unit != "1" or name in self._display):
+                    real.set("displayUnit", disp)
+            for k, v in zip(("min", "max"), self._limits.get(name, (None, None))):
+                if v is not None:
+                    real.set(k, repr(float(v)))
+            if start is not None:
+                real.set("start", start)
         # structure: outputs with their dependencies, and the same as initial unknowns
         structure = root.find("ModelStructure")
         for child in list(structure):
@@ -135,16 +324,35 @@ class UnitSlave(Fmi2Slave):
                 SubElement(o, "Unknown", self._unknown(n, index))
             init = SubElement(structure, "InitialUnknowns")
             for n in sorted(outs, key=index.get):
-                SubElement(init, "Unknown", self._unknown(n, index))
+                SubElement(init, "Unknown", self._unknown(n, index, initial=True))
         return root
 
-    def _unknown(self, name, index):
+    def initial_dependencies(self, name):
+        """Inputs and parameters an output depends on in Initialization Mode: its Step-Mode
+        inputs and every parameter but ``init_independent`` (a superset is truthful in FMI)."""
+        return list(self._depends[name]) + [p for p in self._params
+                                            if p not in self.init_independent]
+
+    def _unknown(self, name, index, initial=False):
         attrib = {"index": str(index[name])}
-        deps = sorted(index[d] for d in self._depends[name])
+        deps = sorted(index[d] for d in (self.initial_dependencies(name) if initial
+                                         else self._depends[name]))
         attrib["dependencies"] = " ".join(map(str, deps))
         if deps:
             attrib["dependenciesKind"] = " ".join(["dependent"] * len(deps))
         return attrib
+
+
+class _Failure(ValueError):
+    """A failure already logged by ``fail``."""
+
+
+def _version():
+    try:
+        from cyclo_fmu import __version__
+        return __version__
+    except ImportError:   # inside an FMU at run time (to_xml runs at build time only)
+        return "unknown"
 
 
 __all__ = ["UnitSlave", "Real", "Integer", "Boolean", "String", "Fmi2Status"]

@@ -7,7 +7,9 @@ transducer's rotor) is integrated here with its own sub-steps against the felt b
 friction T_set tanh(w_drum/w_reg). The twist is the integral of the speed the FMU receives, so
 no co-simulation input is differentiated: an earlier version took J_out dw/dt from a backward
 difference of the input speed, which made a +-1.5 N*m oscillation that moved with the
-communication step.
+communication step. With J_out = 0 (the bench's default: the reducer carries the output
+inertia and reflects it to the motor's integrator) there is no drum and no coupling: the felt
+brake's friction acts on the shaft, T_set tanh(w/w_reg).
 """
 from __future__ import annotations
 
@@ -23,22 +25,22 @@ class FeltBrake(UnitSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.parameter("T_first", 5.0, "N.m", "first brake torque setpoint of the test series")
-        self.parameter("T_last", 5.0, "N.m", "last brake torque setpoint of the test series")
-        self.parameter("T_count", 1, None, "number of brake torque setpoints", Integer)
-        self.parameter("hold_time", 1.0, "s", "time each setpoint is held")
+        self.parameter("T_first", 5.0, "N.m", "first brake torque setpoint of the test series", min=0.0)
+        self.parameter("T_last", 5.0, "N.m", "last brake torque setpoint of the test series", min=0.0)
+        self.parameter("T_count", 1, None, "number of brake torque setpoints", Integer, min=1)
+        self.parameter("hold_time", 1.0, "s", "time each setpoint is held", min=0.0)
         self.parameter("torque_schedule", "", None, "instead of the series: setpoints "
                        "'t0 T0; t1 T1; ...' (s, N*m), each held until the next", String)
         self.schedule_parameters("N.m", "brake torque")
         self.parameter("w_reg", 0.5, "rad/s", "speed below which the Coulomb torque is "
-                       "regularised (tanh)")
+                       "regularised (tanh)", min=0.0)
         self.parameter("J_out", 2.0e-3, "kg.m2", "output-side inertia: brake drum, coupling, "
-                       "output transducer rotor. Assumption")
+                       "output transducer rotor. Assumption", min=0.0)
         self.parameter("k_coupling", 500.0, "N.m/rad", "torsional stiffness of the coupling "
                        "between output shaft and brake drum. Assumption: a small bellows or "
-                       "jaw coupling (catalogues: 100-2000 N*m/rad)")
+                       "jaw coupling (catalogues: 100-2000 N*m/rad)", min=0.0)
         self.parameter("zeta_coupling", 0.3, "1", "damping ratio of the coupling with the drum "
-                       "(c = 2 zeta sqrt(k J_out)). Assumption: an elastomer insert")
+                       "(c = 2 zeta sqrt(k J_out)). Assumption: an elastomer insert", min=0.0)
         self.input("w", 0.0, "rad/s", "speed of the output shaft")
         self.output("tau_out", 0.0, "N.m", "torque the brake applies on the reducer's output shaft",
                     depends=("w",))
@@ -48,24 +50,35 @@ class FeltBrake(UnitSlave):
         self._twist = 0.0
         self._w_drum = 0.0
 
-    def exit_initialization_mode(self):
+    #: at the start the drum turns with the shaft, untwisted: no coupling torque yet
+    init_independent = ("J_out", "k_coupling", "zeta_coupling")
+
+    def _setup(self):
         try:
+            self.check_limits()
             self._schedule = self.schedule_from_parameters("torque_schedule")
             if self.T_count < 1:
                 raise ValueError(f"T_count = {self.T_count!r}: must be at least 1")
             if min(self.T_first, self.T_last) < 0:
                 raise ValueError("T_first, T_last: a brake torque setpoint must not be negative")
-            for name in ("w_reg", "J_out", "k_coupling", "zeta_coupling"):
+            for name in ("w_reg", "k_coupling", "zeta_coupling"):
                 v = getattr(self, name)
                 if not (math.isfinite(v) and v > 0):
                     raise ValueError(f"{name} = {v!r}: must be positive")
+            if not (math.isfinite(self.J_out) and self.J_out >= 0):
+                raise ValueError(f"J_out = {self.J_out!r}: must not be negative")
             if self._schedule and any(v < 0 for _, v in self._schedule):
                 raise ValueError("torque schedule: a brake torque setpoint must not be negative")
         except ValueError as exc:
             self.fail(f"invalid parameter: {exc}")
-        self._w_drum = float(self.w)          # the drum starts with the shaft, untwisted
-        self._twist = 0.0
         self._c = 2 * self.zeta_coupling * math.sqrt(self.k_coupling * self.J_out)
+
+    def _evaluate_init(self):
+        w = self.w
+        if not math.isfinite(w):
+            self.require_finite(w=w)
+        self._w_drum = float(w)          # the drum starts with the shaft, untwisted
+        self._twist = 0.0
         self._update(0.0, 0.0)
 
     def _setpoint(self, t):
@@ -78,7 +91,11 @@ class FeltBrake(UnitSlave):
         if not math.isfinite(w):
             self.require_finite(w=w)
         setpoint = self._setpoint(t)
-        if dt > 0:
+        if self.J_out == 0:
+            # no drum here (the bench gives the output inertia to the reducer, which reflects
+            # it to the motor's integrator): the friction acts on the shaft directly
+            Ts = Tb = core.rig.felt_brake_torque(w, setpoint, self.w_reg)
+        elif dt > 0:
             self._twist, self._w_drum, Ts, Tb = core.rig.coupled_drum_step(
                 self._twist, self._w_drum, w, dt, setpoint, self.w_reg, self.J_out,
                 self.k_coupling, self._c)

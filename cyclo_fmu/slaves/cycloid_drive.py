@@ -11,6 +11,17 @@ power into the reducer at a shaft is tau*w):
            eta efficiency of the actual power flow, locked (self-locking back-drive holds)
 Forward motoring into a brake: tau_in*w_in > 0, tau_out*w_out < 0.
 
+Output-side inertia (``J_out``, default 0): the inertia on the driven shaft (brake drum,
+coupling, output transducer) is integrated by the driving side's integrator, not differentiated
+here. With the driving shaft's mean acceleration ``alpha_in`` of the last step (from the motor's
+integrator), the load on the driven shaft is tau_out - J_out r alpha_in (r = w_out/w_in), and
+all losses and ``tau_in`` are at that total torque. ``tau_in_static`` is the driving torque
+without the inertial part and ``J_load`` the output inertia as the driving shaft feels it
+through the reducer's efficiency, (tau_in(tau_out - J_out r a) - tau_in(tau_out))/a, a secant
+over the last step's acceleration a (at least _ALPHA_MIN): J_out r^2/eta forward, J_out r^2 eta'
+when the load back-drives.
+The motor integrates (J_motor + J_load) dw/dt = T_em - tau_in_static.
+
 Parameters: ``mode`` (12, 21, 1S, S1, 2S, S2) and the design values a system engineer varies
 (defaults: the paper's test drive). At initialization the full physics core is solved on a grid
 (model_core.lossmap.ModeMap); a step interpolates it (``exact = false``) or solves the full core
@@ -73,7 +84,25 @@ DESIGN_PARAMETERS = [
      "exponent p of the drag's speed law (|w|/300 rad/s)^p", Real),
 ]
 
+#: min/max of the parameters (the modelDescription's; checked at initialization). Lengths,
+#: viscosity, density positive; friction coefficients in [0, 1]: above 1 no lubricated steel
+#: contact (dry steel on steel is about 0.6-0.8); thermal_loss_change >= -1: the losses cannot
+#: fall below zero when warm (that also keeps P_loss >= 0).
+PARAMETER_LIMITS = dict(
+    z1=(3, None), n_disc_rollers=(3, None), lam=(1.0, None),
+    **{n: (0.0, None) for n in ("e", "d_v1", "d_o1", "b1", "d_v2", "d_o2", "b2", "d_m2", "D_cz",
+                                "D_p", "d_p", "delta_z", "nu", "rho_oil", "pin_roughness",
+                                "drag_torque", "stribeck_torque", "stribeck_speed",
+                                "input_inertia", "thermal_tau")},
+    mu_boundary=(0.0, 1.0), mu_rolling=(0.0, 1.0), thermal_loss_change=(-1.0, None),
+    mode_number=(0, 6), map_torque_max=(0.0, None), map_speed_max=(0.0, None))
+
 OUTPUT_LOSSES = ("PL1", "PL2", "PL3", "PL5", "PL6")
+#: rad/s^2; below this driving-shaft acceleration J_load is the secant over this value (the
+#: inertial torque it stands for, J_out r * 1 rad/s^2, is below the torque transducers' noise)
+_ALPHA_MIN = 1.0
+#: relative change of w_in and tau_out within which a steady step reuses the last J_load
+_SLOPE_REUSE = 1e-3
 
 
 class CycloidDrive(UnitSlave):
@@ -88,34 +117,55 @@ class CycloidDrive(UnitSlave):
                        "(12, 21, 1S, S1, 2S, S2; 1 ring, 2 disc, S eccentric)", String)
         self.parameter("mode_number", 0, None, "the mode as a number for importers that cannot "
                        "set String parameters (fmpy's SSP master): 0 = use mode, 1..6 = 12, 21, "
-                       "1S, S1, 2S, S2", Integer)
+                       "1S, S1, 2S, S2", Integer, min=0, max=6)
         for name, section, field, unit, desc, kind in DESIGN_PARAMETERS:
             owner = default if section is None else getattr(default, section)
-            self.parameter(name, getattr(owner, field), unit, desc, kind)
+            lo, hi = PARAMETER_LIMITS.get(name, (None, None))
+            self.parameter(name, getattr(owner, field), unit, desc, kind, min=lo, max=hi,
+                           display="um" if name == "pin_roughness" else None)
         self.parameter("exact", False, None, "solve the full model every step instead of "
                        "interpolating the map built at initialization", Boolean)
-        self.parameter("map_torque_max", 30.0, "N.m", "largest |tau_out| in the loss map")
-        self.parameter("map_speed_max", 350.0, "rad/s", "largest |w_in| in the loss map")
+        self.parameter("J_out", 0.0, "kg.m2", "inertia on the driven shaft, reflected to the "
+                       "driving side's integrator (see J_load)", min=0.0)
+        self.parameter("map_torque_max", 30.0, "N.m", "largest |tau_out| in the loss map", min=0.0)
+        self.parameter("map_speed_max", 350.0, "rad/s", "largest |w_in| in the loss map", min=0.0)
         self.input("w_in", 0.0, "rad/s", "speed of the driving shaft")
         self.input("tau_out", 0.0, "N.m", "torque the load applies on the driven shaft")
+        self.input("alpha_in", 0.0, "rad/s2", "mean acceleration of the driving shaft over the "
+                   "last step (from its integrator); used with J_out")
         self.output("w_out", 0.0, "rad/s", "speed of the driven shaft", depends=("w_in",))
-        both = ("w_in", "tau_out")
+        # alpha_in acts through J_out (0 by default); declared, so that the dependencies hold
+        # for every parameter value
+        both = ("w_in", "tau_out", "alpha_in")
         self.output("tau_in", 0.0, "N.m", "torque the driver applies on the driving shaft",
                     depends=both)
         self.output("tau_housing", 0.0, "N.m", "torque the support applies on the held shaft",
                     depends=both)
-        self.output("P_loss", 0.0, "W", "total power loss tau_in*w_in + tau_out*w_out", depends=both)
+        self.output("P_loss", 0.0, "W", "total power loss tau_in*w_in + tau_out*w_out - P_stored "
+                    "(>= 0)", depends=both)
         for n in OUTPUT_LOSSES:
             self.output(n, 0.0, "W", f"partial loss {n}: {core.losses.LOSS_DESCRIPTIONS[n]}",
                         depends=both)
         self.output("eta", 0.0, "1", "efficiency of the actual power flow (0 without power or "
-                    "when locked)", depends=both)
-        self.output("eta0", 1.0, "1", "basic efficiency (carrier held)", depends=both)
+                    "when locked)", depends=both, quantity="Efficiency", display="%")
+        self.output("eta0", 1.0, "1", "basic efficiency (carrier held)", depends=both,
+                    quantity="Efficiency", display="%")
         self.output("locked", False, None, "self-locking back-drive holds: the driving shaft "
                     "must push although the load drives", depends=both, kind=Boolean)
+        self.output("tau_in_static", 0.0, "N.m", "tau_in without the torque that accelerates "
+                    "J_out (for the driving side's integrator)", depends=both)
+        self.output("J_load", 0.0, "kg.m2", "J_out as the driving shaft feels it through the "
+                    "reducer", depends=both)
+        self.output("torque_out", 0.0, "N.m", "torque the driven shaft delivers to the load side, "
+                    "J_out's inertial torque included (what a transducer there reads)",
+                    depends=both)
         self.output("P_extra", 0.0, "W", "power of the physics beyond the paper (drag, Stribeck, "
                     "inertia, ripple, warm-up) at the driving shaft", depends=both)
+        self.output("P_stored", 0.0, "W", "power into stored energy at the driving shaft: "
+                    "kinetic energy of input_inertia and the ripples' zero-mean exchange (part "
+                    "of P_extra, not a loss)", depends=both)
         self._theta = 0.0
+        self._slope_key = None
         self._w_last = None
         self._map = None
         self._design = None
@@ -133,8 +183,12 @@ class CycloidDrive(UnitSlave):
                                    friction=dataclasses.replace(base.friction, **fr),
                                    extra=dataclasses.replace(base.extra, **ex), **changes)
 
-    def exit_initialization_mode(self):
+    #: no step yet in Initialization Mode: no acceleration, no warm-up
+    init_independent = ("input_inertia", "thermal_loss_change", "thermal_tau")
+
+    def _setup(self):
         try:
+            self.check_limits()
             mode = self.mode
             if self.mode_number:
                 if not 1 <= self.mode_number <= 6:
@@ -150,6 +204,8 @@ class CycloidDrive(UnitSlave):
                 v = getattr(self, name)
                 if not (math.isfinite(v) and v > 0):
                     raise core.CycloidInputError(name, v, "must be a positive number")
+            if not (math.isfinite(self.J_out) and self.J_out >= 0):
+                raise core.CycloidInputError("J_out", self.J_out, "must not be negative")
             self._map = None if self.exact else core.lossmap.ModeMap(
                 self._design, self._mode, self.map_torque_max, self.map_speed_max)
             ex = self._design.extra
@@ -160,9 +216,19 @@ class CycloidDrive(UnitSlave):
             self._ratio_out = float(unit[b])
             # roller pass: z1 per turn of the ring relative to the carrier, per driving turn
             self._order = self._design.z1 * abs(float(unit["1"] - unit["S"])) / abs(float(unit[a]))
-        except (core.CycloidInputError, TypeError) as exc:
+        except (core.CycloidInputError, TypeError, ValueError) as exc:
             self.fail(f"invalid parameter: {exc}")
-        self._update()
+        self._theta, self._w_last = 0.0, None
+
+    def _evaluate_init(self):
+        if self._in_init:   # a read in Initialization Mode: commit no dynamic state
+            saved = self._theta, self._w_last
+            try:
+                self._update()
+            finally:
+                self._theta, self._w_last = saved
+        else:               # fmi2ExitInitializationMode: the state starts here
+            self._update()
 
     def do_step(self, current_time, step_size):
         self._update(current_time + step_size, step_size)
@@ -170,12 +236,53 @@ class CycloidDrive(UnitSlave):
 
     # -- physics ------------------------------------------------------------------------------
     def _update(self, t=0.0, dt=0.0):
-        w_in, tau_out = self.w_in, self.tau_out
-        if not (math.isfinite(w_in) and math.isfinite(tau_out)):
-            self.require_finite(w_in=w_in, tau_out=tau_out)
+        w_in, tau_ext, alpha = self.w_in, self.tau_out, self.alpha_in
+        if not (math.isfinite(w_in) and math.isfinite(tau_ext) and math.isfinite(alpha)):
+            self.require_finite(w_in=w_in, tau_out=tau_ext, alpha_in=alpha)
+        J_r = self.J_out * self._ratio_out
+        tau_out = tau_ext - J_r * alpha          # the load including the output inertia
+        self._update_at(t, dt, w_in, tau_out)
+        self.torque_out = -tau_out
+        if J_r == 0.0:
+            self.tau_in_static, self.J_load = self.tau_in, 0.0
+            return
+        gear = self._tau_in_gear
+        static = self._gear_torque(w_in, tau_ext)
+        # the slope over a small acceleration of the last step's sign: which side of the
+        # efficiency's kink (forward or back-driven) the inertia is on, not how large the last
+        # acceleration was (a secant over it would feed it back with one step's delay)
+        if abs(alpha) > _ALPHA_MIN:
+            J_load = (gear - static) / alpha
+        else:
+            a = _ALPHA_MIN if alpha >= 0 else -_ALPHA_MIN
+            key = self._slope_key
+            if (key is not None and key[0] == a and abs(w_in - key[1]) <= _SLOPE_REUSE * abs(key[1])
+                    and abs(tau_ext - key[2]) <= _SLOPE_REUSE * abs(key[2])):
+                J_load = key[3]          # steady: the slope of the last step still holds
+            else:
+                J_load = (self._gear_torque(w_in, tau_ext - J_r * a) - static) / a
+                self._slope_key = (a, w_in, tau_ext, J_load)
+        if not (math.isfinite(J_load) and J_load > 0):    # standstill in the exact core
+            J_load = J_r * self._ratio_out
+        self.J_load = J_load
+        self.tau_in_static = self.tau_in - (gear - static)
+
+    def _gear_torque(self, w_in, tau_out):
+        """Driving-shaft torque of the gear alone (map or exact core) at a load torque."""
+        if self._map is not None:
+            return self._map.solve(w_in, tau_out)[1][self._shaft_index[0]]
+        if w_in == 0 or tau_out == 0:
+            return 0.0
+        op = core.operating_point(self._design, self._mode, w_in, T_out=tau_out)
+        return float(op.torques[self._mode[0]]) - float(self._design.extra.steady_torque(w_in))
+
+    def _update_at(self, t, dt, w_in, tau_out):
         if self._map is not None:
             speeds, torques, losses, eta, eta0, locked, forward = self._map.solve(w_in, tau_out)
-            if self._map.out_of_range and not self._warned_range:
+            # below the grid (|w_in| < map_speed_max/1000: start-up, standstill) the edge values
+            # are the physics' own limit, not a lack of range: warn only beyond the maxima
+            if (not self._warned_range and (abs(tau_out) > self.map_torque_max
+                                            or abs(w_in) > self.map_speed_max)):
                 self._warned_range = True
                 self.log(f"operating point outside the loss map (|tau_out| <= "
                          f"{self.map_torque_max} N.m, |w_in| <= {self.map_speed_max} rad/s): "
@@ -190,10 +297,11 @@ class CycloidDrive(UnitSlave):
                 self.tau_in += float(self._design.extra.steady_torque(w_in))
         else:
             speeds, torques, losses, eta, eta0, locked = self._exact(w_in, tau_out)
+        self.P_stored = 0.0
         if self._dynamic_extra:
             self.tau_in += self._dynamic_torque(t, dt, w_in, tau_out)
         self.P_extra = (self.tau_in - self._tau_in_gear) * w_in
-        self.P_loss = self.tau_in * w_in + tau_out * self.w_out
+        self.P_loss = self.tau_in * w_in + tau_out * self.w_out - self.P_stored
         if self._steady_extra or self._dynamic_extra:
             p_in = max(self.tau_in * w_in, tau_out * self.w_out)
             p_out = -min(self.tau_in * w_in, tau_out * self.w_out)
@@ -209,8 +317,13 @@ class CycloidDrive(UnitSlave):
         elif self._w_last is None:
             self._w_last = w_in
         loss_in = self._tau_in_gear + tau_out * self._ratio_out   # minus the lossless torque
-        return float(self._design.extra.dynamic_torque(alpha, self._theta, self._order, t,
-                                                       loss_in))
+        ex = self._design.extra
+        torque = float(ex.dynamic_torque(alpha, self._theta, self._order, t, loss_in))
+        # the conservative part: d/dt of J w^2/2 and of the ripples' potentials
+        # -A cos(theta + phi) - A_z/z cos(z theta + phi_z), each times w = dtheta/dt
+        stored = float(ex.dynamic_torque(alpha, self._theta, self._order, 0.0, 0.0))
+        self.P_stored = stored * w_in
+        return torque
 
     def _exact(self, w_in, tau_out):
         a, b = self._mode[0], self._mode[1]

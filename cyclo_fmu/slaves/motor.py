@@ -1,7 +1,9 @@
 """FMI slave: induction motor on a frequency regulator (Kloss curve, setpoint ramp, inertia).
 
 It owns the rotor inertia (rotor, coupling, input transducer rotor), integrates it and outputs
-the speed (no direct feedthrough). Input ``tau_shaft`` is the torque the motor delivers into
+the speed and its mean acceleration over the step (no direct feedthrough). In the bench the
+reducer reflects the output-side inertia here: ``J_load`` adds to J and ``tau_shaft`` is then the
+reducer's ``tau_in_static``. Input ``tau_shaft`` is the torque the motor delivers into
 the shaft towards the load (the reducer's ``tau_in``): J dw/dt = T_em(w, f) - tau_shaft.
 """
 from __future__ import annotations
@@ -21,32 +23,46 @@ class InductionMotor(UnitSlave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         m = core.rig.InductionMotor()
-        self.parameter("rated_power", m.rated_power, "W", "rated power")
-        self.parameter("rated_speed", m.rated_speed, "rad/s", "rated speed at rated frequency")
-        self.parameter("rated_frequency", m.rated_frequency, "Hz", "rated frequency")
-        self.parameter("pole_pairs", m.pole_pairs, None, "pole pairs", Integer)
-        self.parameter("breakdown_ratio", m.breakdown_ratio, "1", "breakdown / rated torque")
-        self.parameter("J", m.inertia, "kg.m2", "rotor, coupling and input-transducer inertia")
-        self.parameter("ramp_rate", m.ramp_rate, "Hz", "setpoint ramp of the regulator, Hz per s")
+        self.parameter("rated_power", m.rated_power, "W", "rated power", min=0.0)
+        self.parameter("rated_speed", m.rated_speed, "rad/s", "rated speed at rated frequency", min=0.0)
+        self.parameter("rated_frequency", m.rated_frequency, "Hz", "rated frequency", min=0.0)
+        self.parameter("pole_pairs", m.pole_pairs, None, "pole pairs", Integer, min=1)
+        self.parameter("breakdown_ratio", m.breakdown_ratio, "1", "breakdown / rated torque", min=1.0)
+        self.parameter("J", m.inertia, "kg.m2", "rotor, coupling and input-transducer inertia", min=0.0)
+        self.parameter("ramp_rate", m.ramp_rate, "Hz", "setpoint ramp of the regulator, Hz per s", min=0.0)
         self.parameter("f_first", 50.0, "Hz", "first frequency setpoint of the test series")
         self.parameter("f_last", 50.0, "Hz", "last frequency setpoint of the test series")
-        self.parameter("f_count", 1, None, "number of frequency setpoints", Integer)
-        self.parameter("hold_time", 1.0, "s", "time each setpoint pair is held")
+        self.parameter("f_count", 1, None, "number of frequency setpoints", Integer, min=1)
+        self.parameter("hold_time", 1.0, "s", "time each setpoint pair is held", min=0.0)
         self.parameter("loads_per_frequency", 1, None, "brake setpoints run at each frequency",
-                       Integer)
+                       Integer, min=1)
         self.parameter("frequency_schedule", "", None, "instead of the series: setpoints "
                        "'t0 f0; t1 f1; ...' (s, Hz), each held until the next", String)
         self.schedule_parameters("Hz", "frequency")
         self.parameter("w_start", 0.0, "rad/s", "initial speed")
-        self.input("tau_shaft", 0.0, "N.m", "torque the motor delivers into the shaft (reducer tau_in)")
+        self.input("tau_shaft", 0.0, "N.m", "torque the motor delivers into the shaft, without the "
+                   "load's inertia (reducer tau_in_static)")
+        self.input("J_load", 0.0, "kg.m2", "inertia of the load seen at the motor shaft (reducer "
+                   "J_load), integrated here")
+        self.output("alpha", 0.0, "rad/s2", "mean shaft acceleration over the last step, from "
+                    "the integrator's own state")
         self.output("w", 0.0, "rad/s", "shaft speed")
         self.output("T_em", 0.0, "N.m", "electromagnetic torque")
         self.output("frequency", 0.0, "Hz", "stator frequency after the ramp")
         self.output("P_mech", 0.0, "W", "mechanical power T_em*w")
         self._t = 0.0
 
-    def exit_initialization_mode(self):
+    #: at the start the outputs follow w_start and the motor's curve; not the inertia, ramp or
+    #: the setpoints (the frequency starts at the synchronous value of w_start)
+    init_independent = ("J", "ramp_rate", "f_first", "f_last", "f_count", "hold_time",
+                        "loads_per_frequency", "frequency_schedule")
+
+    def initial_dependencies(self, name):
+        return [p for p in super().initial_dependencies(name) if not p.startswith("schedule_")]
+
+    def _setup(self):
         try:
+            self.check_limits()
             self._motor = core.rig.InductionMotor(
                 rated_power=float(self.rated_power), rated_speed=float(self.rated_speed),
                 rated_frequency=float(self.rated_frequency), pole_pairs=int(self.pole_pairs),
@@ -66,6 +82,8 @@ class InductionMotor(UnitSlave):
         except ValueError as exc:
             self.fail(f"invalid parameter: {exc}")
         self._torque = self._motor.torque_function()
+
+    def _evaluate_init(self):
         self.w = float(self.w_start)
         self.frequency = 0.0 if self.w == 0 else self.w * self.pole_pairs / (2 * math.pi)
         self._outputs()
@@ -81,14 +99,16 @@ class InductionMotor(UnitSlave):
         self.P_mech = self.T_em * self.w
 
     def do_step(self, current_time, step_size):
-        tau = self.tau_shaft
-        if not math.isfinite(tau):
-            self.require_finite(tau_shaft=tau)
+        tau, J_load = self.tau_shaft, self.J_load
+        if not (math.isfinite(tau) and math.isfinite(J_load) and J_load >= 0):
+            self.require_finite(tau_shaft=tau, J_load=J_load)
+            self.fail(f"J_load = {J_load!r}: input must not be negative")
         n = max(1, int(math.ceil(step_size / _SUBSTEP - 1e-9)))
         h = step_size / n
-        m, J = self._motor, self._motor.inertia
+        m, J = self._motor, self._motor.inertia + J_load
         torque = self._torque
-        w, f = self.w, self.frequency
+        w0 = w = self.w
+        f = self.frequency
         df = m.ramp_rate * h
         # the setpoint changes at most at the series' or schedule's steps: evaluated at the
         # sub-steps only when it differs between the step's ends
@@ -98,5 +118,6 @@ class InductionMotor(UnitSlave):
             f = target if abs(target - f) <= df else f + math.copysign(df, target - f)
             w += h * (torque(w, f) - tau) / J
         self.w, self.frequency = w, f
+        self.alpha = (w - w0) / step_size
         self._outputs()
         return True

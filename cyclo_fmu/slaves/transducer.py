@@ -20,16 +20,19 @@ class Transducer(UnitSlave):
         self.parameter("gain_error", 0.0, "1", "relative gain error (accuracy class)")
         self.parameter("offset", 0.0, "1", "zero offset, in output units")
         self.parameter("bandwidth", 1000.0, "Hz", "first-order bandwidth (<= 0: none)")
-        self.parameter("noise", 0.0, "1", "standard deviation of white noise, output units")
+        self.parameter("noise", 0.0, "1", "standard deviation of white noise, output units", min=0.0)
         self.parameter("resolution", 0.0, "1", "quantisation step, output units (<= 0: none)")
-        self.parameter("seed", 1, None, "noise seed", Integer)
+        self.parameter("seed", 1, None, "noise seed", Integer, min=0)
         self.parameter("ideal", False, None, "switch all errors off: y = scale*x", Boolean)
         self.input("x", 0.0, "1", "true value")
         self.output("y", 0.0, "1", "reading", depends=("x",))
         self._filtered = None
 
-    def exit_initialization_mode(self):
+    init_independent = ("bandwidth",)   # the filter starts at the input
+
+    def _setup(self):
         try:
+            self.check_limits()
             for name in ("scale", "gain_error", "offset", "bandwidth", "noise", "resolution"):
                 v = getattr(self, name)
                 if not math.isfinite(v):
@@ -40,8 +43,13 @@ class Transducer(UnitSlave):
             self.fail(f"invalid parameter: {exc}")
         self._model = core.rig.Transducer(self.gain_error, self.offset, self.bandwidth,
                                           self.noise, self.resolution)
-        self._rng = random.Random(int(self.seed))
-        self._filtered = self.scale * self.x
+
+    def _evaluate_init(self):
+        x = self.x
+        if not math.isfinite(x):
+            self.require_finite(x=x)
+        self._rng = random.Random(int(self.seed))   # the same first draw at every evaluation
+        self._filtered = self.scale * x
         self._dt, self._a = None, 0.0
         self._read()
 
