@@ -16,6 +16,7 @@ import numpy as np
 
 from model_core import (CycloidInputError, DriveDesign, LOSS_NAMES, design_from_toml,
                         operating_point, rad_s_to_rpm, rpm_to_rad_s)
+from model_core.design import PROFILES
 from model_core.kinematics import MODES, parse_mode
 from model_core.losses import LOSS_DESCRIPTIONS
 
@@ -81,8 +82,27 @@ def _collect_fmu_log() -> None:
     _collect_fmu_log.keep = (cb, logger)    # ctypes callbacks must outlive every FMU
 
 
-def _load_design(path):
-    return DriveDesign() if path is None else design_from_toml(Path(path))
+def _add_profile(p):
+    """The model-profile option shared by every command that takes a design."""
+    p.add_argument("--profile", choices=PROFILES,
+                   help="model profile: physical (default: correct kinematics, roll or skid, "
+                   "Stribeck pin law, load-independent losses) or paper (what the paper "
+                   "computed, Eq. 24 as printed, calibrated to its theory); overrides the "
+                   "design file's [model] profile")
+
+
+def _with_profile(design, profile):
+    """The design in ``profile`` (None: as it is). The paper profile is the paper's model:
+    load-dependent losses only."""
+    if profile is None:
+        return design
+    return design.replace(profile=profile,
+                          losses="load_dependent" if profile == "paper" else design.losses)
+
+
+def _load_design(path, profile=None):
+    design = DriveDesign() if path is None else design_from_toml(Path(path))
+    return _with_profile(design, profile)
 
 
 def _json_num(x):
@@ -91,7 +111,7 @@ def _json_num(x):
 
 
 def cmd_efficiency(args) -> int:
-    design = _load_design(args.design)
+    design = _load_design(args.design, args.profile)
     a, b, h = parse_mode(args.mode)
     if not math.isfinite(args.speed):
         raise CycloidInputError("speed", args.speed, "must be a finite number of r/min")
@@ -100,7 +120,28 @@ def cmd_efficiency(args) -> int:
     if args.torque == 0:
         raise CycloidInputError("torque", args.torque, "no power flows at zero torque: the "
                                 "efficiency is undefined (give the torque of the load case)")
-    op = operating_point(design, a + b, rpm_to_rad_s(args.speed), args.torque)
+    from model_core import thermal
+    from model_core.design import KELVIN
+    temperature = None
+    if args.temperature is not None and args.ambient is not None:
+        raise CycloidInputError("temperature", args.temperature, "give either --temperature "
+                                "(fixed grease temperature) or --ambient (heat balance), not both")
+    for name in ("temperature", "ambient"):
+        v = getattr(args, name)
+        if v is not None and not (math.isfinite(v) and -100 < v < 200):
+            raise CycloidInputError(name, v, "must lie between -100 and 200 degC")
+    if (args.temperature is not None or args.ambient is not None) and design.profile == "paper":
+        raise CycloidInputError("profile", "paper", "the paper profile uses the catalogue "
+                                "viscosity; --temperature and --ambient need --profile physical")
+    if args.temperature is not None:
+        design = thermal.at_temperature(design, args.temperature + KELVIN)
+    if args.ambient is not None:
+        op, temperature = thermal.solve_heat_balance(
+            design.replace(ambient_temperature=args.ambient + KELVIN), a + b,
+            rpm_to_rad_s(args.speed), args.torque)
+        design = thermal.at_temperature(design, temperature)
+    else:
+        op = operating_point(design, a + b, rpm_to_rad_s(args.speed), args.torque)
     from model_core.contact import ring_torque_rating
     rating = ring_torque_rating(design)
     T_ring = abs(float(op.torques["1"]))
@@ -127,7 +168,23 @@ def cmd_efficiency(args) -> int:
         "output_speed_rpm": float(rad_s_to_rpm(w_out)), "output_torque_Nm": _json_num(t_out),
         "output_power_W": _json_num(t_out * w_out),
         "reaction_torque_Nm": _json_num(op.torques[h]),
+        "profile": design.profile, "losses": design.losses,
     }
+    if design.profile == "physical":
+        from model_core.losses import contact_states
+        from model_core.drag import IDLE_NAMES
+        result["idle_losses_W"] = {k: _json_num(getattr(op.losses, k)) for k in IDLE_NAMES}
+        result["grease_temperature_C"] = design.operating_temperature - KELVIN
+        result["grease_viscosity_mm2_s"] = thermal.lubricant_viscosity(design) * 1e6
+        if math.isfinite(T_ring):
+            st = contact_states(design, T_ring, float(op.speeds["2"] - op.speeds["S"]))
+            result["rollers"] = {
+                k: {"rolling_share": _json_num(st[k + "_rolling"]),
+                    "state": ("no plain rollers" if not math.isfinite(st[k + "_rolling"]) else
+                              "roll" if st[k + "_rolling"] == 1 else
+                              "skid" if st[k + "_rolling"] == 0 else "mixed"),
+                    "pin_hersey_min_max": [_json_num(x) for x in st[k + "_hersey"]],
+                    "stribeck_clamp_binds": st[k + "_clamped"]} for k in ("ring", "disc")}
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
@@ -154,13 +211,26 @@ def cmd_efficiency(args) -> int:
     for k in LOSS_NAMES:
         share = f"{100 * losses[k] / p_in:6.2f} %" if p_in > 0 else "   n/a"
         print(f"    {k}  {losses[k]:9.3f} W  {share} of input   {LOSS_DESCRIPTIONS[k]}")
+    for k, v in result.get("idle_losses_W", {}).items():
+        share = f"{100 * v / p_in:6.2f} %" if p_in > 0 else "   n/a"
+        print(f"    {k}  {v:9.3f} W  {share} of input")
     print(f"    sum  {result['loss_power_W']:9.3f} W")
+    print(f"  profile {design.profile}, losses {design.losses}")
+    if "rollers" in result:
+        print(f"  grease at {result['grease_temperature_C']:.1f} degC, "
+              f"{result['grease_viscosity_mm2_s']:.1f} mm^2/s")
+        for k, r in result["rollers"].items():
+            if r["rolling_share"] is not None:
+                print(f"  {k} rollers: {r['state']} ({100 * r['rolling_share']:.0f} % of the "
+                      f"loaded rollers roll), pin Hersey number {r['pin_hersey_min_max'][0]:.3g}"
+                      f"-{r['pin_hersey_min_max'][1]:.3g}"
+                      f"{', Stribeck clamp binds' if r['stribeck_clamp_binds'] else ''}")
     return 0
 
 
 def cmd_paper(args) -> int:
     from .paper import run_paper_comparison
-    design = _load_design(args.design)
+    design = _load_design(args.design, args.profile)
     if not args.out:
         return run_paper_comparison(design, args.out, args.json)
     with _staged_dir("out", args.out) as out:
@@ -169,7 +239,7 @@ def cmd_paper(args) -> int:
 
 def cmd_stiffness(args) -> int:
     from model_core import stiffness as st
-    design = _load_design(args.design)
+    design = _load_design(args.design, args.profile)
     rated = args.rated_torque
     if rated is not None and not (math.isfinite(rated) and rated > 0):
         raise CycloidInputError("rated-torque", rated, "must be a positive number of N*m")
@@ -201,7 +271,7 @@ def cmd_build(args) -> int:
     for name in args.names:
         if name not in ALL_FMUS:
             raise CycloidInputError("FMU name", name, f"must be one of {', '.join(ALL_FMUS)}")
-    design = _load_design(args.design)
+    design = _load_design(args.design, args.profile)
     with _staged_dir("dest", args.dest) as dest:
         for name in args.names or list(ALL_FMUS):
             print(build_any(name, dest, design))
@@ -253,7 +323,7 @@ def cmd_bench(args) -> int:
     except ValueError as exc:
         raise CycloidInputError("scenario", args.scenario, "must be one of paper, runup, "
                                 "loadstep, reversal") from exc
-    design = _load_design(args.design)
+    design = _load_design(args.design, args.profile)
     with _staged_dir("out", args.out) as out:
         fmu_dir = out / "fmus"
         for name in SLAVES:
@@ -307,10 +377,11 @@ def cmd_synth(args) -> int:
     if args.engine == "bench" and (len(effects) > 1 or rise is not None):
         raise CycloidInputError("engine", args.engine, "hides exactly one effect and writes no "
                                 "temperature column; use --engine fast")
+    design = _load_design(None, args.profile) if args.profile else None
     from tqdm import tqdm
     bar = tqdm(total=2, desc="synth", unit="stage", disable=not _progress_on(args), leave=False)
     rec = synthesize(effects[0] if len(effects) == 1 else effects, args.seed, mode, args.size,
-                     plan=args.plan, engine=args.engine, temperature_rise=rise,
+                     design=design, plan=args.plan, engine=args.engine, temperature_rise=rise,
                      progress=_progress_on(args))
     bar.update()
     bar.set_description("synth: writing")
@@ -330,7 +401,7 @@ def cmd_diagnose(args) -> int:
     from .diagnosis import DiagnosisError
     from .io import RecordingError, load_recording
     from .sweep.batch import diagnose_recording
-    design = _load_design(args.design)
+    design = _load_design(args.design, args.profile)
     if args.mode.strip().lower() != "auto":
         parse_mode(args.mode)
     if args.out:
@@ -390,6 +461,10 @@ def _workers(args):
 def cmd_sweep(args) -> int:
     from .sweep import load_spec, run_sweep
     spec = load_spec(args.spec)
+    if args.profile:
+        spec.base.setdefault("model", {})["profile"] = args.profile
+        if args.profile == "paper":
+            spec.base["model"]["losses"] = "load_dependent"
     _output_file("out", args.out)
     if Path(args.out).suffix.lower() != ".parquet":
         raise CycloidInputError("out", args.out, "must end in .parquet")
@@ -414,7 +489,7 @@ def cmd_diagnose_batch(args) -> int:
     paths = find_recordings(folder)
     if not paths:
         raise CycloidInputError("folder", args.folder, "holds no recording (*.csv, *.mf4)")
-    design = _load_design(args.design)
+    design = _load_design(args.design, args.profile)
     mode = "".join(parse_mode(args.mode)[:2])
     try:
         columns = parse_column_map(args.columns) if args.columns else None
@@ -452,11 +527,18 @@ def build_parser() -> argparse.ArgumentParser:
                    help="torque delivered into the driving shaft, N*m")
     e.add_argument("--design", help="design file (TOML); default: the paper's test drive")
     e.add_argument("--json", action="store_true", help="print one JSON object")
+    e.add_argument("--temperature", type=_number("temperature"),
+                   help="grease temperature, degC (fixes it; physical profile)")
+    e.add_argument("--ambient", type=_number("ambient"),
+                   help="ambient temperature, degC: the grease temperature then follows from "
+                   "the housing's steady heat balance (physical profile)")
+    _add_profile(e)
     e.set_defaults(func=cmd_efficiency)
     pp = sub.add_parser("paper", help="the paper's Section 5 comparison, theory side")
     pp.add_argument("--out", default="out", help="folder for the figures (default: out)")
     pp.add_argument("--design", help="design file (TOML); default: the paper's test drive")
     pp.add_argument("--json", action="store_true", help="print one JSON object")
+    _add_profile(pp)
     pp.set_defaults(func=cmd_paper)
     sp = sub.add_parser("stiffness", help="torsional rigidity, lost motion, backlash and the "
                         "hysteresis curve from the contact model, as a catalogue states them")
@@ -465,6 +547,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "N*m the catalogue values refer to (default: the paper's motor times z1-1)")
     sp.add_argument("--json", action="store_true", help="print one JSON object")
     sp.add_argument("--out", help="folder for stiffness.png and stiffness.json")
+    _add_profile(sp)
     sp.set_defaults(func=cmd_stiffness)
     bp = sub.add_parser("build", help="build the FMUs (dist/CycloidDrive.fmu, "
                         "dist/CycloidDriveNative.fmu, ...)")
@@ -472,6 +555,7 @@ def build_parser() -> argparse.ArgumentParser:
     bp.add_argument("--design", help="design file (TOML) whose loss map CycloidDriveNative.fmu "
                     "carries; default: the paper's test drive")
     bp.add_argument("names", nargs="*", help="FMUs to build (default: all)")
+    _add_profile(bp)
     bp.set_defaults(func=cmd_build)
     mx = sub.add_parser("export-modelica", help="a Modelica package: the mode as MSL LossyGear "
                         "with a loss table fitted to the core over the bench envelope")
@@ -492,6 +576,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--quiet", action="store_true", help="no progress bar")
     bench.add_argument("--design", help="design file (TOML) for the reducer, e.g. the "
                        "design_updated.toml a diagnosis wrote")
+    _add_profile(bench)
     bench.set_defaults(func=cmd_bench, fmus=True)
     sy = sub.add_parser("synth", help="write a bench recording with one hidden effect")
     sy.add_argument("--effect", required=True, help="hidden effect id (see model_core.effects); "
@@ -509,6 +594,7 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--engine", default="fast", help="fast (the bench's components replayed "
                     "vectorised) or bench (the bench's FMUs co-simulated; slower)")
     sy.add_argument("--quiet", action="store_true", help="no progress bar")
+    _add_profile(sy)
     sy.set_defaults(func=cmd_synth, fmus=True)
     dg = sub.add_parser("diagnose", help="locate, explain and model the mismatch of a recording")
     dg.add_argument("recording", help="recording CSV")
@@ -520,6 +606,7 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--units", help="units of columns, overriding anything detected, e.g. "
                     "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")
     dg.add_argument("--json", action="store_true")
+    _add_profile(dg)
     dg.set_defaults(func=cmd_diagnose)
     sw = sub.add_parser("sweep", help="design study: many designs over the bench envelope "
                         "(dask)")
@@ -527,6 +614,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--out", required=True, help="results file (.parquet)")
     _cluster_options(sw)
     sw.add_argument("--quiet", action="store_true", help="no progress bar")
+    _add_profile(sw)
     sw.set_defaults(func=cmd_sweep)
     db = sub.add_parser("diagnose-batch", help="diagnose every recording (*.csv, *.mf4) in a "
                         "folder (dask)")
@@ -538,6 +626,7 @@ def build_parser() -> argparse.ArgumentParser:
     db.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     _cluster_options(db)
     db.add_argument("--quiet", action="store_true", help="no progress bar")
+    _add_profile(db)
     db.set_defaults(func=cmd_diagnose_batch)
     return p
 

@@ -9,14 +9,15 @@ import numpy as np
 
 from model_core import LOSS_NAMES, efficiency_map, operating_point, rad_s_to_rpm, rpm_to_rad_s
 from model_core.losses import LOSS_DESCRIPTIONS
-from model_core.paper import PAPER_THEORY, BenchEnvelope, envelope_statistics
+from model_core.drag import IDLE_DESCRIPTIONS, IDLE_NAMES
+from model_core.paper import PAPER_EXPERIMENT, PAPER_THEORY, BenchEnvelope, envelope_statistics
 
 
 #: [r/min] input speeds of the efficiency curves: the bench's test speeds
 BENCH_SPEEDS_RPM = (1000.0, 1500.0, 2000.0, 2500.0, 2800.0)
 
 
-def _figures(design, envelope, out: Path) -> list[Path]:
+def _figures(design, envelope, out: Path, breakdown_of=None) -> list[Path]:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -31,11 +32,12 @@ def _figures(design, envelope, out: Path) -> list[Path]:
         ax = axes[row, 0]
         for i, n in enumerate(BENCH_SPEEDS_RPM):
             ax.plot(torques, 100 * m.eta[i], label=f"{n:.0f} r/min")
-        ref = PAPER_THEORY[mode]
-        ax.axhspan(100 * ref["min"], 100 * ref["max"], color="0.85", label="paper theory range")
-        ax.axhline(100 * ref["mean"], color="k", ls="--", lw=0.8, label="paper theory mean")
+        what = "experiment" if design.profile == "physical" else "theory"
+        ref = (PAPER_EXPERIMENT if design.profile == "physical" else PAPER_THEORY)[mode]
+        ax.axhspan(100 * ref["min"], 100 * ref["max"], color="0.85", label=f"paper {what} range")
+        ax.axhline(100 * ref["mean"], color="k", ls="--", lw=0.8, label=f"paper {what} mean")
         ax.set(xlabel="input torque T_S / N*m", ylabel=f"efficiency eta_{mode} / %",
-               title=f"mode {mode}: efficiency over input torque")
+               title=f"mode {mode}, profile {design.profile}: efficiency over input torque")
         ax.legend(fontsize=7)
         ax = axes[row, 1]
         p_in = m.input_power
@@ -49,24 +51,29 @@ def _figures(design, envelope, out: Path) -> list[Path]:
     fig.savefig(f1, dpi=110)
     plt.close(fig)
 
-    # Fig. 7-like: partial losses at the rated point, plain rollers vs needle bearings
+    # Fig. 7-like: partial losses at the rated point, both profiles, plain rollers vs needles
     w_rated, t_rated = rpm_to_rad_s(2800.0), 0.85
-    fig, ax = plt.subplots(figsize=(9, 4.5))
-    variants = [("plain rollers (default)", design),
-                ("needle-bearing rollers", replace(design, ring_rollers="needle",
-                                                   disc_rollers="needle"))]
-    x = np.arange(len(LOSS_NAMES))
+    names = list(LOSS_NAMES) + list(IDLE_NAMES)
+    descr = {**LOSS_DESCRIPTIONS, **IDLE_DESCRIPTIONS}
+    fig, axes = plt.subplots(1, 2, figsize=(14, 5), sharey=True)
+    x = np.arange(len(names))
     width = 0.2
-    for j, mode in enumerate(("S1", "S2")):
-        for k, (label, d) in enumerate(variants):
-            op = operating_point(d, mode, w_rated, t_rated)
-            vals = [float(getattr(op.losses, n)) for n in LOSS_NAMES]
-            ax.bar(x + (2 * j + k - 1.5) * width, vals, width,
-                   label=f"{mode}, {label}: eta = {100 * float(op.eta):.1f} %")
-    ax.set_xticks(x, [f"{n}\n" + LOSS_DESCRIPTIONS[n].replace(" ", "\n", 2) for n in LOSS_NAMES],
-                  fontsize=7)
-    ax.set(ylabel="power loss / W", title="Partial losses at 2800 r/min, 0.85 N*m input")
-    ax.legend(fontsize=7)
+    src = design if breakdown_of is None else breakdown_of
+    for ax, (pname, base) in zip(axes, (("paper", paper_profile(src)),
+                                        ("physical", physical_profile(src)))):
+        variants = [("plain rollers", base),
+                    ("needle-bearing rollers", replace(base, ring_rollers="needle",
+                                                       disc_rollers="needle"))]
+        for j, mode in enumerate(("S1", "S2")):
+            for k, (label, d) in enumerate(variants):
+                op = operating_point(d, mode, w_rated, t_rated)
+                vals = [float(getattr(op.losses, n)) for n in names]
+                ax.bar(x + (2 * j + k - 1.5) * width, vals, width,
+                       label=f"{mode}, {label}: eta = {100 * float(op.eta):.1f} %")
+        ax.set_xticks(x, [f"{n}\n" + descr[n].replace(" ", "\n", 2) for n in names], fontsize=6)
+        ax.set(ylabel="power loss / W", title=f"profile {pname}: partial losses at 2800 r/min, "
+               "0.85 N*m input")
+        ax.legend(fontsize=7)
     fig.tight_layout()
     f2 = out / "partial_losses.png"
     fig.savefig(f2, dpi=110)
@@ -74,22 +81,51 @@ def _figures(design, envelope, out: Path) -> list[Path]:
     return [f1, f2]
 
 
+def paper_profile(design):
+    """The design computed as the paper did (Eq. 24, calibrated mu_boundary, load-dependent)."""
+    return replace(design, profile="paper", losses="load_dependent")
+
+
+def physical_profile(design):
+    """The design in the physical profile (its own ``losses`` setting)."""
+    return replace(design, profile="physical")
+
+
+def paper_comparison(design, envelope=BenchEnvelope()) -> dict:
+    """The envelope statistics (fractions) of both profiles and the paper's numbers:
+    ``S1``/``S2`` the paper profile, ``physical`` the physical one, ``theory`` and
+    ``experiment`` the paper's Section 5 ranges."""
+    out = {mode: envelope_statistics(paper_profile(design), mode, envelope) for mode in ("S1", "S2")}
+    out["physical"] = {mode: envelope_statistics(physical_profile(design), mode, envelope)
+                       for mode in ("S1", "S2")}
+    out["theory"] = PAPER_THEORY
+    out["experiment"] = PAPER_EXPERIMENT
+    return out
+
+
 def run_paper_comparison(design, out, as_json: bool) -> int:
     envelope = BenchEnvelope()
-    stats = {mode: envelope_statistics(design, mode, envelope) for mode in ("S1", "S2")}
-    files = _figures(design, envelope, Path(out)) if out else []
+    stats = paper_comparison(design, envelope)
+    files = _figures(paper_profile(design), envelope, Path(out), design) if out else []
+    if files:
+        phys = _figures(physical_profile(design), envelope, Path(out) / "physical", design)
+        files = files[:1] + [phys[0]] + files[1:]
     if as_json:
         print(json.dumps(stats, indent=2))
         return 0
-    print("Paper, Section 5, theory side: efficiency over the bench envelope")
+    print("Paper, Section 5: efficiency over the bench envelope")
     print(f"  envelope: input speed {envelope.speed_min_rpm:.0f}-{envelope.speed_max_rpm:.0f} r/min, "
           f"input torque {envelope.torque_min}-{envelope.torque_max} N*m "
           f"(250 W, 2800 r/min motor on a frequency regulator), {envelope.n_speed}x{envelope.n_torque} grid")
-    print(f"  {'mode':4}  {'model min/mean/max %':>24}   {'paper theory min/mean/max %':>28}")
-    for mode, s in stats.items():
-        r = PAPER_THEORY[mode]
-        print(f"  {mode:4}  {100 * s['min']:7.2f} {100 * s['mean']:7.2f} {100 * s['max']:7.2f}   "
-              f"   {100 * r['min']:7.2f} {100 * r['mean']:7.2f} {100 * r['max']:7.2f}")
+    print(f"  {'mode':4}  {'profile':9} {'model min/mean/max %':>24}   {'paper min/mean/max %':>24}")
+    rows = (("paper", stats, PAPER_THEORY, "theory"),
+            ("physical", stats["physical"], PAPER_EXPERIMENT, "experiment"))
+    for mode in ("S1", "S2"):
+        for pname, st, ref, what in rows:
+            s, r = st[mode], ref[mode]
+            print(f"  {mode:4}  {pname:9} {100 * s['min']:7.2f} {100 * s['mean']:7.2f} "
+                  f"{100 * s['max']:7.2f}   {100 * r['min']:7.2f} {100 * r['mean']:7.2f} "
+                  f"{100 * r['max']:7.2f} ({what})")
     for f in files:
         print(f"  figure: {f}")
     return 0

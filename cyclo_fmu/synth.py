@@ -152,8 +152,8 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
         friction_error = 0.0 if ids <= {"none"} else float(rng.uniform(-0.15, 0.15))
         if "friction_miscalibrated" in ids and abs(friction_error) < 0.06:
             friction_error = math.copysign(0.06 + abs(friction_error), friction_error or 1.0)
-    true_design = replace(design, friction=replace(
-        design.friction, mu_boundary=design.friction.mu_boundary * (1 + friction_error)))
+    from model_core.design import scale_friction_level
+    true_design = scale_friction_level(design, 1 + friction_error)
     if engine == "bench":
         if len(hidden) != 1 or added_torque is not None or temperature_rise is not None:
             raise ValueError("engine = 'bench' hides exactly one library effect")
@@ -169,10 +169,9 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
     sens_nu = None
     if "viscosity_drift" in hidden:
         from model_core.lossmap import replay_input_torque as rp
-        hi = replace(true_design, lubricant=replace(
-            true_design.lubricant, kinematic_viscosity=true_design.lubricant.kinematic_viscosity * 1.05))
-        lo = replace(true_design, lubricant=replace(
-            true_design.lubricant, kinematic_viscosity=true_design.lubricant.kinematic_viscosity * 0.95))
+        from model_core.design import scale_viscosity
+        hi = scale_viscosity(true_design, 1.05)
+        lo = scale_viscosity(true_design, 0.95)
         sens_nu = (rp(hi, mode, w_in, tau_out)[0] - rp(lo, mode, w_in, tau_out)[0]) / (
             math.log(1.05) - math.log(0.95))
     sig = effect_signals(t, w_in, loss_in, mode, design.z1, temperature, T_in_model=tau_in,

@@ -25,6 +25,21 @@ ROLLER_KINDS = ("plain", "needle")
 PROFILE_MODIFICATIONS = ("equidistant", "offset")
 DISC_PIN_SLIDING = ("paper", "kinematic")
 CONTACT_LAWS = ("hertz", "linear")
+#: Model profiles: "paper" computes what the paper computed (Eq. 24 as printed, Benedict-Kelley
+#: at its boundary clamp mu_boundary calibrated to the paper's theory, frictionless contact
+#: forces, load-dependent losses only); "physical" the kinematically correct model with roll or
+#: skid, a live Stribeck pin law, friction in the force balance and, with losses = "all", the
+#: load-independent losses (README, Physics).
+PROFILES = ("paper", "physical")
+#: Which losses enter: "load_dependent" (the paper's model) or "all" (adds the
+#: load-independent drag, seal, support-bearing and churning losses of model_core.drag).
+LOSS_SCOPES = ("load_dependent", "all")
+#: Fields of DriveDesign that live in the design file's [model] section.
+MODEL_FIELDS = ("profile", "losses", "temperature_model", "ambient_temperature",
+                "operating_temperature")
+#: How the grease temperature is found: from the housing's steady heat balance, or fixed.
+TEMPERATURE_MODELS = ("heat_balance", "fixed")
+KELVIN = 273.15   # degC at the design-file edge: T[K] = T[degC] + 273.15
 
 
 def _f(default, unit, doc, toml_unit=None, scale=1.0):
@@ -44,6 +59,14 @@ class Lubricant:
 
     kinematic_viscosity: float = _f(200e-6, "m^2/s", "Base-oil kinematic viscosity [paper, Table 3].",
                                     "mm^2/s", MM2_S)
+    kinematic_viscosity_100: float = _f(17.5e-6, "m^2/s",
+                                        "Base-oil kinematic viscosity at 100 degC (the "
+                                        "kinematic_viscosity above is taken at 40 degC) for the "
+                                        "Walther/ASTM D341 viscosity-temperature line "
+                                        "(model_core.thermal). **Assumption**: 17.5 mm^2/s, a "
+                                        "mineral oil of 200 mm^2/s at 40 degC with viscosity "
+                                        "index 95 (ASTM D2270 tables); the paper gives none.",
+                                        "mm^2/s", MM2_S)
     density: float = _f(900.0, "kg/m^3",
                         "Base-oil density. **Assumption**: 900 kg/m^3, typical mineral base oil "
                         "at 40 C; the paper gives none. Only the product rho*nu (dynamic viscosity) "
@@ -101,6 +124,33 @@ class Friction:
     skf_Kz: float = _f(5.1, "1", "SKF bearing-type constant K_Z (cylindrical roller bearings).")
     skf_mu_bl: float = _f(0.15, "1", "SKF boundary sliding coefficient mu_bl (cylindrical roller).")
     skf_mu_ehl: float = _f(0.02, "1", "SKF full-film sliding coefficient mu_EHL (cylindrical roller).")
+    # -- physical profile (model_core.friction.stribeck_pin_mu, roll_or_skid) ------------------
+    mu_pin_boundary: float = _f(0.12, "1",
+                                "Boundary friction coefficient of a roller bore on its greased steel "
+                                "pin (physical profile, the Stribeck law's low-Hersey limit). "
+                                "**Assumption**: 0.12, the middle of 0.08-0.15 for boundary-"
+                                "lubricated (greased) steel on steel (Bhushan, Introduction to "
+                                "Tribology, 2nd ed. 2013, Table 9.1; Stachowiak & Batchelor, "
+                                "Engineering Tribology, 4th ed., ch. 8).")
+    hersey_transition: float = _f(1.7e-6, "1",
+                                  "Hersey number eta*N/p (eta Pa*s, N rev/s, p Pa) at which the pin "
+                                  "contact leaves boundary lubrication (Stribeck law). "
+                                  "**Assumption**: 1.7e-6, the thick-film limit of McKee's journal "
+                                  "tests (Shigley's Mechanical Engineering Design, 10th ed., "
+                                  "Sec. 12-3, Fig. 12-4).")
+    pin_clearance_ratio: float = _f(2e-3, "1",
+                                    "Radial clearance over pin radius c/r of a plain roller on its "
+                                    "pin (Petroff term of the Stribeck law). **Assumption**: 0.002, "
+                                    "the usual journal clearance ratio 0.001-0.002 (Shigley, "
+                                    "Sec. 12-8) at its loose end.")
+    mu_tooth: float = _f(0.06, "1",
+                         "Traction (sliding) coefficient of a plain roller on the cycloid tooth or "
+                         "of a disc roller in its hole, greased steel line contact in mixed/EHL "
+                         "lubrication (physical profile: limits the traction that turns the "
+                         "roller, and the coefficient of its sliding when it skids). "
+                         "**Assumption**: 0.06, inside 0.02-0.10 for lubricated steel rolling-"
+                         "sliding line contacts (Johnson, Contact Mechanics, 1985, Sec. 9.3; "
+                         "Harris & Kotzalas, Rolling Bearing Analysis, 5th ed., ch. 10).")
 
 
 @dataclass(frozen=True)
@@ -226,6 +276,26 @@ class DriveDesign:
                                  "'linear'. A very large value gives the rigid limit.", "N/mm", 1e3)
     n_positions: int = _f(8, "1", "Mesh positions per ring-roller pitch over which losses are "
                           "averaged (the efficiency changes by < 5e-5 from 8 to 64).")
+    profile: str = _f("physical", "-", "Model profile: 'physical' (default: correct kinematics for "
+                      "both roller kinds, roll or skid, Stribeck pin law, friction in the force "
+                      "balance, load-independent losses with losses = 'all') or 'paper' (what the "
+                      "paper computed: Eq. 24 as printed, mu_boundary calibrated to its theory, "
+                      "load-dependent losses only).")
+    losses: str = _f("all", "-", "Losses that enter: 'load_dependent' (the paper's model) or "
+                     "'all' (adds the load-independent losses of model_core.drag). The paper "
+                     "profile always uses 'load_dependent'.")
+    ambient_temperature: float = _f(293.15, "K", "Ambient temperature of the housing's heat "
+                                    "balance (model_core.thermal). **Assumption**: 20 degC, a "
+                                    "laboratory.", "degC", None)
+    temperature_model: str = _f("fixed", "-", "Grease temperature (physical profile): "
+                                "'heat_balance' solves the housing's steady heat balance "
+                                "(model_core.thermal.solve_heat_balance, single operating points); "
+                                "'fixed' (default) uses operating_temperature. **Choice**: fixed "
+                                "at 40 degC for maps, as the paper's short bench runs. The paper "
+                                "profile uses the catalogue viscosity as given.")
+    operating_temperature: float = _f(313.15, "K", "Grease temperature with temperature_model = "
+                                      "'fixed' (default 40 degC, the catalogue temperature of the "
+                                      "base-oil viscosity).", "degC", None)
     lubricant: Lubricant = field(default_factory=Lubricant)
     friction: Friction = field(default_factory=Friction)
     extra: ExtraPhysics = field(default_factory=ExtraPhysics)
@@ -378,14 +448,32 @@ def validate_design(d: DriveDesign) -> None:
                           ("disc_pin_sliding", DISC_PIN_SLIDING)):
         if getattr(d, name) not in allowed:
             raise CycloidInputError(name, getattr(d, name), f"must be one of {', '.join(allowed)}")
+    for name, allowed in (("profile", PROFILES), ("losses", LOSS_SCOPES)):
+        if getattr(d, name) not in allowed:
+            raise CycloidInputError(name, getattr(d, name), f"must be one of {', '.join(allowed)}")
+    if not 173.15 < d.ambient_temperature < 473.15:
+        raise CycloidInputError("ambient_temperature", d.ambient_temperature,
+                                "must lie between -100 and 200 degC (in K inside)")
+    if not 173.15 < d.operating_temperature < 473.15:
+        raise CycloidInputError("operating_temperature", d.operating_temperature,
+                                "must lie between -100 and 200 degC (in K inside)")
+    if d.temperature_model not in TEMPERATURE_MODELS:
+        raise CycloidInputError("temperature_model", d.temperature_model,
+                                f"must be one of {', '.join(TEMPERATURE_MODELS)}")
     lub, fr = d.lubricant, d.friction
-    for name in ("kinematic_viscosity", "density"):
+    if not lub.kinematic_viscosity_100 < lub.kinematic_viscosity:
+        raise CycloidInputError("lubricant.kinematic_viscosity_100", lub.kinematic_viscosity_100,
+                                "must be below the 40 degC viscosity (oils thin when hot)")
+    for name in ("kinematic_viscosity", "kinematic_viscosity_100", "density"):
         if not getattr(lub, name) > 0:
             raise CycloidInputError("lubricant." + name, getattr(lub, name), "must be positive")
     for f in dataclasses.fields(fr):
         if getattr(fr, f.name) < 0:
             raise CycloidInputError("friction." + f.name, getattr(fr, f.name), "must not be negative")
-    for name in ("mu_boundary", "mu_full_film"):
+    for name in ("hersey_transition", "pin_clearance_ratio"):
+        if not getattr(fr, name) > 0:
+            raise CycloidInputError("friction." + name, getattr(fr, name), "must be positive")
+    for name in ("mu_boundary", "mu_full_film", "mu_pin_boundary", "mu_tooth"):
         if getattr(fr, name) > MAX_FRICTION_COEFFICIENT:
             raise CycloidInputError("friction." + name, getattr(fr, name),
                                     f"a friction coefficient above {MAX_FRICTION_COEFFICIENT} is "
@@ -400,25 +488,32 @@ def validate_design(d: DriveDesign) -> None:
 _SECTIONS = (("geometry", None), ("lubricant", "lubricant"), ("friction", "friction"))
 
 
-def _to_si(v: float, scale: float) -> float:
+def _to_si(v: float, scale) -> float:
+    if scale is None:   # degC -> K
+        return v + KELVIN
     # divide by an exact integer (1000, 1e6) so that 18 mm -> 0.018 round-trips exactly
     return v / round(1 / scale) if scale < 1 else v * scale
 
 
-def _from_si(v: float, scale: float) -> float:
+def _from_si(v: float, scale) -> float:
+    if scale is None:   # K -> degC
+        return v - KELVIN
     return v * round(1 / scale) if scale < 1 else v / scale
 
 
 def _toml_key(f) -> str:
     u = f.metadata.get("toml_unit", "1")
-    suffix = {"mm": "_mm", "um": "_um", "mm^2/s": "_mm2_s", "GPa": "_GPa", "N/mm": "_N_mm"}.get(u, "")
+    suffix = {"mm": "_mm", "um": "_um", "mm^2/s": "_mm2_s", "GPa": "_GPa", "N/mm": "_N_mm",
+              "degC": "_degC"}.get(u, "")
     return f.name + suffix
 
 
-def _section_to_dict(obj) -> dict:
+def _section_to_dict(obj, only=None, skip=()) -> dict:
     out = {}
     for f in dataclasses.fields(obj):
-        if f.name in ("lubricant", "friction", "extra"):
+        if f.name in ("lubricant", "friction", "extra") or f.name in skip:
+            continue
+        if only is not None and f.name not in only:
             continue
         v = getattr(obj, f.name)
         if isinstance(v, float):
@@ -430,9 +525,10 @@ def _section_to_dict(obj) -> dict:
     return out
 
 
-def _section_from_dict(cls, data: dict, section: str) -> dict:
+def _section_from_dict(cls, data: dict, section: str, only=None, skip=()) -> dict:
     keys = {_toml_key(f): f for f in dataclasses.fields(cls)
-            if f.name not in ("lubricant", "friction", "extra")}
+            if f.name not in ("lubricant", "friction", "extra") and f.name not in skip
+            and (only is None or f.name in only)}
     kwargs = {}
     for key, value in data.items():
         if key not in keys:
@@ -456,7 +552,9 @@ def _section_from_dict(cls, data: dict, section: str) -> dict:
 
 def design_to_dict(design: DriveDesign) -> dict:
     """The design as nested dict in design-file units (mm, mm^2/s, um)."""
-    return {"geometry": _section_to_dict(design), "lubricant": _section_to_dict(design.lubricant),
+    return {"model": _section_to_dict(design, only=MODEL_FIELDS),
+            "geometry": _section_to_dict(design, skip=MODEL_FIELDS),
+            "lubricant": _section_to_dict(design.lubricant),
             "friction": _section_to_dict(design.friction),
             "extra": _section_to_dict(design.extra)}
 
@@ -466,15 +564,16 @@ def design_from_dict(data: dict) -> DriveDesign:
     if not isinstance(data, dict):
         raise CycloidInputError("design", data, "must be a table")
     for section in data:
-        if section not in ("geometry", "lubricant", "friction", "extra"):
+        if section not in ("model", "geometry", "lubricant", "friction", "extra"):
             raise CycloidInputError(f"[{section}]", "...", "unknown section in design file "
-                                    "(known: geometry, lubricant, friction, extra)")
-    for section in ("geometry", "lubricant", "friction", "extra"):
+                                    "(known: model, geometry, lubricant, friction, extra)")
+    for section in ("model", "geometry", "lubricant", "friction", "extra"):
         if not isinstance(data.get(section, {}), dict):
             raise CycloidInputError(f"[{section}]", data[section], "must be a table")
     lub = Lubricant(**_section_from_dict(Lubricant, data.get("lubricant", {}), "lubricant"))
     fr = Friction(**_section_from_dict(Friction, data.get("friction", {}), "friction"))
-    geo = _section_from_dict(DriveDesign, data.get("geometry", {}), "geometry")
+    geo = _section_from_dict(DriveDesign, data.get("geometry", {}), "geometry", skip=MODEL_FIELDS)
+    geo.update(_section_from_dict(DriveDesign, data.get("model", {}), "model", only=MODEL_FIELDS))
     ex = ExtraPhysics(**_section_from_dict(ExtraPhysics, data.get("extra", {}), "extra"))
     return DriveDesign(lubricant=lub, friction=fr, extra=ex, **geo)
 
@@ -515,3 +614,24 @@ def design_from_toml(source) -> DriveDesign:
     except tomllib.TOMLDecodeError as exc:
         raise CycloidInputError("design file", str(source)[:60], f"is not valid TOML ({exc})")
     return design_from_dict(data)
+
+
+def scale_friction_level(design: DriveDesign, factor: float) -> DriveDesign:
+    """The design with its sliding-friction level scaled by ``factor`` (a diagnosis' friction
+    level): mu_boundary in the paper profile; in the physical profile also the pin's boundary
+    coefficient and the tooth traction (mu_pin_boundary, mu_tooth), which set its sliding
+    losses."""
+    fr = design.friction
+    changes = {"mu_boundary": fr.mu_boundary * factor}
+    if design.profile == "physical":
+        changes.update(mu_pin_boundary=fr.mu_pin_boundary * factor, mu_tooth=fr.mu_tooth * factor)
+    return dataclasses.replace(design, friction=dataclasses.replace(fr, **changes))
+
+
+def scale_viscosity(design: DriveDesign, factor: float) -> DriveDesign:
+    """The design with its grease's viscosity scaled by ``factor`` at every temperature (both
+    catalogue viscosities, so the Walther line keeps its slope approximately)."""
+    lub = design.lubricant
+    return dataclasses.replace(design, lubricant=dataclasses.replace(
+        lub, kinematic_viscosity=lub.kinematic_viscosity * factor,
+        kinematic_viscosity_100=lub.kinematic_viscosity_100 * factor))

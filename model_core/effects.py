@@ -297,10 +297,13 @@ def _with_extra(design, **kw):
 
 
 def _apply_friction(design, v, shape, temperature):
-    fr = design.friction
-    mu = fr.mu_boundary * (1 + v["mu_boundary_rel_error"])
-    return replace(design, friction=replace(fr, mu_boundary=mu)), [
-        f"friction.mu_boundary {fr.mu_boundary:.6g} -> {mu:.6g} (diagnosed friction level)"]
+    from .design import scale_friction_level
+    factor = 1 + v["mu_boundary_rel_error"]
+    new = scale_friction_level(design, factor)
+    return new, [f"friction level x {factor:.6g} (diagnosed): friction.mu_boundary "
+                 f"{design.friction.mu_boundary:.6g} -> {new.friction.mu_boundary:.6g}"
+                 + (f", mu_pin_boundary -> {new.friction.mu_pin_boundary:.6g}, mu_tooth -> "
+                    f"{new.friction.mu_tooth:.6g}" if design.profile == "physical" else "")]
 
 
 def _apply_thermal(design, v, shape, temperature):

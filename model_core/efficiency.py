@@ -155,12 +155,28 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> Operat
         return T_known / c
 
     state = {}   # warm start of the contact solutions between iterations
+    # load-independent losses (physical profile, losses = "all"): they depend on the speeds
+    # only; loss power is frame-invariant, so they enter eta0 like the gear's own losses
+    if design.profile == "physical" and design.losses == "all":
+        from . import drag, thermal
+        idle = drag.idle_losses(design, w, thermal.lubricant_viscosity(design))
+        idle = {k: np.broadcast_to(v, T_known.shape) for k, v in idle.items()}
+    else:
+        idle = {}
+    P_idle = sum(idle.values()) if idle else 0.0
 
     def eta0_from(eta0):
         T1 = ring_torque(eta0)
-        L = partial_losses(design, np.abs(T1), w2p, state=state)
+        # physical profile: friction in the force balance. The gear's torque balance with its
+        # losses makes the disc side carry |T2| = i0 eta0^w |T1| (less than the ring side's
+        # frictionless share when the ring drives, more when the disc drives), so the disc
+        # rollers' and the eccentric bearing's forces follow the power-flow direction
+        Td = (np.abs(T1) * i0 * np.where(wdir > 0, eta0, 1.0 / np.maximum(eta0, 1e-3))
+              if design.profile == "physical" else None)
+        L = partial_losses(design, np.abs(T1), w2p, state=state, disc_torque=Td,
+                           ring_flow=wdir if design.profile == "physical" else None)
         with np.errstate(divide="ignore", invalid="ignore"):
-            x = np.where(T1 != 0, L.total / (np.abs(T1) * base), 0.0)
+            x = np.where(T1 != 0, (L.total + P_idle) / (np.abs(T1) * base), 0.0)
         return np.where(wdir > 0, 1.0 - x, 1.0 / (1.0 + x)), L, T1
 
     # secant iteration on g(eta0) = f(eta0) - eta0, started from the frictionless point
@@ -215,7 +231,8 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> Operat
     torques = {k: np.where(undefined, nan, v) for k, v in torques.items()}
     torques[a] = torques[a] + T_extra
     L = PartialLosses(*(np.where(undefined, nan, getattr(L, n)) for n in LOSS_NAMES),
-                      P_extra=np.where(undefined, nan, T_extra * w[a]))
+                      P_extra=np.where(undefined, nan, T_extra * w[a]),
+                      **{k: np.where(undefined, nan, v) for k, v in idle.items()})
     p_a, p_b = torques[a] * w[a], torques[b] * w[b]
     p_in = np.where(forward, p_a, p_b)
     p_out = -np.where(forward, p_b, p_a)

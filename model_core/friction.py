@@ -77,3 +77,98 @@ def skf_frictional_moment(radial_load, speed, d, D, nu, friction):
     mu_sl = phi_bl * fr.skf_mu_bl + (1 - phi_bl) * fr.skf_mu_ehl
     M_sl = fr.skf_S2 * dm * F * mu_sl
     return (M_rr + M_sl) * 1e-3
+
+
+#: Upper bound of any sliding coefficient the Stribeck law may return [1]: dry clean steel on
+#: steel (about 0.6, Bhushan 2013, Table 9.1); reaching it means the film model has broken down,
+#: and every such point is reported (StribeckMu.clamped).
+MU_DRY_STEEL = 0.6
+
+
+def hersey_number(eta, omega_rel, normal_force, width, diameter):
+    """Hersey number H = eta N / p of a journal contact (dimensionless in SI).
+
+    eta dynamic viscosity [Pa*s], omega_rel relative angular speed of roller and pin [rad/s]
+    (N = |omega_rel|/(2 pi) in rev/s), p = F/(b d) the projected pressure [Pa] of the normal
+    force F [N] on the pin of width b [m] and diameter d [m] (Shigley, Sec. 12-3).
+    """
+    F = np.maximum(np.asarray(normal_force, float), 1e-12)
+    p = F / (width * diameter)
+    return eta * np.abs(np.asarray(omega_rel, float)) / (2 * np.pi) / p
+
+
+def stribeck_pin_mu(hersey, mu_boundary, hersey_transition, clearance_ratio):
+    """Friction coefficient of a plain roller on its greased pin over the Stribeck curve.
+
+    .. math::
+
+        \\mu = \\mu_{bl} \\exp(-H / H_t) + 2 \\pi^2 H (r/c)
+
+    The boundary term fades as the Hersey number H = eta N/p passes the thick-film limit H_t
+    (McKee's journal tests, Shigley Fig. 12-4); the second is Petroff's law of a concentric
+    journal (Shigley Eq. 12-6), the viscous shear of the full film with radial clearance c over
+    radius r. The sum has the Stribeck curve's shape: boundary value at standstill or high load,
+    a minimum near H_t, rising with H in the full film. Bounded above by MU_DRY_STEEL.
+
+    Returns (mu, clamped) where clamped marks the points where the upper bound binds.
+
+    References: R. Stribeck, Z. VDI 46 (1902); M. D. Hersey, J. Wash. Acad. Sci. 4 (1914);
+    R. G. Budynas, J. K. Nisbett, Shigley's Mechanical Engineering Design, 10th ed., Sec. 12-3
+    to 12-8.
+    """
+    H = np.asarray(hersey, float)
+    mu = mu_boundary * np.exp(-H / hersey_transition) + 2 * np.pi ** 2 * H / clearance_ratio
+    clamped = mu > MU_DRY_STEEL
+    return np.minimum(mu, MU_DRY_STEEL), clamped
+
+
+def roll_or_skid(mu_tooth, mu_pin, r_pin, r_roller, rolling_term=0.0):
+    r"""Whether a plain roller rolls on the tooth (True) or skids (False).
+
+    A roller turning on its pin needs the friction moment mu_pin F r_pin (plus its rolling
+    resistance, ``rolling_term`` = mu_r r_roller v_roll/v_s in units of F) from the tooth's
+    traction, at most mu_tooth F r_roller. It rolls (and its bore slides on the pin) where
+
+    .. math:: \mu_{tooth} r_{roller} > \mu_{pin} r_{pin} + \mu_r r_{roller} v_{roll}/v_s
+
+    and otherwise stays still on its pin and skids on the tooth. Multiplied by v_s/r_roller
+    this is: the traction's power exceeds the rolling roller's dissipation, so the roller takes
+    the regime of lower dissipation and the loss is continuous at the switch (derived;
+    Sensinger 2013, J. Mech. Des. 135:071006, for fixed versus rolling pins).
+    """
+    return np.asarray(mu_tooth) * r_roller > np.asarray(mu_pin) * r_pin + rolling_term * 1.0
+
+
+def ring_friction_arm_ratio(phi, force, mu_eff, e, z1, lam, r_c):
+    """rho_1: the moment of the tooth-contact friction forces about the ring centre over that of
+    the normal forces, for ring rollers at phi (rad from the line of centres, pitch-point side)
+    carrying normal forces ``force`` [N] with effective tangential coefficients ``mu_eff``
+    (mu_tooth when a roller skids, mu_pin r_pin/r_roller when it rolls); rollers on the last
+    axis.
+
+    Friction in the force balance (derived). With the ring centre O1 at the origin, the gear
+    centre O2 = (e, 0), the pitch point P = (e z1, 0) and a roller centre D = r_p (cos phi,
+    sin phi), the normal n = (P - D)/|DP| passes through P and the tooth contact C = D + r_c n.
+    The friction force mu N t (t perpendicular to n) opposes the gear's motion relative to the
+    ring at C, a rotation about P. Its moment about O1 is mu N (C - O1).n, that of the normal
+    force N e z1 |n_y| = N r_p sin(phi)/S_l, so
+
+    .. math::
+
+        \\rho_1 = \\frac{\\sum \\mu_i N_i (e z_1 S_l - r_c - e z_1 (1 - \\lambda \\cos\\phi)/S_l)}
+                       {\\sum N_i r_p \\sin\\phi / S_l}
+
+    A known ring torque T1 then needs the normal forces N_0/(1 - rho_1) when the ring drives
+    in the relative motion and N_0/(1 + rho_1) when it is driven (N_0 frictionless); the same
+    torque balance on the gear gives the mesh efficiency (1 - rho_2)/(1 - rho_1) driving and
+    (1 + rho_1)/(1 + rho_2) driven, and their losses equal sum mu N v_s (checked in the tests).
+    """
+    S = np.sqrt(1 + lam * lam - 2 * lam * np.cos(phi))
+    r_p = lam * e * z1
+    F = np.maximum(np.asarray(force, float), 0.0)
+    arm_f = e * z1 * S - r_c - e * z1 * (1 - lam * np.cos(phi)) / S
+    arm_n = r_p * np.sin(phi) / S
+    num = (mu_eff * F * arm_f).sum(-1)
+    den = (F * arm_n).sum(-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import contact, friction, velocities
+from . import contact, friction, thermal, velocities
 
 LOSS_NAMES = ("PL1", "PL2", "PL3", "PL5", "PL6")
 LOSS_DESCRIPTIONS = {
@@ -35,6 +35,8 @@ LOSS_DESCRIPTIONS = {
     "PL5": "ring rollers rolling on the teeth",
     "PL6": "ring rollers sliding on their pins",
 }
+# physical profile, plain rollers: a skidding roller's sliding at the tooth (hole) is booked on
+# PL5 (PL2), where its rolling loss would be; its pin loss PL6 (PL3) is then zero
 
 
 @dataclass(frozen=True)
@@ -47,10 +49,18 @@ class PartialLosses:
     PL5: np.ndarray
     PL6: np.ndarray
     P_extra: np.ndarray = 0.0   # W, design.extra (drag, Stribeck) at the driving shaft
+    PL_support: np.ndarray = 0.0  # W, load-independent (model_core.drag, losses = "all")
+    PL_seal: np.ndarray = 0.0
+    PL_churn: np.ndarray = 0.0
+
+    @property
+    def idle(self) -> np.ndarray:
+        """Load-independent losses (W): support bearings, seals, grease drag."""
+        return self.PL_support + self.PL_seal + self.PL_churn
 
     @property
     def total(self) -> np.ndarray:
-        return self.PL1 + self.PL2 + self.PL3 + self.PL5 + self.PL6 + self.P_extra
+        return self.PL1 + self.PL2 + self.PL3 + self.PL5 + self.PL6 + self.P_extra + self.idle
 
     def as_dict(self) -> dict:
         return {name: getattr(self, name) for name in LOSS_NAMES}
@@ -67,26 +77,62 @@ def mesh_positions(design, n_positions=None):
     return np.arange(n) * (2 * np.pi / design.z1) * joint_cycle_pitches(design) / n
 
 
+def _pin_stribeck(design, F, spin, width, d_pin, eta, diag, key):
+    fr = design.friction
+    H = friction.hersey_number(eta, spin, F, width, d_pin)
+    mu, clamped = friction.stribeck_pin_mu(H, fr.mu_pin_boundary, fr.hersey_transition,
+                                           fr.pin_clearance_ratio)
+    if diag is not None:
+        loaded = F > 0
+        diag.setdefault(key + "_clamped", []).append(np.any(clamped & loaded))
+        diag.setdefault(key + "_hersey", []).append(H[loaded] if np.any(loaded) else H.ravel()[:0])
+    return mu
+
+
 def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, gear=0,
-                 ring_index=None, disc_index=None, dedup=True):
+                 ring_index=None, disc_index=None, dedup=True, diag=None, disc_torque=None,
+                 ring_flow=None):
     """Losses of one gear with its roller patterns at psi_ring, psi_disc (rad from its line of
     centres); gear_torque and w2_rel shaped (...), positions trailing.
 
     ring_index, disc_index: when given, psi_ring and psi_disc are distinct classes and the
     returned losses are gathered to the positions ``ring_index`` / ``disc_index`` (same length).
+    disc_torque: the gear's torque on the disc side where friction makes it differ from the
+    ring side (physical profile); None: the same (the paper's frictionless balance).
+    ring_flow: +1 where the ring drives in the relative motion, -1 where it is driven; with it
+    the ring rollers' normal forces carry the friction's moment
+    (friction.ring_friction_arm_ratio). diag: a dict collecting roller states (contact_states).
     """
     fr, lub = design.friction, design.lubricant
+    physical = design.profile == "physical"
+    nu = thermal.lubricant_viscosity(design)
+    eta = lub.density * nu
     T = np.asarray(gear_torque, float)
     W = np.asarray(w2_rel, float)[..., None, None]
-    eta = lub.dynamic_viscosity
     # ring rollers (z1 per position)
     phi, F = contact.ring_roller_forces(design, T, psi_ring, state, ("ring", gear),
                                            dedup=dedup)
     omega_r = velocities.relative_ring_speed(W, design.z1)
     r_c = design.d_v1 / 2
     v_rt = velocities.profile_velocity(phi, design.e, design.z1, design.lam, r_c, omega_r)
-    PL5 = friction.rolling_resistance_loss(fr.rolling_ring, F, v_rt).sum(-1)
-    if design.ring_rollers == "plain":
+    PL5 = friction.rolling_resistance_loss(fr.rolling_ring, F, v_rt)
+    if design.ring_rollers == "plain" and physical:
+        v_s = velocities.ring_contact_sliding(phi, design.e, design.z1, design.lam, r_c, omega_r)
+        spin = v_s / r_c
+        mu6 = _pin_stribeck(design, F, spin, design.b1, design.d_o1, eta, diag, "ring")
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rr = np.where(v_s > 0, fr.rolling_ring * r_c * np.abs(v_rt) / np.where(v_s > 0, v_s, 1.0),
+                          0.0)
+        rolls = friction.roll_or_skid(fr.mu_tooth, mu6, design.d_o1 / 2, r_c, rr)
+        mu_eff = np.where(rolls, mu6 * design.d_o1 / design.d_v1, fr.mu_tooth)
+        PL6 = np.where(rolls, friction.sliding_loss(mu6, F, design.d_o1 / design.d_v1 * v_s), 0.0)
+        PL5 = np.where(rolls, PL5, friction.sliding_loss(fr.mu_tooth, F, v_s))
+        if diag is not None:
+            loaded = np.broadcast_to(F > 0, rolls.shape)
+            diag.setdefault("ring_rolling", []).append(
+                (np.sum(rolls & loaded), np.sum(loaded)))
+        PL6 = PL6.sum(-1)
+    elif design.ring_rollers == "plain":
         v6 = velocities.ring_pin_sliding(phi, design.e, design.z1, design.lam, design.d_v1,
                                          design.d_o1, omega_r)
         mu6 = friction.benedict_kelley_mu(F / design.b1, eta, v6, v6, fr.pin_roughness,
@@ -94,16 +140,38 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
         PL6 = friction.sliding_loss(mu6, F, v6).sum(-1)
     else:
         spin = velocities.ring_roller_spin(phi, design.e, design.z1, design.lam, r_c, omega_r)
-        M = friction.skf_frictional_moment(F, spin, design.d_o1, design.d_v1,
-                                           lub.kinematic_viscosity, fr)
+        M = friction.skf_frictional_moment(F, spin, design.d_o1, design.d_v1, nu, fr)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            mu_eff = np.where(F > 0, M / np.where(F > 0, F, 1.0) / r_c, 0.0)
         PL6 = (M * spin).sum(-1)
+    PL5 = PL5.sum(-1)
+    if physical and ring_flow is not None:
+        # friction in the force balance: the normal forces that carry T1 with the friction's
+        # moment, N0/(1 - rho_1) (ring drives) or N0/(1 + rho_1) (ring driven)
+        rho1 = friction.ring_friction_arm_ratio(phi, F, mu_eff, design.e, design.z1, design.lam,
+                                                r_c)
+        k = 1.0 / (1.0 - np.asarray(ring_flow, float)[..., None] * rho1)
+        PL5, PL6, F = PL5 * k, PL6 * k, F * k[..., None]
     # disc rollers (k per position)
-    theta, Q = contact.disc_roller_forces(design, T, psi_disc, state, ("disc", gear),
-                                             dedup=dedup)
+    T_d = T if disc_torque is None else np.asarray(disc_torque, float)
+    theta, Q = contact.disc_roller_forces(design, T_d, psi_disc, state, ("disc", gear),
+                                          dedup=dedup)
     W2 = W[..., 0]
-    PL2 = friction.rolling_resistance_loss(fr.rolling_disc, Q,
-                                           velocities.disc_rolling_speed(design.D_cz, W2)[..., None]).sum(-1)
-    if design.disc_rollers == "plain":
+    v_r2 = velocities.disc_rolling_speed(design.D_cz, W2)[..., None]
+    PL2 = friction.rolling_resistance_loss(fr.rolling_disc, Q, v_r2)
+    if design.disc_rollers == "plain" and physical:
+        spin2 = velocities.disc_roller_spin(design.e, design.d_v2, W2)[..., None]
+        v3 = velocities.disc_pin_sliding(design.e, design.d_v2, design.d_o2, W2)[..., None]
+        v_skid = velocities.disc_hole_sliding(design.e, W2)[..., None]
+        mu3 = _pin_stribeck(design, Q, spin2, design.b2, design.d_o2, eta, diag, "disc")
+        rr2 = fr.rolling_disc * (design.d_v2 / 2) * v_r2 / np.maximum(v_skid, 1e-300)
+        rolls = friction.roll_or_skid(fr.mu_tooth, mu3, design.d_o2 / 2, design.d_v2 / 2, rr2)
+        PL3 = np.where(rolls, friction.sliding_loss(mu3, Q, v3), 0.0).sum(-1)
+        PL2 = np.where(rolls, PL2, friction.sliding_loss(fr.mu_tooth, Q, v_skid))
+        if diag is not None:
+            loaded = np.broadcast_to(Q > 0, rolls.shape)
+            diag.setdefault("disc_rolling", []).append((np.sum(rolls & loaded), np.sum(loaded)))
+    elif design.disc_rollers == "plain":
         v3 = velocities.disc_pin_sliding(design.e, design.d_v2, design.d_o2, W2,
                                          design.D_cz if design.disc_pin_sliding == "paper" else None)[..., None]
         mu3 = friction.benedict_kelley_mu(Q / design.b2, eta, v3, v3, fr.pin_roughness,
@@ -111,9 +179,9 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
         PL3 = friction.sliding_loss(mu3, Q, v3).sum(-1)
     else:
         spin2 = velocities.disc_roller_spin(design.e, design.d_v2, W2)[..., None]
-        M = friction.skf_frictional_moment(Q, spin2, design.d_o2, design.d_v2,
-                                           lub.kinematic_viscosity, fr)
+        M = friction.skf_frictional_moment(Q, spin2, design.d_o2, design.d_v2, nu, fr)
         PL3 = (M * spin2).sum(-1)
+    PL2 = PL2.sum(-1)
     # eccentric bearing: relative speed of its rings is |w_p - w_S| = |w2 - wS| (Eq. 21)
     F_EV, F_EH = contact.eccentric_bearing_force(design, phi, F, Q, ring_index, disc_index)
     if ring_index is not None:
@@ -121,9 +189,37 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
         PL2, PL3 = PL2[..., disc_index], PL3[..., disc_index]
     F_E = np.hypot(F_EV, F_EH)
     Om = np.abs(W2)
-    PL1 = friction.skf_frictional_moment(F_E, Om, design.d_p, design.D_p,
-                                         lub.kinematic_viscosity, fr) * Om
+    PL1 = friction.skf_frictional_moment(F_E, Om, design.d_p, design.D_p, nu, fr) * Om
     return PL1, PL2, PL3, PL5, PL6
+
+
+def contact_states(design, ring_torque, w2_rel, n_positions=None):
+    """What the plain rollers do and where the pin law sits, at |T1| = ring_torque [N*m] and
+    w2 - wS = w2_rel [rad/s] (scalars or arrays; physical profile).
+
+    Returns a dict: ``ring_rolling``/``disc_rolling`` the share of loaded rollers that roll on
+    the tooth (hole) rather than skid (NaN without plain rollers of that set);
+    ``ring_hersey``/``disc_hersey`` (min, max) of the pins' Hersey numbers over the loaded
+    rollers; ``ring_clamped``/``disc_clamped`` whether the Stribeck law's upper bound binds
+    anywhere (MU_DRY_STEEL)."""
+    diag = {}
+    alpha = mesh_positions(design, n_positions)
+    Tc = np.abs(np.asarray(ring_torque, float)) * design.z_c / design.z1
+    for gear, (share, shift) in enumerate(((design.torque_share, 0.0),
+                                           (1.0 - design.torque_share, np.pi))):
+        if share:
+            _gear_losses(design, share * Tc, w2_rel, alpha + shift, alpha / design.i0 + shift,
+                         None, ("states", gear), dedup=False, diag=diag)
+    out = {}
+    for key in ("ring", "disc"):
+        r = diag.get(key + "_rolling")
+        out[key + "_rolling"] = (sum(a for a, _ in r) / max(sum(b for _, b in r), 1)
+                                 if r else float("nan"))
+        h = [x for x in diag.get(key + "_hersey", []) if x.size]
+        out[key + "_hersey"] = ((float(min(x.min() for x in h)), float(max(x.max() for x in h)))
+                                if h else (float("nan"), float("nan")))
+        out[key + "_clamped"] = bool(any(diag.get(key + "_clamped", [])))
+    return out
 
 
 def _angle_classes(psi, n):
@@ -161,13 +257,17 @@ def _mesh_entries(design, n_positions, gears, dedup):
 
 
 def partial_losses_by_position(design, ring_torque, w2_rel, n_positions=None, state=None,
-                               dedup=True):
+                               dedup=True, disc_torque=None, ring_flow=None):
     """Partial losses of the whole drive (both gears) at each mesh position, W.
 
     ring_torque: |T1|, the torque on the ring shaft (N*m), shape (...); w2_rel = w2 - wS (rad/s).
     state: optional dict for warm-starting the contact solutions of repeated calls.
     dedup: evaluate each distinct gear position and contact problem once (default); False is
     the straightforward per-position path (same results to ~1e-13, slower).
+    disc_torque: |T2| (N*m) where friction in the force balance makes the disc side's torque
+    differ from the frictionless i0*|T1| (physical profile); None: i0*|T1| (the paper).
+    ring_flow: +1/-1 where the ring drives/is driven in the relative motion (physical profile:
+    friction in the ring rollers' force balance); None: frictionless forces (the paper).
     Returns (alpha, PartialLosses with arrays shaped (..., n_alpha)).
     """
     alpha = mesh_positions(design, n_positions)
@@ -185,8 +285,11 @@ def partial_losses_by_position(design, ring_torque, w2_rel, n_positions=None, st
         gears = tuple(gears)
         psi_ring, ring_index, psi_disc, disc_index = _mesh_entries(design, n_positions, gears,
                                                                    dedup)
-        parts = _gear_losses(design, shares[gears[0]] * Tc, w2_rel, psi_ring, psi_disc, state,
-                             gears, ring_index, disc_index, dedup)
+        share = shares[gears[0]]
+        Td = None if disc_torque is None else share * np.abs(np.asarray(disc_torque, float))
+        parts = _gear_losses(design, share * Tc, w2_rel, psi_ring, psi_disc, state,
+                             gears, ring_index, disc_index, dedup, disc_torque=Td,
+                             ring_flow=ring_flow)
         for g in range(len(gears)):
             sl = tuple(p[..., g * m:(g + 1) * m] for p in parts)
             total = sl if total is None else tuple(a + b for a, b in zip(total, sl))
@@ -194,8 +297,8 @@ def partial_losses_by_position(design, ring_torque, w2_rel, n_positions=None, st
 
 
 def partial_losses(design, ring_torque, w2_rel, n_positions=None, state=None,
-                   dedup=True) -> PartialLosses:
+                   dedup=True, disc_torque=None, ring_flow=None) -> PartialLosses:
     """Partial losses (W) averaged over a full mesh cycle; arrays shaped like the inputs."""
     _, by_pos = partial_losses_by_position(design, ring_torque, w2_rel, n_positions, state,
-                                           dedup)
+                                           dedup, disc_torque, ring_flow)
     return PartialLosses(*(getattr(by_pos, n).mean(-1) for n in LOSS_NAMES))

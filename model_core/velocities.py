@@ -97,3 +97,9 @@ def disc_pin_sliding(e, d_v2, d_o2, w2_rel, D_cz=None):
     """
     radius = e if D_cz is None else D_cz / 2
     return radius * d_o2 / d_v2 * np.abs(w2_rel)
+
+
+def disc_hole_sliding(e, w2_rel):
+    """Sliding speed of a disc roller that skids (stands still on its pin) in its hole, m/s:
+    the hole translates at e*Omega (derived, see the module note)."""
+    return e * np.abs(w2_rel)

@@ -5,8 +5,15 @@ from model_core import DriveDesign
 
 @pytest.fixture(scope="session")
 def design():
-    """The paper's test drive (Table 3) with the documented assumptions."""
-    return DriveDesign()
+    """The paper's test drive (Table 3) with the documented assumptions, computed as the paper
+    did (profile "paper": its theory's numbers)."""
+    return DriveDesign(profile="paper")
+
+
+@pytest.fixture(scope="session")
+def physical():
+    """The paper's test drive in the physical profile (the default)."""
+    return DriveDesign(profile="physical")
 
 
 @pytest.fixture(scope="session")

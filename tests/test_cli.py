@@ -60,8 +60,11 @@ def test_paper_json(tmp_path):
     r = run("paper", "--out", str(tmp_path), "--json")
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
-    assert set(out) == {"S1", "S2"}
+    # S1/S2: the paper profile (its theory); physical and the paper's experiment beside them
+    assert set(out) == {"S1", "S2", "physical", "theory", "experiment"}
     assert 0.6425 <= out["S1"]["mean"] <= 0.6625
+    assert set(out["physical"]) == {"S1", "S2"}
+    assert out["experiment"]["S2"] == {"min": 0.5821, "mean": 0.6090, "max": 0.6300}
     assert (tmp_path / "efficiency_S1_S2.png").stat().st_size > 10000
     assert (tmp_path / "partial_losses.png").stat().st_size > 10000
 

@@ -254,8 +254,10 @@ def test_a_library_effect_next_to_an_unknown_one(hidden, form, seed, mode):
     """The library effect is named, the rest is said to be unexplained; a steady library
     term that the unknown steady loss could hold (the friction level) is withdrawn, not
     reported with a wrong value."""
-    r = synthesize(hidden, seed, mode, "small", added_torque=form)
-    d = diagnose(r, mode)
+    # the paper profile: its friction is proportional to load, the case this test was built on
+    paper = DriveDesign(profile="paper")
+    r = synthesize(hidden, seed, mode, "small", added_torque=form, design=paper)
+    d = diagnose(r, mode, paper)
     assert named(d) == {hidden}, [e["id"] for e in d.effects]
     assert d.unexplained["present"], d.unexplained
     if form is _mains:
@@ -337,8 +339,11 @@ def test_says_when_the_data_cannot_tell_effects_apart():
 
 
 def test_gain_error_and_friction_look_alike_in_forward_driving():
-    r = synthesize("torque_sensor_gain", 11, "S1", "small")     # no back-driven segment
-    d = diagnose(r, "S1")
+    # the paper profile, whose friction is proportional to load like a gain error (in the
+    # physical profile the load-independent and Petroff parts tell them apart)
+    paper = DriveDesign(profile="paper")
+    r = synthesize("torque_sensor_gain", 11, "S1", "small", design=paper)   # no back-driven segment
+    d = diagnose(r, "S1", paper)
     pair = {d.effect} | set(d.indistinguishable_from)
     assert {"torque_sensor_gain", "friction_miscalibrated"} <= pair
     assert "back-driven" in d.suggested_test

@@ -89,7 +89,7 @@ def test_known_torque_reproduced_or_flagged_over_decades(design, mode):
 
 
 def test_self_locking_back_drive_is_reported_locked():
-    sticky = DriveDesign(friction=Friction(mu_boundary=0.3))
+    sticky = DriveDesign(profile="paper", friction=Friction(mu_boundary=0.3))
     op = operating_point(sticky, "1S", rpm_to_rad_s(100), 8.0)
     assert float(op.eta0) < I0
     assert bool(op.locked) and np.isnan(op.eta)

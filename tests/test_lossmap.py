@@ -31,7 +31,7 @@ def test_map_matches_core_over_envelope_both_directions(design, mode):
 
 
 def test_map_locks_like_the_core():
-    sticky = DriveDesign(friction=Friction(mu_boundary=0.3))
+    sticky = DriveDesign(profile="paper", friction=Friction(mu_boundary=0.3))
     m = ModeMap(sticky, "S1", 30.0, 350.0)
     # the load drives the ring (power into shaft 1): back-driving 1 -> S is self-locking
     speeds, torques, losses, eta, eta0, locked, fwd = m.solve(rpm_to_rad_s(1500), 9.0)

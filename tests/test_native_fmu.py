@@ -453,7 +453,8 @@ def test_initialization_mode_outputs_equal_the_first_step(native, extra):
 def test_two_designs_in_one_process_do_not_interfere(native, tmp_path):
     """Two FMUs of different designs (mu_boundary) loaded together, interleaved."""
     toml = tmp_path / "rough.toml"
-    rough_design = DriveDesign().replace(friction=Friction(mu_boundary=0.13))
+    # mu_boundary acts in the paper profile (the physical one uses the Stribeck pin law)
+    rough_design = DriveDesign(profile="paper").replace(friction=Friction(mu_boundary=0.13))
     toml.write_text(design_to_toml(rough_design))
     dest = tmp_path / "rough"
     r = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "build", "--design", str(toml),

@@ -243,8 +243,8 @@ class Diagnoser:
         rel1 = 0.0
         if fr is not None and abs(fr[0]) > FRICTION_RELINEARISE:
             rel1 = float(fr[0])
-            d2 = replace(self.design, friction=replace(
-                self.design.friction, mu_boundary=self.design.friction.mu_boundary * (1 + rel1)))
+            from model_core.design import scale_friction_level
+            d2 = scale_friction_level(self.design, 1 + rel1)
             sig = first["P"]["sig"]
             state = self._analyse(rec, d2, forced=("friction_miscalibrated",),
                                   sensitivities=(sig["sens_mu"], sig["sens_nu"]))

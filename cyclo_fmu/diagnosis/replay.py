@@ -50,9 +50,8 @@ def block_means(x, m):
 
 
 def _scaled(design, mu=1.0, nu=1.0):
-    return replace(design,
-                   friction=replace(design.friction, mu_boundary=design.friction.mu_boundary * mu),
-                   lubricant=replace(design.lubricant, kinematic_viscosity=design.lubricant.kinematic_viscosity * nu))
+    from model_core.design import scale_friction_level, scale_viscosity
+    return scale_viscosity(scale_friction_level(design, mu), nu)
 
 
 @dataclass

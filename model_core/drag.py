@@ -1,0 +1,84 @@
+"""Load-independent losses (physical profile, losses = "all"): the support bearings of the
+shafts, the shaft seals and the grease drag of the eccentric bearings.
+
+The paper keeps only load-dependent losses and blames part of its 1.76-1.92 % gap between
+theory and experiment on these (Section 5). Each is a named partial loss in W:
+
+- ``PL_support``: two deep-groove ball bearings on each rotating shaft, Palmgren's
+  load-independent moment M0 = 1e-7 f0 (nu n)^(2/3) d_m^3 [N*mm; nu mm^2/s, n r/min, d_m mm],
+  or 160e-7 f0 d_m^3 for nu n < 2000 (Palmgren, Ball and Roller Bearing Engineering, 1959;
+  Harris & Kotzalas, Rolling Bearing Analysis, 5th ed., Sec. 9.4).
+- ``PL_churn``: the grease sheared between the orbiting cycloid gears' faces and their
+  neighbours (disc, housing, the other gear): Couette flow P = eta v^2 A / h per face, with v =
+  e |w2 - wS| the gear's translation speed relative to the disc (Petroff's film argument; the
+  eccentric bearings' own viscous rolling loss is already in PL1 through SKF's M_rr, and SKF
+  neglects M_drag for grease lubrication).
+- ``PL_seal``: radial lip seals on the input and output shafts, frictional power
+  P = SEAL_POWER_COEFF d^2 n [W; d mm, n r/min] (the rule of thumb of the seal makers'
+  catalogues, e.g. Freudenberg Simrit, Technical Manual, radial shaft seals, frictional power
+  chart, for a greased seal on a ground steel shaft).
+
+Every dimension here is an **assumption** (the paper shows the bench in a photograph only),
+named as a module constant with its reason.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .kinematics import rad_s_to_rpm
+
+#: Names of the load-independent partial losses.
+IDLE_NAMES = ("PL_support", "PL_seal", "PL_churn")
+IDLE_DESCRIPTIONS = {
+    "PL_support": "support bearings of the shafts (load-independent)",
+    "PL_seal": "shaft lip seals",
+    "PL_churn": "grease sheared at the orbiting gears' faces",
+}
+
+#: Support bearings per rotating shaft: (bore, outside diameter) [m], two each.
+#: **Assumption**: input shaft S on two 6004 (20 x 42 mm), output shafts 1 and 2 on two 6006
+#: (30 x 55 mm): light series for a 250 W drive.
+SUPPORT_BEARINGS = {"S": (0.020, 0.042), "1": (0.030, 0.055), "2": (0.030, 0.055)}
+#: Palmgren's f0 of a grease-lubricated deep-groove ball bearing [1]. **Assumption**: 0.75
+#: (Harris & Kotzalas Table 9.x: 0.7-1 for greased deep-groove ball bearings).
+F0_BALL_GREASE = 0.75
+#: Gap between a gear face and its neighbour [m]. **Assumption**: 0.5 mm, an axial play
+#: typical of small reducers.
+FACE_GAP = 0.5e-3
+#: Gear faces running in grease [1]. **Assumption**: 4, both faces of both gears.
+N_FACES = 4
+#: Shaft diameters at the lip seals [m]. **Assumption**: one seal on S at 20 mm, one on each
+#: output shaft at 30 mm (the held shaft's seal does not move).
+SEAL_DIAMETERS = {"S": 0.020, "1": 0.030, "2": 0.030}
+#: Seal frictional power coefficient [W/(mm^2 r/min)]. **Assumption**: 7.7e-6 (about 8.6 W at
+#: 20 mm and 2800 r/min, 0.03 N*m), the middle of the seal makers' charts for NBR lip seals.
+SEAL_POWER_COEFF = 7.7e-6
+
+
+def palmgren_idle_moment(n_rpm, nu_mm2_s, dm_mm, f0):
+    """Load-independent bearing moment M0 [N*mm] of Palmgren (see module note)."""
+    n = np.abs(np.asarray(n_rpm, float))
+    x = nu_mm2_s * n
+    return np.where(x >= 2000, 1e-7 * f0 * np.maximum(x, 2000) ** (2 / 3) * dm_mm ** 3,
+                    160e-7 * f0 * dm_mm ** 3) * (n > 0)
+
+
+def idle_losses(design, speeds, nu):
+    """Load-independent losses [W] at the shaft speeds ``speeds`` {"1","2","S": rad/s} with
+    the grease's kinematic viscosity nu [m^2/s]; a dict keyed IDLE_NAMES."""
+    nu_mm = nu * 1e6
+    sup = 0.0
+    seal = 0.0
+    for shaft, (d, D) in SUPPORT_BEARINGS.items():
+        w = np.abs(np.asarray(speeds[shaft], float))
+        M0 = palmgren_idle_moment(rad_s_to_rpm(w), nu_mm, 0.5 * (d + D) * 1e3, F0_BALL_GREASE)
+        sup = sup + 2 * M0 * 1e-3 * w
+        seal = seal + SEAL_POWER_COEFF * (SEAL_DIAMETERS[shaft] * 1e3) ** 2 * rad_s_to_rpm(w)
+    w_rel = np.abs(np.asarray(speeds["2"], float) - np.asarray(speeds["S"], float))
+    # face area of a gear: an annulus from the eccentric bearing's seat to the tooth root
+    r_out = design.r_p - design.e - design.d_v1 / 2
+    r_in = design.D_p / 2
+    area = np.pi * (r_out ** 2 - r_in ** 2)
+    eta = design.lubricant.density * nu
+    churn = N_FACES * eta * (design.e * w_rel) ** 2 * area / FACE_GAP
+    return {"PL_support": sup, "PL_seal": seal, "PL_churn": churn}
