@@ -2,7 +2,7 @@
 
 Targets (issue 8): a 50 x 50 efficiency map, every point mesh-cycle averaged with its contacts
 solved iteratively, in at most 0.08 s; one operating point in at most 0.5 ms; the FMU's map
-(ModeMap, 36 x 28 points x 2 flow directions) in at most 50 ms. The reference measured in the
+(ModeMap, 48 x 28 points x 2 flow directions) in at most 50 ms. The reference measured in the
 same run is the straightforward path (every mesh position and contact problem solved on its own,
 ``dedup=False``), which gives the same numbers.
 Run: python benchmarks/bench_core.py
@@ -56,7 +56,7 @@ def main():
     from model_core.lossmap import ModeMap
     for mode in ("S1", "S2"):
         best, med = best_of(lambda: ModeMap(d, mode, 30.0, 350.0), 5)
-        print(f"FMU map (ModeMap 36 x 28 x 2), mode {mode}: best {best * 1e3:6.1f} ms, "
+        print(f"FMU map (ModeMap 48 x 28 x 2), mode {mode}: best {best * 1e3:6.1f} ms, "
               f"median {med * 1e3:6.1f} ms (target <= 50 ms)")
 
 

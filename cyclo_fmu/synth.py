@@ -22,7 +22,7 @@ import numpy as np
 from model_core import DriveDesign
 from model_core.effects import EFFECTS, effect_signals, switch_on
 from model_core.kinematics import parse_mode, shaft_speeds
-from model_core.lossmap import ModeMap, replay_input_torque
+from model_core.lossmap import replay_input_torque
 
 from .bench import RECORDING_COLUMNS, write_recording
 

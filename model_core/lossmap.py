@@ -194,7 +194,7 @@ def replay_input_torque(design, mode, w_in, tau_out, grid=None):
         Torque the load applies on the driven shaft [N*m] (minus the delivered output torque).
 
     grid : (int, int), optional
-        Points of the map over torque and speed (default: ModeMap's 36 x 28).
+        Points of the map over torque and speed (default: ModeMap's 48 x 28).
 
     Returns
     -------

@@ -22,7 +22,7 @@ The chain (each step a function of this package):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
