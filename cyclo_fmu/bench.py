@@ -100,11 +100,15 @@ def scenario(name: str, mode: str = "S1") -> Scenario:
         return Scenario("loadstep", mode=mode, f_first=40, f_last=40, f_count=1,
                         torque_schedule="0 2; 3 7", hold=3.0, settle=1.5, duration=6.0)
     if name == "reversal":
-        # +40 Hz, then the regulator reverses to -40 Hz. A flywheel on the output (0.05 kg m^2)
-        # and a light brake: while the regulator decelerates, the flywheel drives the reducer
-        # backwards (power flows from the output to the motor) until it has slowed down
+        # +40 Hz, then the regulator reverses to -40 Hz. A flywheel on the output (0.2 kg m^2,
+        # e.g. a steel disc of 300 mm x 36 mm) and a light brake: while the regulator
+        # decelerates (25 Hz/s), the flywheel drives the reducer backwards (power flows from the
+        # output to the motor) until it has slowed down. The flywheel must be that large: at
+        # 160 r/min and 10.5 rad/s^2 it delivers J w dw/dt = 35 W, more than the physical
+        # profile's load-independent losses at 2400 r/min (about 18 W); 0.05 kg m^2 (9 W) does
+        # not back-drive the reducer, the drag eats it.
         return Scenario("reversal", mode=mode, frequency_schedule="0 40; 3 -40", T_first=0.05,
-                        T_last=0.05, T_count=1, hold=3.0, settle=2.0, duration=8.0, J_out=0.05)
+                        T_last=0.05, T_count=1, hold=3.0, settle=2.0, duration=8.0, J_out=0.2)
     raise ValueError(f"scenario = {name!r}: must be one of paper, runup, loadstep, reversal")
 
 

@@ -190,8 +190,9 @@ def cmd_efficiency(args) -> int:
         return 0
     if stalled or (bool(op.locked) and not math.isfinite(t_out)):
         why = ("self-locking: the drive cannot be back-driven into S, it holds"
-               if op.locked else "at this light load the load-dependent losses exceed the "
-               "power the drive would transmit: no steady motion (stall)")
+               if op.locked else "at this light load the drive's losses (the load-independent "
+               "drag, seals and churning included) exceed the power it would transmit: no "
+               "steady motion (stall)")
         print(f"cycloid drive, mode {op.mode}: no steady state at {args.speed} r/min, "
               f"{args.torque} N*m: {why}")
         return 0

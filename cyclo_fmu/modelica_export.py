@@ -14,10 +14,14 @@ with, at |w_a| interpolated linearly in ``lossTable = [|w_a|, eta_mf1, eta_mf2, 
 - flange_b drives (b -> a; quadrants 2 and 4): eta_mf = 1/eta_mf2, tau_bf = tau_bf2
   (-flange_b.tau = i (tau_a / eta_mf2 - sign(w_a) tau_bf2)).
 
-The physics core gives, at each speed, the torque relation of the reducer; over a torque band it
-is nearly affine in the torque, so a least-squares line per speed and flow direction gives the
-table's columns: forward, y = -tau_out / i against x = tau_in: slope eta_mf1, intercept -tau_bf1;
-backward, tau_in against y: slope eta_mf2, intercept eta_mf2 tau_bf2. flange_a is the driving
+The physics core gives, at each speed, the torque relation of the reducer; LossyGear's is affine
+in the torque, i.e. its efficiency is eta_mf - tau_bf / tau. Per speed and flow direction the
+columns are the minimax (Chebyshev) fit of that form to the core's efficiency over the torque
+band, so the table's largest efficiency error is as small as the form allows: forward,
+eta = y / x = eta_mf1 - tau_bf1 / x with y = -tau_out / i, x = tau_in; backward,
+eta = x / y = eta_mf2 + eta_mf2 tau_bf2 / y. Where the core's efficiency curves over the torque
+(the physical profile's Stribeck transition and roll-or-skid switch) the form cannot follow it
+exactly; the package states the error that remains. flange_a is the driving
 shaft of the mode, flange_b the driven one, the flange torques are the torques the outside
 applies (the FMUs' convention: tau_in on flange_a, tau_out on flange_b).
 
@@ -41,8 +45,8 @@ from . import __version__
 
 #: rows of the lossTable over the speed band (linear in speed, as LossyGear interpolates)
 N_SPEED_ROWS = 12
-#: torque points per speed in the least-squares fit
-N_TORQUE_FIT = 12
+#: torque points per speed in the minimax fit
+N_TORQUE_FIT = 24
 #: grid on which the error against the core is reported (finer than the fit's, off its nodes)
 N_CHECK = 17
 
@@ -104,6 +108,20 @@ def _core_eta(design, mode, w, tau_in, ratio):
     return eta, np.asarray(op.locked, bool), tau_b
 
 
+def _minimax_eta(x, eta):
+    """(s, c) minimising max |s + c / x - eta| over the points (a linear programme)."""
+    from scipy.optimize import linprog
+    x, eta = np.asarray(x, float).ravel(), np.asarray(eta, float).ravel()
+    a = np.column_stack([np.ones_like(x), 1.0 / x, -np.ones_like(x)])
+    a_ub = np.vstack([a, -a * np.array([1.0, 1.0, -1.0])])
+    b_ub = np.concatenate([eta, -eta])
+    res = linprog([0.0, 0.0, 1.0], A_ub=a_ub, b_ub=b_ub,
+                  bounds=[(None, None), (None, None), (0.0, None)], method="highs")
+    if not res.success:                       # pragma: no cover - a 3-variable LP always solves
+        raise RuntimeError(f"LossyGear fit failed: {res.message}")
+    return float(res.x[0]), float(res.x[1])
+
+
 def fit_loss_table(design: DriveDesign, mode: str, envelope: BenchEnvelope = BenchEnvelope()
                    ) -> LossTableFit:
     """Fit LossyGear's lossTable to the core over the envelope (driving-shaft speed and torque
@@ -126,10 +144,10 @@ def fit_loss_table(design: DriveDesign, mode: str, envelope: BenchEnvelope = Ben
     yb = -np.asarray(opb.torques[b], float) / ratio
     backward_runs = not np.any(np.asarray(opb.locked, bool))
     for j in range(len(speeds)):
-        s1, c1 = np.polyfit(T[j], y[j], 1)          # y = eta_mf1 x - tau_bf1
+        s1, c1 = _minimax_eta(T[j], y[j] / T[j])        # y / x = eta_mf1 - tau_bf1 / x
         eta_mf1, tau_bf1 = s1, -c1
         if backward_runs:
-            s2, c2 = np.polyfit(yb[j], -T[j], 1)    # tau_a = eta_mf2 y + eta_mf2 tau_bf2
+            s2, c2 = _minimax_eta(yb[j], -T[j] / yb[j])  # x / y = eta_mf2 + eta_mf2 tau_bf2 / y
             eta_mf2, tau_bf2 = s2, c2 / s2
         else:
             eta_mf2, tau_bf2 = eta_mf1, tau_bf1

@@ -276,13 +276,12 @@ class DriveDesign:
                                  "'linear'. A very large value gives the rigid limit.", "N/mm", 1e3)
     n_positions: int = _f(8, "1", "Mesh positions per ring-roller pitch over which losses are "
                           "averaged (the efficiency changes by < 5e-5 from 8 to 64).")
-    profile: str = _f("paper", "-", "Model profile: 'paper' (default: what the paper computed: "
-                      "Eq. 24 as printed, mu_boundary calibrated to its theory, load-dependent "
-                      "losses only) or 'physical' (correct kinematics for both roller kinds, roll "
-                      "or skid, Stribeck pin law, friction in the force balance, load-independent "
-                      "losses with losses = 'all'). The default stays 'paper' until the physical "
-                      "profile predicts the paper's experiment (it gives S1 73.6 % mean against "
-                      "the measured 63.5 %, see README).")
+    profile: str = _f("physical", "-", "Model profile: 'physical' (default: correct kinematics "
+                      "for both roller kinds, roll or skid, Stribeck pin law, friction in the "
+                      "force balance, load-independent losses with losses = 'all') or 'paper' "
+                      "(what the paper computed: Eq. 24 as printed, mu_boundary calibrated to "
+                      "its theory, load-dependent losses only). The physical profile does not "
+                      "yet predict the paper's experiment (README, Two profiles).")
     losses: str = _f("all", "-", "Losses that enter: 'load_dependent' (the paper's model) or "
                      "'all' (adds the load-independent losses of model_core.drag). The paper "
                      "profile always uses 'load_dependent'.")

@@ -25,7 +25,11 @@ from model_core.efficiency import operating_point
 from model_core.paper import BenchEnvelope
 
 ROOT = Path(__file__).resolve().parents[1]
-TOL = 0.2e-2     # 0.2 percentage points (issue 7)
+TOL = {"paper": 0.2e-2,      # 0.2 percentage points (issue 7)
+       # the physical profile's efficiency curves over the torque (Stribeck transition, roll or
+       # skid), which LossyGear's eta_mf - tau_bf / tau cannot follow: its minimax fit leaves
+       # about 0.3 points (README, "Use it in your tool")
+       "physical": 0.35e-2}
 
 
 def test_lossy_gear_formula_closed_forms():
@@ -48,11 +52,13 @@ def test_lossy_gear_formula_closed_forms():
         assert 0 < lossy_gear_efficiency(tab, i, w, tau_a) < 0.6
 
 
+@pytest.mark.parametrize("profile", ["paper", "physical"])
 @pytest.mark.parametrize("mode", ["S1", "S2"])
-def test_lossy_gear_reproduces_core_over_bench_envelope(mode):
+def test_lossy_gear_reproduces_core_over_bench_envelope(mode, profile):
     """Random points of the bench envelope (1000-2800 r/min, 0.3-0.85 N.m at the driving shaft,
-    README), both flow directions and both speed signs, off the fit's grid: within 0.2 points."""
-    design = DriveDesign()
+    README), both flow directions and both speed signs, off the fit's grid: within 0.2 points
+    for the paper profile, within the form's limit for the physical one."""
+    design = DriveDesign(profile=profile)
     fit = fit_loss_table(design, mode)
     env = BenchEnvelope()
     rng = np.random.default_rng(7)
@@ -70,7 +76,7 @@ def test_lossy_gear_reproduces_core_over_bench_envelope(mode):
     assert not np.asarray(op.locked).any()
     lg = lossy_gear_efficiency(fit.table, fit.ratio, ww, tt)
     err = np.abs(lg - core)
-    assert err.max() < TOL, (mode, err.max())
+    assert err.max() < TOL[profile], (mode, err.max())
     assert err.max() <= max(fit.max_error_forward, fit.max_error_backward) + 2e-4
     assert fit.ratio == pytest.approx({"S1": 15.0, "S2": -14.0}[mode])
 

@@ -50,7 +50,7 @@ def test_design_file_carries_the_profile(tmp_path):
     back = design_from_toml(text)
     assert back == d
     # the default stays the paper profile until the physical one predicts the experiment
-    assert DriveDesign().profile == "paper"
+    assert DriveDesign().profile == "physical"
 
 
 def test_roll_or_skid_switches_at_the_traction_limit():
