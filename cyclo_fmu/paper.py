@@ -10,7 +10,8 @@ import numpy as np
 from model_core import LOSS_NAMES, efficiency_map, operating_point, rad_s_to_rpm, rpm_to_rad_s
 from model_core.losses import LOSS_DESCRIPTIONS
 from model_core.drag import IDLE_DESCRIPTIONS, IDLE_NAMES
-from model_core.paper import PAPER_EXPERIMENT, PAPER_THEORY, BenchEnvelope, envelope_statistics
+from model_core.paper import (PAPER_EXPERIMENT, PAPER_THEORY, BenchEnvelope, envelope_statistics,
+                              experiment_gap)
 
 
 #: [r/min] input speeds of the efficiency curves: the bench's test speeds
@@ -100,6 +101,7 @@ def paper_comparison(design, envelope=BenchEnvelope()) -> dict:
                        for mode in ("S1", "S2")}
     out["theory"] = PAPER_THEORY
     out["experiment"] = PAPER_EXPERIMENT
+    out["experiment_gap"] = experiment_gap(design, envelope)
     return out
 
 
@@ -126,6 +128,19 @@ def run_paper_comparison(design, out, as_json: bool) -> int:
             print(f"  {mode:4}  {pname:9} {100 * s['min']:7.2f} {100 * s['mean']:7.2f} "
                   f"{100 * s['max']:7.2f}   {100 * r['min']:7.2f} {100 * r['mean']:7.2f} "
                   f"{100 * r['max']:7.2f} ({what})")
+    g = stats["experiment_gap"]
+    print("  What the physical profile lacks to predict the experiment (an inference: two numbers "
+          "fitted to S1's min/mean/max, S2 predicted):")
+    print(f"    a load-proportional meshing loss k = {100 * g['k']:.2f} % of the basic mechanism's "
+          f"power: {g['load_proportional_W']:.1f} W at 2800 r/min, 0.85 N*m (the model's "
+          f"load-dependent losses there: {g['load_dependent_W']:.1f} W)")
+    print(f"    load-independent losses at a = {g['a']:.2f} of the model's catalogue estimate: "
+          f"{g['load_independent_inferred_W']:.1f} W instead of {g['load_independent_W']:.1f} W")
+    for mode in ("S1", "S2"):
+        s, r = g["inferred"][mode], PAPER_EXPERIMENT[mode]
+        print(f"  {mode:4}  {'inferred':9} {100 * s['min']:7.2f} {100 * s['mean']:7.2f} "
+              f"{100 * s['max']:7.2f}   {100 * r['min']:7.2f} {100 * r['mean']:7.2f} "
+              f"{100 * r['max']:7.2f} (experiment)")
     for f in files:
         print(f"  figure: {f}")
     return 0
