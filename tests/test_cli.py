@@ -61,10 +61,11 @@ def test_paper_json(tmp_path):
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout)
     # S1/S2: the paper profile (its theory); physical and the paper's experiment beside them
-    assert set(out) == {"S1", "S2", "physical", "theory", "experiment"}
+    assert set(out) == {"S1", "S2", "physical", "theory", "experiment", "experiment_gap"}
     assert 0.6425 <= out["S1"]["mean"] <= 0.6625
     assert set(out["physical"]) == {"S1", "S2"}
     assert out["experiment"]["S2"] == {"min": 0.5821, "mean": 0.6090, "max": 0.6300}
+    assert {"k", "a", "inferred", "load_proportional_W"} <= set(out["experiment_gap"])
     assert (tmp_path / "efficiency_S1_S2.png").stat().st_size > 10000
     assert (tmp_path / "partial_losses.png").stat().st_size > 10000
 
