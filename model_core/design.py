@@ -11,10 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10: the same parser as the tomli package
-    import tomli as tomllib
+import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
