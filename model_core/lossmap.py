@@ -17,7 +17,11 @@ import numpy as np
 
 from . import kinematics
 from .efficiency import operating_point
+from .drag import IDLE_NAMES
 from .losses import LOSS_NAMES
+
+#: the partial losses a map carries: the load-dependent ones, then the load-independent ones
+MAP_LOSS_NAMES = LOSS_NAMES + IDLE_NAMES
 
 _SHAFT_INDEX = {"1": 0, "2": 1, "S": 2}
 
@@ -51,10 +55,10 @@ class ModeMap:
         for forward in (True, False):
             # forward: the load absorbs power, tau_out * w_out < 0
             op = operating_point(design, self.mode, WW, T_out=(-sign_b if forward else sign_b) * TT)
-            shares = np.stack([getattr(op.losses, n) for n in LOSS_NAMES], -1)
-            # shares of PL1..PL6 among themselves: they sum to the whole loss (with losses =
-            # "all" the load-independent part, which has no output of its own, is spread over
-            # them in proportion; eta0 carries it exactly)
+            shares = np.stack([np.broadcast_to(getattr(op.losses, n), WW.shape)
+                               for n in MAP_LOSS_NAMES], -1)
+            # shares of PL1..PL6 and the load-independent PL_support, PL_seal, PL_churn: they
+            # sum to the whole loss, which eta0 carries exactly
             shares = shares / np.maximum(shares.sum(-1, keepdims=True), 1e-300)
             table = np.concatenate([op.eta0[..., None], shares], -1)
             # below the lightest load that runs (losses above the power, or locked with the
@@ -80,7 +84,7 @@ class ModeMap:
         self._lw = [math.log(w) for w in W]
         self.torque_range = (float(T[0]), float(T[-1]))
         self.speed_range = (float(W[0]), float(W[-1]))
-        self.names = LOSS_NAMES
+        self.names = MAP_LOSS_NAMES
         self.out_of_range = 0
 
     def _interp(self, table, t, w):
@@ -106,7 +110,7 @@ class ModeMap:
         """Steady state at driving speed w_in (rad/s) and load torque tau_out (N*m, applied by
         the load on the driven shaft). Returns (speeds, torques, losses, eta, eta0, locked,
         forward): speeds and torques as tuples over shafts (1, 2, S), losses a list in
-        LOSS_NAMES order (W), eta the efficiency of the actual flow (0 without power or when
+        MAP_LOSS_NAMES order (W), eta the efficiency of the actual flow (0 without power or when
         locked)."""
         r1, r2, rS = self.ratio
         speeds = (r1 * w_in, r2 * w_in, rS * w_in)

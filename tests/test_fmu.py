@@ -136,6 +136,25 @@ def test_outputs_valid_after_initialization(fmu):
     inst.close()
 
 
+PARTS = ("PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal", "PL_churn")
+
+
+@pytest.mark.parametrize("exact", [False, True])
+def test_load_independent_losses_have_their_own_outputs(fmu, exact):
+    """The physical profile's seal, support-bearing and churning losses come out under their
+    own names, equal to the core's at the operating point (map: within its interpolation),
+    and with the load-dependent ones they make up P_loss."""
+    inst = Instance(fmu, mode="S1", exact=exact)
+    inst.step(w_in=250.0, tau_out=-7.0)
+    op = operating_point(DriveDesign(), "S1", 250.0, T_out=-7.0)
+    got = dict(zip(PARTS, inst.get(*PARTS)))
+    for n in ("PL_support", "PL_seal", "PL_churn"):
+        assert got[n] == pytest.approx(float(getattr(op.losses, n)), rel=1e-9 if exact else 2e-2)
+        assert got[n] > 0
+    assert sum(got.values()) == pytest.approx(inst.get("P_loss")[0], rel=1e-9)
+    inst.close()
+
+
 def test_energy_balance_every_step_all_quadrants(fmu):
     inst = Instance(fmu, mode="S2")
     rng = np.random.default_rng(1)
@@ -144,7 +163,7 @@ def test_energy_balance_every_step_all_quadrants(fmu):
         tau = rng.uniform(-9, 9)
         inst.step(w_in=w, tau_out=tau)
         tau_in, w_out, p_loss, parts = inst.get("tau_in", "w_out", "P_loss")[0], \
-            inst.get("w_out")[0], inst.get("P_loss")[0], inst.get("PL1", "PL2", "PL3", "PL5", "PL6")
+            inst.get("w_out")[0], inst.get("P_loss")[0], inst.get(*PARTS)
         assert tau_in * w + tau * w_out == pytest.approx(p_loss, rel=1e-9, abs=1e-12)
         assert p_loss >= 0
         assert sum(parts) == pytest.approx(p_loss, rel=1e-9, abs=1e-12)
