@@ -29,11 +29,13 @@ RPM_PER_RAD_S = 30 / math.pi
 
 #: component name -> (FMU, connectors [(name, kind)])
 COMPONENTS = {
-    "motor": ("InductionMotor", [("tau_shaft", "input"), ("J_load", "input"), ("w", "output"),
+    "motor": ("InductionMotor", [("tau_shaft", "input"), ("J_load", "input"),
+                                 ("J_load_dec", "input"), ("w", "output"),
                                  ("alpha", "output"), ("T_em", "output"), ("frequency", "output")]),
     "drive": ("CycloidDrive", [("w_in", "input"), ("tau_out", "input"), ("alpha_in", "input"),
                                ("w_out", "output"), ("tau_in", "output"),
                                ("tau_in_static", "output"), ("J_load", "output"),
+                               ("J_load_dec", "output"),
                                ("torque_out", "output"), ("tau_housing", "output"),
                                ("P_loss", "output"), ("eta", "output")]),
     "brake": ("FeltBrake", [("w", "input"), ("tau_out", "output"), ("torque_shaft", "output")]),
@@ -47,6 +49,7 @@ CONNECTIONS = [
     ("motor", "alpha", "drive", "alpha_in"),
     ("drive", "tau_in_static", "motor", "tau_shaft"),
     ("drive", "J_load", "motor", "J_load"),
+    ("drive", "J_load_dec", "motor", "J_load_dec"),
     ("drive", "w_out", "brake", "w"),
     ("brake", "tau_out", "drive", "tau_out"),
     ("drive", "tau_in", "t_in", "x"),
@@ -276,34 +279,52 @@ def run_ssp(ssp_path, stop_time: float, step: float = 1e-3):
     return simulate_ssp(str(ssp_path), stop_time=stop_time, step_size=step, parameter_set=params)
 
 
-def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progress=False):
-    """The same bench as ``run_ssp`` (components, connections, fixed-step Jacobi with all
-    connector values starting at 0, rows holding post-step values), run by a lean master that
-    calls the FMUs' C functions over value references and buffers resolved once, and that can
-    also set String parameters (fmpy's SSP master cannot). ``progress``: a tqdm bar on stderr.
+#: the lean master's order of the components within a step (Gauss-Seidel): the motor (the
+#: train's integrator) first, then the brake (at the output speed of the last step and the
+#: setpoint of the step's start), then the reducer at the motor's new speed and acceleration
+#: and the brake's torque, then the transducers reading the values of the same instant
+ORDER = ("motor", "brake", "drive", "t_in", "n_in", "t_out", "n_out")
+COUPLINGS = ("gauss-seidel", "jacobi")
+
+
+def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progress=False,
+             coupling: str = "gauss-seidel"):
+    """The bench of ``run_ssp`` (components, connections, parameters, fixed step, all connector
+    values starting at 0, rows holding post-step values) run by a lean master that calls the
+    FMUs' C functions over value references and buffers resolved once, and that can also set
+    String parameters (fmpy's SSP master cannot). ``progress``: a tqdm bar on stderr.
+
+    ``coupling``: ``"gauss-seidel"`` (default) steps the components in ``ORDER``, each after
+    its inputs were updated from the outputs already computed in this step, so that a row holds
+    the values of one instant (the reducer and the transducers are quasi-static); ``"jacobi"``
+    steps all components from the previous step's outputs, as fmpy's SSP master does (the same
+    numbers to 1e-9, a test), which delays every signal by one step per connection it passes.
     Returns a structured array with the same fields as ``run_ssp``."""
     import ctypes
 
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave, fmi2Real, fmi2ValueReference
 
+    if coupling not in COUPLINGS:
+        raise ValueError(f"coupling = {coupling!r}: must be one of {', '.join(COUPLINGS)}")
     unknown = sorted({k.split(".", 1)[0] for k in params} - set(COMPONENTS))
     if unknown:
         raise ValueError(f"{unknown[0]}: no such bench component ({', '.join(COMPONENTS)})")
-    # one buffer for every output, one for every input; each FMU reads and writes its slice
+    # one buffer: every output, then every input; each FMU reads and writes its slice, and a
+    # row of the recording is one copy of the whole buffer
     outputs = [(n, c) for n, (_, cons) in COMPONENTS.items() for c, k in cons if k == "output"]
     inputs = [(n, c) for n, (_, cons) in COMPONENTS.items() for c, k in cons if k == "input"]
-    out_buf = (fmi2Real * len(outputs))()
-    in_buf = (fmi2Real * len(inputs))()
+    n_out = len(outputs)
+    buf = (fmi2Real * (n_out + len(inputs)))()
+    view = np.frombuffer(buf, dtype=np.float64)
     out_index = {key: i for i, key in enumerate(outputs)}
+    in_index = {key: n_out + i for i, key in enumerate(inputs)}
     feeds = {(c, d): (a, b) for a, b, c, d in CONNECTIONS}
-    links = [(i, out_index[feeds[key]]) for i, key in enumerate(inputs)]
-    out_view = np.frombuffer(out_buf, dtype=np.float64)
-    in_view = np.frombuffer(in_buf, dtype=np.float64)
-    dst = np.array([d for d, _ in links], dtype=np.intp)
-    src = np.array([s_ for _, s_ in links], dtype=np.intp)
+    dst = np.array([in_index[key] for key in inputs], dtype=np.intp)
+    src = np.array([out_index[feeds[key]] for key in inputs], dtype=np.intp)
     size = ctypes.sizeof(fmi2Real)
-    comps, calls, unpacked = [], [], {}
+    fmi2Status = ctypes.c_int
+    comps, calls, unpacked, libs = [], {}, {}, []
     try:
         for name, (fmu, connectors) in COMPONENTS.items():
             path = str(Path(fmu_dir) / f"{fmu}.fmu")
@@ -332,9 +353,8 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
                 else:
                     f.setString([v.valueReference], [str(value)])
             f.enterInitializationMode()
-            f.exitInitializationMode()
 
-            def block(buf, index):
+            def block(index):
                 sel = [index[(name, c)] for c, _ in connectors if (name, c) in index]
                 if not sel:
                     return None
@@ -342,36 +362,72 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
                     *[var[c].valueReference for c, _ in connectors if (name, c) in index])
                 ptr = ctypes.cast(ctypes.addressof(buf) + sel[0] * size,
                                   ctypes.POINTER(fmi2Real))
-                return vrs, len(sel), ptr
-            fns = f._functions
-            calls.append((name, f.component, fns["fmi2SetReal"], fns["fmi2DoStep"],
-                          fns["fmi2GetReal"],
-                          block(in_buf, {k: i for i, k in enumerate(inputs)}),
-                          block(out_buf, out_index)))
-        # initial outputs are not read: all connector values start at 0 like fmpy's SSP master
+                return vrs, ctypes.c_size_t(len(sel)), ptr
+            # the same functions through ctypes.PyDLL: called with the GIL held (a pythonfmu
+            # FMU takes the GIL for every call; releasing it first, as CDLL does, costs more
+            # than the call)
+            lib = ctypes.PyDLL(f.dll._name)
+            libs.append(lib)
+            set_real, do_step, get_real = (lib.fmi2SetReal, lib.fmi2DoStep, lib.fmi2GetReal)
+            for fn in (set_real, get_real):
+                fn.argtypes = [ctypes.c_void_p, ctypes.POINTER(fmi2ValueReference),
+                               ctypes.c_size_t, ctypes.POINTER(fmi2Real)]
+                fn.restype = fmi2Status
+            do_step.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int]
+            do_step.restype = fmi2Status
+            links = [(in_index[(name, c)], out_index[feeds[(name, c)]])
+                     for c, k in connectors if k == "input"]
+            calls[name] = (name, ctypes.c_void_p(f.component), set_real, do_step, get_real,
+                           block(in_index), block(out_index), links)
+        calls = [calls[name] for name in ORDER]
+        gauss = coupling == "gauss-seidel"
+        if gauss:
+            # consistent initial values: in Initialization Mode the slaves' outputs follow
+            # their inputs and parameters (FMI 2.0 lets a master read them there); propagated
+            # in ORDER, twice (the brake precedes the reducer whose w_out it reads; no loop: the
+            # motor's outputs depend on its state only,
+            # the brake's on the drive's w_out, which depends on the motor's speed alone)
+            for _ in range(2):
+                for name, comp, set_real, do_step, get_real, ins, outs, links in calls:
+                    if ins is not None:
+                        for i, j in links:
+                            buf[i] = buf[j]
+                        if set_real(comp, ins[0], ins[1], ins[2]) > 1:
+                            raise _fmu_error(name, "fmi2SetReal", 0.0)
+                    if outs is not None and get_real(comp, outs[0], outs[1], outs[2]) > 1:
+                        raise _fmu_error(name, "fmi2GetReal", 0.0)
+        # jacobi: all connector values start at 0, like fmpy's SSP master
+        for f in comps:
+            f.exitInitializationMode()
         fields = [f"{n}.{c}" for n, c in outputs] + [f"{n}.{c}" for n, c in inputs]
         n_steps = int(round(stop_time / step))
-        rows = np.empty((n_steps, len(outputs) + len(inputs)))
-        n_out = len(outputs)
+        rows = np.empty((n_steps, len(fields)))
         bar = _progress(progress, n_steps, "bench")
         tick = max(1, n_steps // 100)
         for k in range(n_steps):
             t = k * step
-            for name, comp, set_real, do_step, get_real, ins, outs in calls:
-                if ins is not None and set_real(comp, ins[0], ins[1], ins[2]) > 1:
-                    raise _fmu_error(name, "fmi2SetReal", t)
+            for name, comp, set_real, do_step, get_real, ins, outs, links in calls:
+                if ins is not None:
+                    if gauss:
+                        for i, j in links:
+                            buf[i] = buf[j]
+                    if set_real(comp, ins[0], ins[1], ins[2]) > 1:
+                        raise _fmu_error(name, "fmi2SetReal", t)
                 if do_step(comp, t, step, 1) > 1:
                     raise _fmu_error(name, "fmi2DoStep", t)
                 if outs is not None and get_real(comp, outs[0], outs[1], outs[2]) > 1:
                     raise _fmu_error(name, "fmi2GetReal", t)
-            in_view[dst] = out_view[src]
-            rows[k, :n_out] = out_view
-            rows[k, n_out:] = in_view
+            if not gauss:
+                view[dst] = view[src]
+            rows[k] = view
             if bar is not None and k % tick == 0:
                 bar.update(min(tick, n_steps - k))
         if bar is not None:
             bar.close()
     finally:
+        import _ctypes
+        for lib in libs:         # our reference to the library; fmpy frees its own
+            _ctypes.dlclose(lib._handle)
         for f in comps:
             f.terminate()
             f.freeInstance()

@@ -102,9 +102,9 @@ PARAMETER_LIMITS = dict(
 #: less P_extra
 OUTPUT_LOSSES = ("PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal", "PL_churn")
 _LOSS_TEXT = {**core.losses.LOSS_DESCRIPTIONS, **core.drag.IDLE_DESCRIPTIONS}
-#: rad/s^2; below this driving-shaft acceleration J_load is the secant over this value (the
-#: inertial torque it stands for, J_out r * 1 rad/s^2, is below the torque transducers' noise)
-_ALPHA_MIN = 1.0
+#: rad/s^2, default of ``alpha_ref``: the bench's regulator ramps the stator frequency at
+#: 25 Hz/s, which on the two-pole motor is 2 pi 25 = 157 rad/s^2 of the synchronous speed
+ALPHA_REF = 2 * math.pi * 25.0
 #: relative change of w_in and tau_out within which a steady step reuses the last J_load
 _SLOPE_REUSE = 1e-3
 
@@ -131,12 +131,15 @@ class CycloidDrive(UnitSlave):
                        "interpolating the map built at initialization", Boolean)
         self.parameter("J_out", 0.0, "kg.m2", "inertia on the driven shaft, reflected to the "
                        "driving side's integrator (see J_load)", min=0.0)
+        self.parameter("alpha_ref", ALPHA_REF, "rad/s2", "acceleration of the driving shaft "
+                       "over which J_load and J_load_dec are secants (the order of the "
+                       "accelerations the train sees). Assumption", min=0.0)
         self.parameter("map_torque_max", 30.0, "N.m", "largest |tau_out| in the loss map", min=0.0)
         self.parameter("map_speed_max", 350.0, "rad/s", "largest |w_in| in the loss map", min=0.0)
         self.input("w_in", 0.0, "rad/s", "speed of the driving shaft")
         self.input("tau_out", 0.0, "N.m", "torque the load applies on the driven shaft")
-        self.input("alpha_in", 0.0, "rad/s2", "mean acceleration of the driving shaft over the "
-                   "last step (from its integrator); used with J_out")
+        self.input("alpha_in", 0.0, "rad/s2", "acceleration of the driving shaft (from its "
+                   "integrator's equation of motion); used with J_out")
         self.output("w_out", 0.0, "rad/s", "speed of the driven shaft", depends=("w_in",))
         # alpha_in acts through J_out (0 by default); declared, so that the dependencies hold
         # for every parameter value
@@ -158,7 +161,7 @@ class CycloidDrive(UnitSlave):
         self.output("tau_in_static", 0.0, "N.m", "tau_in without the torque that accelerates "
                     "J_out (for the driving side's integrator)", depends=both)
         self.output("J_load", 0.0, "kg.m2", "J_out as the driving shaft feels it through the "
-                    "reducer", depends=both)
+                    "reducer while it speeds up (|w_in| rising)", depends=both)
         self.output("torque_out", 0.0, "N.m", "torque the driven shaft delivers to the load side, "
                     "J_out's inertial torque included (what a transducer there reads)",
                     depends=both)
@@ -169,6 +172,8 @@ class CycloidDrive(UnitSlave):
                     "of P_extra, not a loss)", depends=both)
         for n in OUTPUT_LOSSES[5:]:      # after the older outputs: their value references stay
             self.output(n, 0.0, "W", f"partial loss {n}: {_LOSS_TEXT[n]}", depends=both)
+        self.output("J_load_dec", 0.0, "kg.m2", "J_out as the driving shaft feels it through the "
+                    "reducer while it slows down (|w_in| falling)", depends=both)
         self._theta = 0.0
         self._slope_key = None
         self._w_last = None
@@ -211,6 +216,8 @@ class CycloidDrive(UnitSlave):
                     raise core.CycloidInputError(name, v, "must be a positive number")
             if not (math.isfinite(self.J_out) and self.J_out >= 0):
                 raise core.CycloidInputError("J_out", self.J_out, "must not be negative")
+            if not (math.isfinite(self.alpha_ref) and self.alpha_ref > 0):
+                raise core.CycloidInputError("alpha_ref", self.alpha_ref, "must be positive")
             self._map = None if self.exact else core.lossmap.ModeMap(
                 self._design, self._mode, self.map_torque_max, self.map_speed_max)
             ex = self._design.extra
@@ -223,7 +230,7 @@ class CycloidDrive(UnitSlave):
             self._order = self._design.z1 * abs(float(unit["1"] - unit["S"])) / abs(float(unit[a]))
         except (core.CycloidInputError, TypeError, ValueError) as exc:
             self.fail(f"invalid parameter: {exc}")
-        self._theta, self._w_last = 0.0, None
+        self._theta, self._w_last, self._slope_key = 0.0, None, None
 
     def _evaluate_init(self):
         if self._in_init:   # a read in Initialization Mode: commit no dynamic state
@@ -249,27 +256,32 @@ class CycloidDrive(UnitSlave):
         self._update_at(t, dt, w_in, tau_out)
         self.torque_out = -tau_out
         if J_r == 0.0:
-            self.tau_in_static, self.J_load = self.tau_in, 0.0
+            self.tau_in_static, self.J_load, self.J_load_dec = self.tau_in, 0.0, 0.0
             return
         gear = self._tau_in_gear
         static = self._gear_torque(w_in, tau_ext)
-        # the slope over a small acceleration of the last step's sign: which side of the
-        # efficiency's kink (forward or back-driven) the inertia is on, not how large the last
-        # acceleration was (a secant over it would feed it back with one step's delay)
-        if abs(alpha) > _ALPHA_MIN:
-            J_load = (gear - static) / alpha
+        # the driving torque as a function of the driving shaft's acceleration a, for the
+        # integrator: tau_in_static + J_load a while the shaft speeds up (a w > 0), + J_load_dec
+        # a while it slows down (a w < 0: the load's inertia back-drives); the slopes are
+        # secants over +-alpha_ref, the order of the accelerations the train sees, so that
+        # they depend on the operating point only: the efficiency's kink (forward against
+        # back-driven) lies between the two sides, and the integrator picks the side at each
+        # of its sub-steps. A secant over the present acceleration would feed the acceleration
+        # back into the slope one step late (a two-step oscillation after every kink)
+        key = self._slope_key
+        if (key is not None and abs(w_in - key[0]) <= _SLOPE_REUSE * abs(key[0])
+                and abs(tau_ext - key[1]) <= _SLOPE_REUSE * abs(key[1])):
+            J_acc, J_dec = key[2], key[3]   # steady: the slopes of the last step still hold
         else:
-            a = _ALPHA_MIN if alpha >= 0 else -_ALPHA_MIN
-            key = self._slope_key
-            if (key is not None and key[0] == a and abs(w_in - key[1]) <= _SLOPE_REUSE * abs(key[1])
-                    and abs(tau_ext - key[2]) <= _SLOPE_REUSE * abs(key[2])):
-                J_load = key[3]          # steady: the slope of the last step still holds
-            else:
-                J_load = (self._gear_torque(w_in, tau_ext - J_r * a) - static) / a
-                self._slope_key = (a, w_in, tau_ext, J_load)
-        if not (math.isfinite(J_load) and J_load > 0):    # standstill in the exact core
-            J_load = J_r * self._ratio_out
-        self.J_load = J_load
+            A = self.alpha_ref if w_in >= 0 else -self.alpha_ref    # speeding up
+            J_acc = (self._gear_torque(w_in, tau_ext - J_r * A) - static) / A
+            J_dec = (static - self._gear_torque(w_in, tau_ext + J_r * A)) / A
+            lossless = J_r * self._ratio_out
+            # standstill in the exact core, or locked: the lossless reflection
+            J_acc = J_acc if (math.isfinite(J_acc) and J_acc > 0) else lossless
+            J_dec = J_dec if (math.isfinite(J_dec) and J_dec > 0) else lossless
+            self._slope_key = (w_in, tau_ext, J_acc, J_dec)
+        self.J_load, self.J_load_dec = J_acc, J_dec
         self.tau_in_static = self.tau_in - (gear - static)
 
     def _gear_torque(self, w_in, tau_out):

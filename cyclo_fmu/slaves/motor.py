@@ -42,14 +42,18 @@ class InductionMotor(UnitSlave):
         self.parameter("w_start", 0.0, "rad/s", "initial speed")
         self.input("tau_shaft", 0.0, "N.m", "torque the motor delivers into the shaft, without the "
                    "load's inertia (reducer tau_in_static)")
-        self.input("J_load", 0.0, "kg.m2", "inertia of the load seen at the motor shaft (reducer "
-                   "J_load), integrated here")
-        self.output("alpha", 0.0, "rad/s2", "mean shaft acceleration over the last step, from "
-                    "the integrator's own state")
+        self.input("J_load", 0.0, "kg.m2", "inertia of the load seen at the motor shaft while "
+                   "the shaft speeds up (reducer J_load), integrated here")
+        self.output("alpha", 0.0, "rad/s2", "shaft acceleration at the end of the step, from the "
+                    "integrator's own state (its equation of motion there)")
         self.output("w", 0.0, "rad/s", "shaft speed")
         self.output("T_em", 0.0, "N.m", "electromagnetic torque")
         self.output("frequency", 0.0, "Hz", "stator frequency after the ramp")
         self.output("P_mech", 0.0, "W", "mechanical power T_em*w")
+        # after the older variables: their value references stay
+        self.input("J_load_dec", -1.0, "kg.m2", "inertia of the load seen at the motor shaft "
+                   "while the shaft slows down (reducer J_load_dec; through a reducer it differs "
+                   "from J_load by the two efficiencies); negative: the same as J_load")
         self._t = 0.0
 
     #: at the start the outputs follow w_start and the motor's curve; not the inertia, ramp or
@@ -99,15 +103,23 @@ class InductionMotor(UnitSlave):
         self.P_mech = self.T_em * self.w
 
     def do_step(self, current_time, step_size):
-        tau, J_load = self.tau_shaft, self.J_load
-        if not (math.isfinite(tau) and math.isfinite(J_load) and J_load >= 0):
-            self.require_finite(tau_shaft=tau, J_load=J_load)
-            self.fail(f"J_load = {J_load!r}: input must not be negative")
+        tau, J_acc, J_dec = self.tau_shaft, self.J_load, self.J_load_dec
+        if not (math.isfinite(tau) and math.isfinite(J_acc) and J_acc >= 0
+                and math.isfinite(J_dec)):
+            self.require_finite(tau_shaft=tau, J_load=J_acc, J_load_dec=J_dec)
+            self.fail(f"J_load = {J_acc!r}: input must not be negative")
+        if J_dec < 0:
+            J_dec = J_acc
         n = max(1, int(math.ceil(step_size / _SUBSTEP - 1e-9)))
         h = step_size / n
-        m, J = self._motor, self._motor.inertia + J_load
+        m = self._motor
+        # the whole rigid train: the load's torque grows with the acceleration by J_load while
+        # the shaft speeds up and by J_load_dec while it slows down, so (J + J_side) dw/dt =
+        # T_em - tau_shaft, the side following from the signs of the right-hand side and of w
+        # (J + J_side > 0), decided at every sub-step, not once per communication step
+        inv_acc, inv_dec = 1.0 / (m.inertia + J_acc), 1.0 / (m.inertia + J_dec)
         torque = self._torque
-        w0 = w = self.w
+        w = self.w
         f = self.frequency
         df = m.ramp_rate * h
         # the setpoint changes at most at the series' or schedule's steps: evaluated at the
@@ -116,8 +128,12 @@ class InductionMotor(UnitSlave):
         for k in range(n):
             target = s0 if s0 == s1 else self._setpoint(current_time + k * h)
             f = target if abs(target - f) <= df else f + math.copysign(df, target - f)
-            w += h * (torque(w, f) - tau) / J
+            r = torque(w, f) - tau
+            w += h * r * (inv_acc if (r >= 0) == (w >= 0) else inv_dec)
         self.w, self.frequency = w, f
-        self.alpha = (w - w0) / step_size
-        self._outputs()
+        T_em = torque(w, f)
+        r = T_em - tau
+        self.alpha = r * (inv_acc if (r >= 0) == (w >= 0) else inv_dec)
+        self.T_em = T_em
+        self.P_mech = T_em * w
         return True
