@@ -201,13 +201,26 @@ def test_schedule_given_two_ways_is_an_error():
                  "brake.schedule_value_2": 7.0}
 
 
-def test_lean_master_gives_fmpys_numbers(fmu_dir):
-    """The package's master (cached value references, raw FMI calls) and fmpy's SSP master run
-    the same SSP to the same numbers, schedules included."""
-    from cyclo_fmu.bench import scenario
+def test_lean_master_gives_fmpys_numbers(fmu_dir, tmp_path):
+    """The package's master (cached value references, raw FMI calls) with Jacobi coupling and
+    fmpy's SSP master run the same SSP to the same numbers, schedules included."""
+    from cyclo_fmu.bench import bench_parameters, run_fmus, scenario
     sc = scenario("loadstep", "S2")
-    lean = run_bench(sc, fmu_dir, master="lean").result
-    ref = run_bench(sc, fmu_dir, master="fmpy").result
+    lean = run_fmus(fmu_dir, bench_parameters(sc, Sensors()), sc.stop_time, coupling="jacobi")
+    ref = run_ssp(build_ssp(tmp_path / "TestBench.ssp", fmu_dir, sc), sc.stop_time)
     n = min(len(lean), len(ref))
     for name in lean.dtype.names:
         np.testing.assert_allclose(lean[name][:n], ref[name][:n], rtol=1e-9, atol=1e-9)
+
+
+def test_gauss_seidel_rows_hold_one_instant(fmu_dir):
+    """The default coupling: the reducer's output speed and the transducers' readings in a
+    row belong to the motor's speed of the same row (Jacobi: one step behind per connection)."""
+    from cyclo_fmu.bench import bench_parameters, run_fmus, scenario
+    sc = scenario("runup", "S1")
+    r = run_fmus(fmu_dir, bench_parameters(sc, Sensors(ideal=True)), 0.5)
+    np.testing.assert_allclose(r["drive.w_out"], r["motor.w"] / 15, rtol=1e-12)
+    np.testing.assert_allclose(r["n_in.y"], r["motor.w"] * RPM_PER_RAD_S, rtol=1e-12)
+    np.testing.assert_allclose(r["t_in.y"], r["drive.tau_in"], rtol=1e-12)
+    with pytest.raises(ValueError, match="coupling"):
+        run_fmus(fmu_dir, {}, 0.01, coupling="implicit")

@@ -171,7 +171,7 @@ def test_model_description_metadata(native, fmu):
     # tau_in_static, torque_out) is the Python FMU's only (issue 9, bench); _failed: the Python
     # FMU's flag for its C status front
     assert set(py) - set(var) == {"exact", "J_out", "alpha_in", "J_load", "tau_in_static",
-                                  "torque_out", "_failed"}
+                                  "torque_out", "_failed", "J_load_dec", "alpha_ref"}
     for name, v in py.items():
         if name in var:
             assert (var[name].type, var[name].unit) == (v.type, v.unit), name

@@ -88,7 +88,17 @@ class UnitSlave(Fmi2Slave):
                                        "or fmi2DoStep failed (read by the FMU's C front, which "
                                        "returns fmi2Error)"))
         step = self.do_step
-        self.do_step = lambda t, h: self._guarded(step, t, h)
+
+        def guarded_step(t, h):
+            # _guarded, inlined: a step is the hot path of a co-simulation
+            self._failed = False
+            try:
+                result = step(t, h)
+            except Exception as exc:   # noqa: BLE001 - reported as fmi2Error, never lost
+                return self._failure(exc)
+            return True if result is None else result
+        self.do_step = guarded_step
+        self._real_names = None      # value reference -> attribute, built at the first get/set
         self._units = {}
         self._quantity = {}      # name -> quantity (overrides QUANTITIES)
         self._display = {}       # name -> display unit (overrides DISPLAY_UNITS' first)
@@ -182,12 +192,17 @@ class UnitSlave(Fmi2Slave):
             result = fn(*args)
             return True if result is None else result
         except Exception as exc:   # noqa: BLE001 - reported as fmi2Error, never lost
-            if not isinstance(exc, _Failure):
-                self.log(f"{type(exc).__name__}: {exc}", Fmi2Status.error, "logStatusError")
-            if not STATUS_FRONT:
-                raise
-            self._failed = True
-            return False        # do_step: fmi2Discard from pythonfmu, which the front reads
+            return self._failure(exc)
+
+    def _failure(self, exc):
+        """Log an exception (``fail`` logged its own) and, with the C front, set ``_failed``
+        and return False; elsewhere re-raise it."""
+        if not isinstance(exc, _Failure):
+            self.log(f"{type(exc).__name__}: {exc}", Fmi2Status.error, "logStatusError")
+        if not STATUS_FRONT:
+            raise exc
+        self._failed = True
+        return False        # do_step: fmi2Discard from pythonfmu, which the front reads
 
     def require_finite(self, **values):
         for name, v in values.items():
@@ -245,9 +260,28 @@ class UnitSlave(Fmi2Slave):
         except Exception:      # noqa: BLE001 - logged by fail(); reported at the exit
             pass
 
+    def _real_attributes(self):
+        self._real_names = {vr: v.local_name for vr, v in self.vars.items()
+                            if isinstance(v, Real)}
+        return self._real_names
+
     def get_real(self, vrs):
-        self._refresh_init()
-        return super().get_real(vrs)
+        # pythonfmu's get_real, over value references resolved once
+        if self._in_init:
+            self._refresh_init()
+        names = self._real_names or self._real_attributes()
+        try:
+            return [float(getattr(self, names[vr])) for vr in vrs]
+        except KeyError:
+            return super().get_real(vrs)        # its TypeError for a non-Real
+
+    def set_real(self, vrs, values):
+        names = self._real_names or self._real_attributes()
+        try:
+            for vr, value in zip(vrs, values):
+                setattr(self, names[vr], value)
+        except KeyError:
+            super().set_real(vrs, values)
 
     def get_boolean(self, vrs):
         self._refresh_init()

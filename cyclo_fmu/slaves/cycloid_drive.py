@@ -259,6 +259,8 @@ class CycloidDrive(UnitSlave):
             self.tau_in_static, self.J_load, self.J_load_dec = self.tau_in, 0.0, 0.0
             return
         gear = self._tau_in_gear
+        # exact, not gear less a slope times alpha: the map's curvature would then feed the
+        # acceleration back into the integrator's torque (an oscillation at the step rate)
         static = self._gear_torque(w_in, tau_ext)
         # the driving torque as a function of the driving shaft's acceleration a, for the
         # integrator: tau_in_static + J_load a while the shaft speeds up (a w > 0), + J_load_dec
