@@ -324,7 +324,7 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
     src = np.array([out_index[feeds[key]] for key in inputs], dtype=np.intp)
     size = ctypes.sizeof(fmi2Real)
     fmi2Status = ctypes.c_int
-    comps, calls, unpacked, libs = [], {}, {}, []
+    comps, calls, unpacked, libs, raw = [], {}, {}, [], {}
     try:
         for name, (fmu, connectors) in COMPONENTS.items():
             path = str(Path(fmu_dir) / f"{fmu}.fmu")
@@ -379,6 +379,8 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
                      for c, k in connectors if k == "input"]
             calls[name] = (name, ctypes.c_void_p(f.component), set_real, do_step, get_real,
                            block(in_index), block(out_index), links)
+            raw[name] = (f.component, *(ctypes.cast(fn, ctypes.c_void_p).value
+                                        for fn in (set_real, do_step, get_real)))
         calls = [calls[name] for name in ORDER]
         gauss = coupling == "gauss-seidel"
         if gauss:
@@ -404,6 +406,10 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
         rows = np.empty((n_steps, len(fields)))
         bar = _progress(progress, n_steps, "bench")
         tick = max(1, n_steps // 100)
+        loop = _c_loop()
+        if loop is not None:
+            loop(calls, raw, buf, rows, n_steps, step, gauss, bar)
+            n_steps = 0                  # done
         for k in range(n_steps):
             t = k * step
             for name, comp, set_real, do_step, get_real, ins, outs, links in calls:
@@ -424,6 +430,7 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
                 bar.update(min(tick, n_steps - k))
         if bar is not None:
             bar.close()
+        n_steps = len(rows)
     finally:
         import _ctypes
         for lib in libs:         # our reference to the library; fmpy frees its own
@@ -439,6 +446,97 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
     for i, fl in enumerate(fields):
         out[fl] = rows[:, i]
     return out
+
+
+#: the C loop's source (cyclo_fmu/native/bench_loop.c), compiled once per source version into
+#: the user's cache folder; without a C compiler run_fmus keeps its Python loop
+_LOOP_SOURCE = Path(__file__).resolve().parent / "native" / "bench_loop.c"
+_LOOP = {}
+
+
+def _c_loop():
+    """The C inner loop as a callable (calls, raw, buf, rows, n_steps, step, gauss, bar), or
+    None when it cannot be compiled (the Python loop runs instead)."""
+    if "fn" in _LOOP:
+        return _LOOP["fn"]
+    _LOOP["fn"] = None
+    try:
+        _LOOP["fn"] = _compile_loop()
+    except Exception as exc:   # noqa: BLE001 - the Python loop is the same master, slower
+        import sys
+        print(f"note: the bench runs its Python loop ({exc})", file=sys.stderr)
+    return _LOOP["fn"]
+
+
+def _compile_loop():
+    import ctypes
+    import hashlib
+    import os
+    import subprocess
+    import sys
+
+    from .native.build import find_compiler
+    if os.environ.get("CYCLOFMU_PYTHON_LOOP"):
+        return None
+    source = _LOOP_SOURCE.read_bytes()
+    tag = hashlib.sha256(source + sys.platform.encode()).hexdigest()[:16]
+    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "cyclo-fmu"
+    lib_path = cache / f"bench_loop_{tag}.so"
+    if not lib_path.is_file():
+        cache.mkdir(parents=True, exist_ok=True)
+        tmp = lib_path.with_suffix(f".{os.getpid()}.tmp")
+        r = subprocess.run([find_compiler(), "-O2", "-shared", "-fPIC", "-o", str(tmp),
+                            str(_LOOP_SOURCE)], capture_output=True, text=True)
+        if r.returncode != 0:
+            raise RuntimeError(f"cc failed: {r.stderr.strip()[:200]}")
+        os.replace(tmp, lib_path)
+    # PyDLL: the GIL stays held through the loop, as the pythonfmu slaves it calls need it
+    fn = ctypes.PyDLL(str(lib_path)).bench_loop
+    fn.restype = ctypes.c_long
+    P = ctypes.c_void_p
+
+    def run(calls, raw, buf, rows, n_steps, step, gauss, bar):
+        n = len(calls)
+        arr = lambda ctype, values: (ctype * max(1, len(values)))(*values)   # noqa: E731
+        comps = arr(P, [raw[c[0]][0] for c in calls])
+        sets = arr(P, [raw[c[0]][1] for c in calls])
+        steps_ = arr(P, [raw[c[0]][2] for c in calls])
+        gets = arr(P, [raw[c[0]][3] for c in calls])
+        vr_p = ctypes.POINTER(ctypes.c_uint)
+        base = ctypes.addressof(buf)
+        size = ctypes.sizeof(ctypes.c_double)
+
+        def part(i):
+            blocks = [c[5 + i] for c in calls]
+            vrs = arr(vr_p, [ctypes.cast(b[0], vr_p) if b else None for b in blocks])
+            cnt = arr(ctypes.c_size_t, [b[1].value if b else 0 for b in blocks])
+            off = arr(ctypes.c_int, [(ctypes.cast(b[2], P).value - base) // size if b else 0
+                                     for b in blocks])
+            return vrs, cnt, off
+        in_vrs, n_in, in_off = part(0)
+        out_vrs, n_out, out_off = part(1)
+        starts, dst, src = [0], [], []
+        for c in calls:
+            for i, j in c[7]:
+                dst.append(i)
+                src.append(j)
+            starts.append(len(dst))
+        starts, dst, src = arr(ctypes.c_int, starts), arr(ctypes.c_int, dst), arr(ctypes.c_int, src)
+        fail = (ctypes.c_int * 3)()
+        chunk = n_steps if bar is None else max(1, n_steps // 100)
+        width = rows.shape[1]
+        for k0 in range(0, n_steps, chunk):
+            m = min(chunk, n_steps - k0)
+            ptr = rows.ctypes.data + k0 * width * size
+            bad = fn(n, comps, sets, steps_, gets, in_vrs, n_in, in_off, out_vrs, n_out, out_off,
+                     starts, dst, src, int(gauss), buf, len(buf), P(ptr), ctypes.c_long(k0),
+                     ctypes.c_long(m), ctypes.c_double(step), fail)
+            if bad:
+                function = ("fmi2SetReal", "fmi2DoStep", "fmi2GetReal")[fail[1]]
+                raise _fmu_error(calls[fail[0]][0], function, (bad - 1) * step)
+            if bar is not None:
+                bar.update(m)
+    return run
 
 
 def _fmu_error(name, function, t):

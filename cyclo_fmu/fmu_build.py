@@ -70,6 +70,9 @@ def build_fmu(name: str = "CycloidDrive", dest="dist") -> Path:
         ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
         shutil.copytree(HERE / "slaves", pkg, ignore=ignore)
         shutil.copytree(HERE.parent / "model_core", pkg / "_bundled_core", ignore=ignore)
+        if name == "CycloidDrive":   # the default design's maps, solved once here
+            from .slaves.cycloid_drive import write_shipped_maps
+            write_shipped_maps(pkg / "_maps")
         front = _have_compiler() and not os.environ.get("CYCLOFMU_NO_SHIM")
         if front:   # the slaves report failures to the C front (slaves.base.STATUS_FRONT)
             (pkg / "_status_front").write_text("linux64 binary: cyclo_fmu/native/"

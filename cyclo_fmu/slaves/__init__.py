@@ -8,7 +8,18 @@ names the module that is really missing."""
 import importlib.util
 
 if importlib.util.find_spec(__name__ + "._bundled_core") is not None:   # inside an FMU
+    import pkgutil
+
     from . import _bundled_core as core  # type: ignore[attr-defined]
+
+    # every FMU of a process shares this package as first imported, from the first FMU's
+    # unpacked folder, which its host may delete (fmpy does after a run): import the whole
+    # package now, so that no later import (another slave, a module the core imports on
+    # demand) looks for a file there
+    for _pkg in (core, importlib.import_module(__name__)):
+        for _m in pkgutil.iter_modules(_pkg.__path__):
+            if not _m.name.startswith("_"):
+                importlib.import_module(f"{_pkg.__name__}.{_m.name}")
 else:  # source tree / installed package
     import model_core as core
 

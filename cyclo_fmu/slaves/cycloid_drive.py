@@ -31,6 +31,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import pickle
+from pathlib import Path
 
 from . import core
 from .base import Boolean, Fmi2Status, Integer, Real, String, UnitSlave
@@ -109,6 +111,52 @@ ALPHA_REF = 2 * math.pi * 25.0
 _SLOPE_REUSE = 1e-3
 
 
+#: default ranges of the loss map (parameters map_torque_max, map_speed_max)
+MAP_TORQUE_MAX, MAP_SPEED_MAX = 30.0, 350.0
+#: modes whose map for the default design is solved when the FMU is built and shipped in it
+#: (the paper's two measured modes, the bench's): building the physical profile's map takes
+#: about 1.2 s, longer than the bench's 48 s paper scenario may take in all at 20x real time
+SHIPPED_MAP_MODES = ("S1", "S2")
+_MAP_DIR = Path(__file__).resolve().parent / "_maps"
+
+
+def _map_key(design, mode, torque_max, speed_max):
+    """What a loss map depends on: the whole design (profile included), mode and ranges."""
+    return (repr(design), mode, float(torque_max), float(speed_max))
+
+
+def write_shipped_maps(folder, modes=SHIPPED_MAP_MODES):
+    """Solve the default design's maps for ``modes`` and store them in ``folder`` (at build)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    import warnings
+
+    import numpy as np
+    design = core.DriveDesign()
+    for mode in modes:
+        # quiet as at an FMU's initialization: the map handles the points that do not run
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore", RuntimeWarning)
+            m = core.lossmap.ModeMap(design, mode, MAP_TORQUE_MAX, MAP_SPEED_MAX)
+        with open(folder / f"{mode}.pkl", "wb") as f:
+            pickle.dump({"key": _map_key(design, mode, MAP_TORQUE_MAX, MAP_SPEED_MAX),
+                         "state": m.__dict__}, f, protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def _shipped_map(key, folder=_MAP_DIR):
+    """The map shipped in ``folder`` for exactly this key, or None."""
+    path = Path(folder) / f"{key[1]}.pkl"
+    if not path.is_file():
+        return None
+    with open(path, "rb") as f:
+        data = pickle.load(f)
+    if data.get("key") != key:
+        return None
+    m = core.lossmap.ModeMap.__new__(core.lossmap.ModeMap)
+    m.__dict__.update(data["state"])
+    return m
+
+
 class CycloidDrive(UnitSlave):
     author = "cyclo-fmu"
     description = ("Constrained cycloid drive: load-dependent losses and efficiency "
@@ -134,8 +182,8 @@ class CycloidDrive(UnitSlave):
         self.parameter("alpha_ref", ALPHA_REF, "rad/s2", "acceleration of the driving shaft "
                        "over which J_load and J_load_dec are secants (the order of the "
                        "accelerations the train sees). Assumption", min=0.0)
-        self.parameter("map_torque_max", 30.0, "N.m", "largest |tau_out| in the loss map", min=0.0)
-        self.parameter("map_speed_max", 350.0, "rad/s", "largest |w_in| in the loss map", min=0.0)
+        self.parameter("map_torque_max", MAP_TORQUE_MAX, "N.m", "largest |tau_out| in the loss map", min=0.0)
+        self.parameter("map_speed_max", MAP_SPEED_MAX, "rad/s", "largest |w_in| in the loss map", min=0.0)
         self.input("w_in", 0.0, "rad/s", "speed of the driving shaft")
         self.input("tau_out", 0.0, "N.m", "torque the load applies on the driven shaft")
         self.input("alpha_in", 0.0, "rad/s2", "acceleration of the driving shaft (from its "
@@ -178,6 +226,7 @@ class CycloidDrive(UnitSlave):
         self._slope_key = None
         self._w_last = None
         self._map = None
+        self._map_key = None
         self._design = None
         self._warned_range = False
 
@@ -192,6 +241,15 @@ class CycloidDrive(UnitSlave):
         return dataclasses.replace(base, lubricant=dataclasses.replace(base.lubricant, **lub),
                                    friction=dataclasses.replace(base.friction, **fr),
                                    extra=dataclasses.replace(base.extra, **ex), **changes)
+
+    def _map_folder(self):
+        """This FMU's shipped maps: under its own resources (the FMUs of a bench share the
+        first-loaded copy of this package, whose folder may belong to another FMU)."""
+        if self.resources:
+            folder = Path(self.resources) / __package__ / "_maps"
+            if folder.is_dir():
+                return folder
+        return _MAP_DIR
 
     #: no step yet in Initialization Mode: no acceleration, no warm-up
     init_independent = ("input_inertia", "thermal_loss_change", "thermal_tau")
@@ -218,8 +276,16 @@ class CycloidDrive(UnitSlave):
                 raise core.CycloidInputError("J_out", self.J_out, "must not be negative")
             if not (math.isfinite(self.alpha_ref) and self.alpha_ref > 0):
                 raise core.CycloidInputError("alpha_ref", self.alpha_ref, "must be positive")
-            self._map = None if self.exact else core.lossmap.ModeMap(
-                self._design, self._mode, self.map_torque_max, self.map_speed_max)
+            # the map depends on design, mode and ranges only: solved once for them (Initialization
+            # Mode's reads and the exit validate the same parameters again)
+            map_key = _map_key(self._design, self._mode, self.map_torque_max,
+                               self.map_speed_max)
+            if self.exact:
+                self._map = None
+            elif self._map is None or self._map_key != map_key:
+                self._map = _shipped_map(map_key, self._map_folder()) or core.lossmap.ModeMap(
+                    self._design, self._mode, self.map_torque_max, self.map_speed_max)
+                self._map_key = map_key
             ex = self._design.extra
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
             self._dynamic_extra = bool(ex.input_inertia or ex.ripple_1x or ex.ripple_roller
