@@ -85,11 +85,16 @@ def test_runup_reaches_speed(fmu_dir):
     assert abs(_means(t, n, 3.0, 3.5) - n_end) < 0.002 * n_end      # steady
 
 
-@pytest.fixture(scope="module", params=["reversal", "loadstep"])
+@pytest.fixture(scope="module", params=[("reversal", "physical"), ("loadstep", "physical"),
+                                        ("reversal", "paper")], ids="-".join)
 def both_steps(request, fmu_dir):
-    """A scenario at 1 ms and at 0.25 ms (ideal sensors), in the default profile."""
-    sc = scenario(request.param)
-    return sc, {h: run_bench(sc, fmu_dir, sensors=IDEAL, step=h).recording for h in STEPS}
+    """A scenario at 1 ms and at 0.25 ms (ideal sensors), in a profile."""
+    name, profile = request.param
+    sc = scenario(name)
+    design = DriveDesign(profile=profile,
+                         losses="load_dependent" if profile == "paper" else "all")
+    return sc, {h: run_bench(sc, fmu_dir, sensors=IDEAL, step=h, design=design).recording
+                for h in STEPS}
 
 
 def _corners(sc):
@@ -166,6 +171,20 @@ def test_design_with_a_string_parameter_runs(fmu_dir, tmp_path):
     # fmpy's SSP master cannot set it: a clear error naming the parameter
     with pytest.raises(ValueError, match="drive.ring_rollers"):
         run_ssp(tmp_path / "TestBench.ssp", 0.01)
+
+
+def test_the_profile_reaches_the_reducer(fmu_dir):
+    """The design's profile is a parameter of the reducer FMU: a run in the paper profile has
+    the paper profile's steady efficiency, not the default's."""
+    import dataclasses
+    sc = dataclasses.replace(scenario("runup"), name="short", duration=3.0, hold=3.0, settle=2.0)
+    eta = {}
+    for profile, losses in (("paper", "load_dependent"), ("physical", "all")):
+        design = DriveDesign(profile=profile, losses=losses)
+        (w,) = run_bench(sc, fmu_dir, sensors=IDEAL, design=design).windows
+        assert abs(w["eta"] - w["eta_core"]) < 0.002, profile
+        eta[profile] = w["eta"]
+    assert abs(eta["paper"] - eta["physical"]) > 0.01
 
 
 def test_libcosim_runs_the_loadstep(fmu_dir, tmp_path):
