@@ -3,10 +3,11 @@
 Components (TestBench.ssp, SSP 1.0): ``motor`` (InductionMotor), ``drive`` (CycloidDrive),
 ``brake`` (FeltBrake) and four ``Transducer`` instances: ``t_in`` (HBM T22/20 on the input
 shaft), ``n_in`` (optical speed sensor), ``t_out`` and ``n_out`` (HBM T30FN on the output).
-Causality: the motor integrates the drive train and outputs speed and its mean acceleration;
+Causality: the motor integrates the rigid drive train and outputs speed and acceleration;
 reducer and brake take speed and give torque. The output-side inertia (brake drum, coupling,
 T30FN rotor) is a parameter of the reducer, which reflects it to the motor's integrator
-(``J_load``, ``tau_in_static``): no component differentiates a co-simulation input. Parameters: resources/<component>.ssv bound to each component in the .ssd
+(``tau_in_static``, ``J_load`` speeding up, ``J_load_dec`` slowing down): no component
+differentiates a co-simulation input. Parameters: resources/<component>.ssv bound to each component in the .ssd
 (libcosim applies them) and the same values in resources/TestBench.ssv, which ``run_ssp``
 passes to fmpy as ``parameter_set`` (fmpy ignores ParameterBindings). The paper's series steps the motor
 frequency and the brake torque; each pair is held to steady state.

@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import math
+import operator
 import sys
 from pathlib import Path
 from xml.etree.ElementTree import Element, SubElement
@@ -99,6 +100,7 @@ class UnitSlave(Fmi2Slave):
             return True if result is None else result
         self.do_step = guarded_step
         self._real_names = None      # value reference -> attribute, built at the first get/set
+        self._getters, self._setters = {}, {}   # per list of value references
         self._units = {}
         self._quantity = {}      # name -> quantity (overrides QUANTITIES)
         self._display = {}       # name -> display unit (overrides DISPLAY_UNITS' first)
@@ -263,25 +265,39 @@ class UnitSlave(Fmi2Slave):
     def _real_attributes(self):
         self._real_names = {vr: v.local_name for vr, v in self.vars.items()
                             if isinstance(v, Real)}
+        self._getters = {}
+        self._setters = {}
         return self._real_names
 
     def get_real(self, vrs):
-        # pythonfmu's get_real, over value references resolved once
+        # pythonfmu's get_real over value references resolved once per list of references
+        # (a master asks for the same list every step)
         if self._in_init:
             self._refresh_init()
-        names = self._real_names or self._real_attributes()
+        key = tuple(vrs)
         try:
-            return [float(getattr(self, names[vr])) for vr in vrs]
-        except KeyError:
-            return super().get_real(vrs)        # its TypeError for a non-Real
+            return self._getters[key](self)
+        except (KeyError, TypeError):
+            names = self._real_names or self._real_attributes()
+            if not all(vr in names for vr in key):
+                return super().get_real(vrs)        # its TypeError for a non-Real
+            attrs = [names[vr] for vr in key]
+            get = operator.attrgetter(*attrs)
+            self._getters[key] = ((lambda o: [float(get(o))]) if len(attrs) == 1 else
+                                  (lambda o: [float(v) for v in get(o)]))
+            return self._getters[key](self)
 
     def set_real(self, vrs, values):
-        names = self._real_names or self._real_attributes()
+        key = tuple(vrs)
         try:
-            for vr, value in zip(vrs, values):
-                setattr(self, names[vr], value)
-        except KeyError:
-            super().set_real(vrs, values)
+            attrs = self._setters[key]
+        except (KeyError, TypeError):
+            names = self._real_names or self._real_attributes()
+            if not all(vr in names for vr in key):
+                return super().set_real(vrs, values)
+            attrs = self._setters[key] = [names[vr] for vr in key]
+        for name, value in zip(attrs, values):
+            setattr(self, name, value)
 
     def get_boolean(self, vrs):
         self._refresh_init()

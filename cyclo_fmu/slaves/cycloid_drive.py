@@ -13,14 +13,14 @@ Forward motoring into a brake: tau_in*w_in > 0, tau_out*w_out < 0.
 
 Output-side inertia (``J_out``, default 0): the inertia on the driven shaft (brake drum,
 coupling, output transducer) is integrated by the driving side's integrator, not differentiated
-here. With the driving shaft's mean acceleration ``alpha_in`` of the last step (from the motor's
-integrator), the load on the driven shaft is tau_out - J_out r alpha_in (r = w_out/w_in), and
-all losses and ``tau_in`` are at that total torque. ``tau_in_static`` is the driving torque
-without the inertial part and ``J_load`` the output inertia as the driving shaft feels it
-through the reducer's efficiency, (tau_in(tau_out - J_out r a) - tau_in(tau_out))/a, a secant
-over the last step's acceleration a (at least _ALPHA_MIN): J_out r^2/eta forward, J_out r^2 eta'
-when the load back-drives.
-The motor integrates (J_motor + J_load) dw/dt = T_em - tau_in_static.
+here. With the driving shaft's acceleration ``alpha_in`` (from the motor's equation of motion),
+the load on the driven shaft is tau_out - J_out r alpha_in (r = w_out/w_in), and all losses and
+``tau_in`` are at that total torque. For the integrator the reducer describes its driving
+torque as a function of the driving shaft's acceleration a: ``tau_in_static`` (at a = 0) plus
+``J_load`` a while the shaft speeds up (a w_in > 0: J_out r^2/eta, the motor drives the load's
+inertia) or ``J_load_dec`` a while it slows down (J_out r^2 eta': the inertia back-drives the
+reducer), each a secant of the map over alpha_ref. The motor integrates
+(J_motor + J_side) dw/dt = T_em - tau_in_static and picks the side at every sub-step.
 
 Parameters: ``mode`` (12, 21, 1S, S1, 2S, S2) and the design values a system engineer varies
 (defaults: the paper's test drive). At initialization the full physics core is solved on a grid

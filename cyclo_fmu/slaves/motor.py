@@ -1,10 +1,12 @@
 """FMI slave: induction motor on a frequency regulator (Kloss curve, setpoint ramp, inertia).
 
 It owns the rotor inertia (rotor, coupling, input transducer rotor), integrates it and outputs
-the speed and its mean acceleration over the step (no direct feedthrough). In the bench the
-reducer reflects the output-side inertia here: ``J_load`` adds to J and ``tau_shaft`` is then the
-reducer's ``tau_in_static``. Input ``tau_shaft`` is the torque the motor delivers into
-the shaft towards the load (the reducer's ``tau_in``): J dw/dt = T_em(w, f) - tau_shaft.
+the speed and its acceleration at the end of the step from its own equation of motion (no
+direct feedthrough). In the bench it integrates the whole rigid train: the reducer reflects the
+output-side inertia here, ``J_load`` while the shaft speeds up and ``J_load_dec`` while it slows
+down, and ``tau_shaft`` is then the reducer's ``tau_in_static``:
+(J + J_side) dw/dt = T_em(w, f) - tau_shaft, the side chosen at every sub-step. Without a
+reducer ``tau_shaft`` is the torque the motor delivers into the shaft towards the load.
 """
 from __future__ import annotations
 
