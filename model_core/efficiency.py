@@ -35,8 +35,36 @@ from . import kinematics
 from .errors import CycloidInputError
 from .losses import LOSS_NAMES, PartialLosses, partial_losses
 
-_FIXED_POINT_TOL = 1e-9   # on eta0: the known torque is then reproduced to ~1e-8
+#: on g(eta0) = f(eta0) - eta0 [1]. T1 depends on eta0 through 1/(i0 eta0 - 1) in the modes
+#: with S driving (i0 = 16/15: about 40 times amplified), so 1e-9 left the losses converged to
+#: only ~1e-8; 1e-12 costs one secant step on part of the points and leaves ~1e-11
+_FIXED_POINT_TOL = 1e-12
 _FIXED_POINT_MAX = 30
+#: lower end of the searched basic efficiency [1]: below 0.1 % no drive runs
+_ETA0_FLOOR = 1e-3
+#: regula falsi on the bracket (points where the secant fails): the bracket's relative width
+#: at the end, adjacent floats (near the locking pole eta0 = i0 the ring torque is
+#: extremely sensitive to eta0), and the most steps (the bisection it replaces took 60)
+_BRACKET_RTOL = 2 * np.finfo(float).eps
+_BRACKET_MAX = 100
+
+
+def _state_subset(state, sel):
+    """The warm-start entries of the contact solver (arrays or tuples of arrays over the
+    points, leading axis) at the points ``sel``."""
+    return {k: (tuple(a[sel] for a in v) if isinstance(v, tuple) else v[sel])
+            for k, v in state.items()}
+
+
+def _state_update(state, sub, sel):
+    """Write the warm-start entries ``sub`` at the points ``sel`` back into ``state``."""
+    for k, v in sub.items():
+        old = state.get(k)
+        if old is None:
+            continue
+        for o, n in (zip(old, v) if isinstance(v, tuple) else ((old, v),)):
+            if o.shape[1:] == n.shape[1:]:
+                o[sel] = n
 
 
 def kreines_efficiency(mode: str, eta0, i0):
@@ -60,8 +88,17 @@ def basic_efficiency(T1, T2, w1, w2):
 
 
 def torque_coefficients(eta0, w, i0):
-    """(c1, c2, cS) with T_shaft = c * T1 by Kreines' rule and the torque balance."""
-    c2 = -i0 * np.where(w > 0, eta0, 1.0 / eta0)
+    """(c1, c2, cS) with T_shaft = c * T1 by Kreines' rule and the torque balance.
+
+    eta0 [1] basic efficiency, w = +1 where shaft 1 drives in the relative motion (T2 = -i0
+    eta0 T1) and -1 where it is driven (T2 = -i0 T1/eta0); a driven ring needs eta0 > 0: at
+    eta0 = 0 no torque reaches it (ValueError, naming the points)."""
+    eta0, w = np.broadcast_arrays(np.asarray(eta0, float), np.asarray(w, float))
+    driven = w <= 0
+    if np.any(driven & ~(eta0 > 0)):
+        raise ValueError(f"basic efficiency eta0 = {eta0[driven & ~(eta0 > 0)].flat[0]!r} with "
+                         "the ring driven: Kreines' rule needs eta0 > 0 there")
+    c2 = -i0 * np.divide(1.0, eta0, out=eta0.copy(), where=driven)
     return np.ones_like(c2), c2, -(1.0 + c2)
 
 
@@ -138,86 +175,160 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> Operat
     w = kinematics.shaft_speeds(mode, w_in, design.z1)
     w1p, w2p = kinematics.relative_speeds(w["1"], w["2"], w["S"])
     idx = {"1": 0, "2": 1, "S": 2}
+    # the solver works on flat arrays of the points (subsets of them are iterated on their own)
+    shape = T_known.shape
+    T_flat, w1p_f = T_known.reshape(-1), np.broadcast_to(w1p, shape).reshape(-1)
+    w2p_f = np.broadcast_to(w2p, shape).reshape(-1)
     # direction of the relative power flow from the frictionless torques
-    c_free = torque_coefficients(np.ones_like(T_known), np.ones_like(T_known), i0)
-    T1_free = T_known / c_free[idx[known]]
-    wdir = np.where(T1_free * w1p >= 0, 1.0, -1.0)
-    base = np.abs(w1p)
-    def guarded(eta0):
-        # with the known torque on S and shaft 2 driving relatively (w = -1), T1 = T_S/(i0/eta0 - 1)
-        # has a pole at the locking limit eta0 = i0: keep off it (such points are locked)
+    c_free = torque_coefficients(np.ones_like(T_flat), np.ones_like(T_flat), i0)
+    T1_free = T_flat / c_free[idx[known]]
+    wdir = np.where(T1_free * w1p_f >= 0, 1.0, -1.0)
+    base = np.abs(w1p_f)
+    physical = design.profile == "physical"
+    # the physical range of eta0 searched: (lo, 1]; with the known torque on S and shaft 2
+    # driving relatively (w = -1), T1 = T_S/(i0/eta0 - 1) has a pole at the locking limit
+    # eta0 = i0, so such points are searched above it (below, they are locked)
+    lo = np.where((wdir < 0) & (known == "S"), i0 * (1 + 1e-9), _ETA0_FLOOR)
+
+    def guarded(eta0, wd):
         if known != "S":
             return eta0
-        return np.where(wdir < 0, np.maximum(eta0, i0 * (1 + 1e-9)), eta0)
-
-    def ring_torque(eta0):
-        c = torque_coefficients(guarded(eta0), wdir, i0)[idx[known]]
-        return T_known / c
+        return np.where(wd < 0, np.maximum(eta0, i0 * (1 + 1e-9)), eta0)
 
     state = {}   # warm start of the contact solutions between iterations
     # load-independent losses (physical profile, losses = "all"): they depend on the speeds
     # only; loss power is frame-invariant, so they enter eta0 like the gear's own losses
-    if design.profile == "physical" and design.losses == "all":
+    if physical and design.losses == "all":
         from . import drag, thermal
         idle = drag.idle_losses(design, w, thermal.lubricant_viscosity(design))
-        idle = {k: np.broadcast_to(v, T_known.shape) for k, v in idle.items()}
+        idle = {k: np.broadcast_to(v, shape) for k, v in idle.items()}
     else:
         idle = {}
-    P_idle = sum(idle.values()) if idle else 0.0
+    P_idle = (np.broadcast_to(sum(idle.values()), shape).reshape(-1) if idle
+              else np.zeros_like(T_flat))
 
-    def eta0_from(eta0):
-        T1 = ring_torque(eta0)
+    def eta0_from(eta0, sel=None):
+        """f(eta0): the basic efficiency the losses give at the ring torque that eta0 implies,
+        at the points ``sel`` (index array; None: all). Returns (f, losses, T1)."""
+        full = sel is None
+        pick = (lambda v: v) if full else (lambda v: v[sel])
+        wd = pick(wdir)
+        c = torque_coefficients(guarded(eta0, wd), wd, i0)[idx[known]]
+        T1 = pick(T_flat) / c
         # physical profile: friction in the force balance. The gear's torque balance with its
         # losses makes the disc side carry |T2| = i0 eta0^w |T1| (less than the ring side's
         # frictionless share when the ring drives, more when the disc drives), so the disc
         # rollers' and the eccentric bearing's forces follow the power-flow direction
-        Td = (np.abs(T1) * i0 * np.where(wdir > 0, eta0, 1.0 / np.maximum(eta0, 1e-3))
-              if design.profile == "physical" else None)
-        L = partial_losses(design, np.abs(T1), w2p, state=state, disc_torque=Td,
-                           ring_flow=wdir if design.profile == "physical" else None)
+        Td = (np.abs(T1) * i0 * np.where(wd > 0, eta0, 1.0 / np.maximum(eta0, 1e-3))
+              if physical else None)
+        sub = state if full else _state_subset(state, sel)
+        L = partial_losses(design, np.abs(T1), pick(w2p_f), state=sub, disc_torque=Td,
+                           ring_flow=wd if physical else None)
+        if not full:
+            _state_update(state, sub, sel)
         with np.errstate(divide="ignore", invalid="ignore"):
-            x = np.where(T1 != 0, (L.total + P_idle) / (np.abs(T1) * base), 0.0)
-        return np.where(wdir > 0, 1.0 - x, 1.0 / (1.0 + x)), L, T1
+            x = np.where(T1 != 0, (L.total + pick(P_idle)) / (np.abs(T1) * pick(base)), 0.0)
+        return np.where(wd > 0, 1.0 - x, 1.0 / (1.0 + x)), L, T1
 
-    # secant iteration on g(eta0) = f(eta0) - eta0, started from the frictionless point
-    x0 = np.ones_like(T_known)
+    # secant iteration on g(eta0) = f(eta0) - eta0, started from the frictionless point; each
+    # point stops when it has converged (the others go on alone), and iterates are kept in the
+    # physical range [lo, 1] (f <= 1 always: the losses are not negative)
+    x0 = np.ones_like(T_flat)
     f0, _, _ = eta0_from(x0)
-    x1 = f0
+    x1 = np.clip(f0, lo, 1.0)
     f1, L, T1 = eta0_from(x1)
+    L = [np.array(getattr(L, n), float) for n in LOSS_NAMES]
     g0, g1 = f0 - x0, f1 - x1
+    # points whose iterate leaves the physical range go to the bracketed solver below
+    stuck = f0 < lo
+    active = np.flatnonzero((np.abs(g1) > _FIXED_POINT_TOL) & ~stuck)
     for _ in range(_FIXED_POINT_MAX):
-        if np.all(np.abs(g1) <= _FIXED_POINT_TOL):
+        if active.size == 0:
             break
-        denom = g1 - g0
+        xa, xb, ga, gb = x0[active], x1[active], g0[active], g1[active]
+        denom = gb - ga
         safe = np.abs(denom) > 1e-300
-        x2 = np.where(safe, x1 - g1 * (x1 - x0) / np.where(safe, denom, 1.0), f1)
-        x0, g0 = x1, g1
-        x1 = x2
-        f1, L, T1 = eta0_from(x1)
-        g1 = f1 - x1
-    # the secant can fail where the losses rival the power (very light load) or run into the
-    # locking pole; such points are solved again by bisection on the bracket (lo, 1], where
-    # g(1) <= 0. No root above lo: self-locking (known torque on S, w = -1) or a stall.
-    lo = np.where((wdir < 0) & (known == "S"), i0 * (1 + 1e-9), 1e-3)
+        x2 = np.where(safe, xb - gb * (xb - xa) / np.where(safe, denom, 1.0), f1[active])
+        # an iterate outside the physical range hands its point to the bracketed solver
+        out = ~((x2 >= lo[active]) & (x2 <= 1.0))
+        stuck[active[out]] = True
+        active, x2, xb, gb = active[~out], x2[~out], xb[~out], gb[~out]
+        if active.size == 0:
+            break
+        f2, L2, T12 = eta0_from(x2, active)
+        x0[active], g0[active] = xb, gb
+        x1[active], f1[active], g1[active], T1[active] = x2, f2, f2 - x2, T12
+        for arr, n in zip(L, LOSS_NAMES):
+            arr[active] = getattr(L2, n)
+        active = active[np.abs(g1[active]) > _FIXED_POINT_TOL]
 
-    def reproduced(eta0, T1):
-        c_k = torque_coefficients(guarded(eta0), wdir, i0)[idx[known]]
-        return np.abs(T1 * c_k - T_known) <= 1e-7 * np.abs(T_known) + 1e-300
+    def reproduced(eta0, T1, sel):
+        wd = wdir[sel]
+        c_k = torque_coefficients(guarded(eta0, wd), wd, i0)[idx[known]]
+        return np.abs(T1 * c_k - T_flat[sel]) <= 1e-7 * np.abs(T_flat[sel]) + 1e-300
 
-    ok = (np.abs(g1) <= 10 * _FIXED_POINT_TOL) & (f1 > lo) & (f1 <= 1) & reproduced(f1, T1)
+    allp = np.arange(T_flat.size)
+    ok = (~stuck & (np.abs(g1) <= 10 * _FIXED_POINT_TOL) & (f1 > lo) & (f1 <= 1)
+          & reproduced(f1, T1, allp))
     solvable = np.ones_like(ok)
-    if not np.all(ok):
-        g_lo = eta0_from(lo)[0] - lo
-        solvable = g_lo >= 0
-        a_, b_ = lo.copy(), np.ones_like(lo)
-        for _ in range(60):
-            mid = 0.5 * (a_ + b_)
-            gm = eta0_from(np.where(ok, x1, mid))[0] - mid
-            a_, b_ = np.where(gm >= 0, mid, a_), np.where(gm >= 0, b_, mid)
-        x1 = np.where(ok, x1, 0.5 * (a_ + b_))
-        f1, L, T1 = eta0_from(x1)
+    bad = np.flatnonzero(~ok)
+    if bad.size:
+        # the secant can fail where the losses rival the power (very light load) or run into
+        # the locking pole; such points are solved again on the bracket (lo, 1], where
+        # g(1) <= 0, by regula falsi (Illinois); no root above lo where g(lo) < 0
+        lo_b = lo[bad]
+        f_lo, L_lo, T1_lo = eta0_from(lo_b, bad)
+        g_lo = f_lo - lo_b
+        solvable[bad] = g_lo >= 0
+        # without a steady solution: the values at the bracket's lower end (torques and losses
+        # are reported NaN below, eta0 is the basic efficiency the losses give there)
+        x1[bad], f1[bad], T1[bad] = lo_b, f_lo, T1_lo
+        for arr, n in zip(L, LOSS_NAMES):
+            arr[bad] = getattr(L_lo, n)
+        keep = g_lo >= 0
+        bad, a_, ga_ = bad[keep], lo_b[keep], g_lo[keep]
+        b_ = np.ones_like(a_)
+        gb_ = eta0_from(b_, bad)[0] - b_ if bad.size else b_
+        xs, fs, Ts, gs = a_.copy(), ga_ + a_, T1[bad], ga_.copy()
+        Ls = [arr[bad] for arr in L]
+        live = np.ones(bad.size, bool)
+        side = np.zeros(bad.size)   # Illinois: which end was kept last (+1 b, -1 a)
+        for _ in range(_BRACKET_MAX):
+            if not live.any():
+                break
+            i = np.flatnonzero(live)
+            den = ga_[i] - gb_[i]
+            m = np.where(den != 0, (a_[i] * -gb_[i] + b_[i] * ga_[i]) / np.where(den != 0, den, 1.0),
+                         0.5 * (a_[i] + b_[i]))
+            m = np.where((m > a_[i]) & (m < b_[i]), m, 0.5 * (a_[i] + b_[i]))
+            fm, Lm, Tm = eta0_from(m, bad[i])
+            gm = fm - m
+            # keep the best point (smallest |g|): near the locking pole g is steep, so even the
+            # float next to the root leaves |g| ~ 1e-12
+            better = np.abs(gm) < np.abs(gs[i])
+            j = i[better]
+            xs[j], fs[j], Ts[j], gs[j] = m[better], fm[better], Tm[better], gm[better]
+            for arr, n in zip(Ls, LOSS_NAMES):
+                arr[j] = getattr(Lm, n)[better]
+            up = gm >= 0
+            a_[i] = np.where(up, m, a_[i])
+            b_[i] = np.where(up, b_[i], m)
+            # Illinois: halve the retained end's value when the same end is kept twice
+            gb_[i] = np.where(up, np.where(side[i] > 0, 0.5 * gb_[i], gb_[i]), gm)
+            ga_[i] = np.where(up, gm, np.where(side[i] < 0, 0.5 * ga_[i], ga_[i]))
+            side[i] = np.where(up, 1.0, -1.0)
+            live[i] = (gm != 0) & (b_[i] - a_[i] > _BRACKET_RTOL * b_[i])
+        x1[bad], f1[bad], T1[bad] = xs, fs, Ts
+        for arr, ls in zip(L, Ls):
+            arr[bad] = ls
+    L = PartialLosses(*(arr.reshape(shape) for arr in L))
+    f1, T1, solvable = f1.reshape(shape), T1.reshape(shape), solvable.reshape(shape)
+    wdir = wdir.reshape(shape)
+
+    def guarded_full(eta0):
+        return guarded(eta0, wdir)
     eta0 = f1   # consistent with the losses L evaluated at T1
-    c = torque_coefficients(guarded(eta0), wdir, i0)
+    c = torque_coefficients(guarded_full(eta0), wdir, i0)
     # all torques from T1 and eta0, so that Kreines' rule and the energy balance hold exactly;
     # the known torque is reproduced to the fixed-point tolerance (about 1e-9 relative)
     torques = {"1": T1 * c[0], "2": T1 * c[1], "S": T1 * c[2]}
