@@ -110,8 +110,9 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
     T = np.asarray(gear_torque, float)
     W = np.asarray(w2_rel, float)[..., None, None]
     # ring rollers (z1 per position)
+    # dedup: only the rollers that carry load somewhere in the batch (the others add zeros)
     phi, F = contact.ring_roller_forces(design, T, psi_ring, state, ("ring", gear),
-                                           dedup=dedup)
+                                        dedup=dedup, layout="compact" if dedup else "positions")
     omega_r = velocities.relative_ring_speed(W, design.z1)
     r_c = design.d_v1 / 2
     v_rt = velocities.profile_velocity(phi, design.e, design.z1, design.lam, r_c, omega_r)
@@ -154,8 +155,12 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
         PL5, PL6, F = PL5 * k, PL6 * k, F * k[..., None]
     # disc rollers (k per position)
     T_d = T if disc_torque is None else np.asarray(disc_torque, float)
-    theta, Q = contact.disc_roller_forces(design, T_d, psi_disc, state, ("disc", gear),
-                                          dedup=dedup)
+    # dedup: the disc rollers' losses depend on their forces alone, so they are evaluated at
+    # the distinct contact problems (dcls: the problem of each position class)
+    dcls, Q = contact.disc_roller_forces(design, T_d, psi_disc, state, ("disc", gear),
+                                         dedup=dedup, layout="distinct" if dedup else "positions")
+    if not dedup:
+        dcls = None
     W2 = W[..., 0]
     v_r2 = velocities.disc_rolling_speed(design.D_cz, W2)[..., None]
     PL2 = friction.rolling_resistance_loss(fr.rolling_disc, Q, v_r2)
@@ -183,13 +188,23 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
         PL3 = (M * spin2).sum(-1)
     PL2 = PL2.sum(-1)
     # eccentric bearing: relative speed of its rings is |w_p - w_S| = |w2 - wS| (Eq. 21)
-    F_EV, F_EH = contact.eccentric_bearing_force(design, phi, F, Q, ring_index, disc_index)
-    if ring_index is not None:
+    if ring_index is None:
+        F_EV, F_EH = contact.eccentric_bearing_force(design, phi, F, Q)
+    else:
+        d_index = disc_index if dcls is None else dcls[disc_index]
+        # the eccentric bearing at each distinct pair (ring class, disc problem) once
+        pairs, pair_index = np.unique(ring_index * (Q.shape[-2] + 1) + d_index,
+                                      return_inverse=True)
+        pair_index = pair_index.reshape(-1)
+        r_i, d_i = np.divmod(pairs, Q.shape[-2] + 1)
+        F_EV, F_EH = contact.eccentric_bearing_force(design, phi, F, Q, r_i, d_i)
         PL5, PL6 = PL5[..., ring_index], PL6[..., ring_index]
-        PL2, PL3 = PL2[..., disc_index], PL3[..., disc_index]
+        PL2, PL3 = PL2[..., d_index], PL3[..., d_index]
     F_E = np.hypot(F_EV, F_EH)
     Om = np.abs(W2)
     PL1 = friction.skf_frictional_moment(F_E, Om, design.d_p, design.D_p, nu, fr) * Om
+    if ring_index is not None:
+        PL1 = PL1[..., pair_index]
     return PL1, PL2, PL3, PL5, PL6
 
 
