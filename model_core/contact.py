@@ -139,7 +139,8 @@ class _Geometry:
     of distinct contact problems (cached per design and positions)."""
 
     __slots__ = ("angles", "levers", "clear", "rep_levers", "rep_clear", "cls", "inv", "_l", "_l2",
-                 "_c", "_l_m", "_c_m", "_no_clearance", "_sum_l2", "_sum_l19")
+                 "_c", "_l_m", "_c_m", "_no_clearance", "_sum_l2", "_sum_l19", "_compact_cache",
+                 "_cls_flat")
 
     def __init__(self, angles, levers, clear, dedup=True):
         # a roller at the end of the loaded half (sin = 0 up to rounding, e.g. sin(pi) = 1.2e-16)
@@ -173,6 +174,8 @@ class _Geometry:
         self._no_clearance = bool(np.all(self.rep_clear[lpos > 0] == 0))
         self._sum_l2 = np.sum(lpos * lpos, axis=-1)
         self._sum_l19 = np.sum(lpos ** (19.0 / 9.0), axis=-1)
+        self._compact_cache = {}
+        self._cls_flat = np.ascontiguousarray(self.cls[:, 0])
 
     @property
     def n_distinct(self):
@@ -231,7 +234,7 @@ class _Geometry:
             pos = dt > 0
             step = np.where(pos, (t - T) / np.where(pos, dt, 1.0), 0.0)
             rot = rot - step
-            if np.all(np.abs(step) <= _NEWTON_RTOL * np.abs(rot)):
+            if (np.abs(step) <= _NEWTON_RTOL * np.abs(rot)).all():
                 break
         return rot
 
@@ -240,8 +243,8 @@ class _Geometry:
 
         - "positions": at every position, shape (..., m, n); returns F.
         - "compact": at every position, only the rollers that carry load at some point of the
-          batch (padded with unloaded ones, whose forces are exactly zero): returns (F, sel),
-          F shaped (..., m, n_c) for the rollers ``sel`` (m, n_c) of the loaded half. Sums
+          batch (padded with unloaded ones, whose forces are exactly zero): returns (F, phi),
+          F shaped (..., m, n_c) for the rollers at the angles phi (m, n_c). Sums
           over the rollers are those of "positions" (the dropped terms are zeros).
         - "distinct": at the distinct problems only (rollers as sorted in the problem): returns
           (F, cls), F (..., n_d, n) and ``cls`` (m,) the problem of each position. Anything
@@ -259,21 +262,35 @@ class _Geometry:
             ex = (slice(None),) + (None,) * T.ndim
             f = contact_force(self._l[ex] * rot - self._c[ex], law, stiffness)
             f = np.where((self._l[ex] > 0) & (T[..., None] > 0), f, 0.0)
-            f = np.moveaxis(f, 0, -1)
-            return (f, self.cls[:, 0]) if layout == "distinct" else f[..., self.cls, self.inv]
+            f = f.transpose(tuple(range(1, f.ndim)) + (0,))
+            return (f, self._cls_flat) if layout == "distinct" else f[..., self.cls, self.inv]
         # a roller can carry load somewhere in the batch only if it does at the largest
         # rotation (the approach l*rot - Delta grows with rot)
         r_max = rot.reshape(-1, self.n_distinct).max(0) if rot.size else np.zeros(
             self.n_distinct)
-        loaded = ((self._l * r_max - self._c > 0) & (self._l > 0)).T      # (n_d, n)
-        at_pos = loaded[self.cls, self.inv]                                # (m, n)
-        n_c = max(int(at_pos.sum(-1).max()), 1)
-        sel = np.argsort(~at_pos, axis=-1, kind="stable")[:, :n_c]
+        loaded = (self._l * r_max - self._c > 0) & (self._l > 0)           # (n, n_d)
+        angles, l_s, c_s, cls = self._compact(loaded)
         # the same approach l*rot - Delta per roller as above, at the selected rollers only
-        roller = np.take_along_axis(self.inv, sel, -1)
-        l_s, c_s = self._l.T[self.cls, roller], self._c.T[self.cls, roller]   # (m, n_c)
-        f = contact_force(l_s * rot[..., self.cls[:, 0], None] - c_s, law, stiffness)
-        return np.where((l_s > 0) & (T[..., None, None] > 0), f, 0.0), sel
+        f = contact_force(l_s * rot[..., cls, None] - c_s, law, stiffness)
+        return np.where((l_s > 0) & (T[..., None, None] > 0), f, 0.0), angles
+
+    def _compact(self, loaded):
+        """Rollers kept at each position for the rollers ``loaded`` (n, n_d) of the distinct
+        problems: (their angles (m, n_c), levers and clearances, the problem of each
+        position); cached per pattern (few occur)."""
+        key = loaded.tobytes()
+        hit = self._compact_cache.get(key)
+        if hit is None:
+            at_pos = loaded.T[self.cls, self.inv]                              # (m, n)
+            n_c = max(int(at_pos.sum(-1).max()), 1)
+            sel = np.argsort(~at_pos, axis=-1, kind="stable")[:, :n_c]
+            roller = np.take_along_axis(self.inv, sel, -1)
+            hit = (np.take_along_axis(self.angles, sel, -1), self._l.T[self.cls, roller],
+                   self._c.T[self.cls, roller], self._cls_flat)
+            if len(self._compact_cache) > 256:
+                self._compact_cache.clear()
+            self._compact_cache[key] = hit
+        return hit
 
 
 _GEOMETRY_CACHE: dict = {}
@@ -309,8 +326,8 @@ def _roller_set_forces(design, gear_torque, state, key, geom, width, dedup, layo
     if dedup:
         out = geom.forces(T, design.contact_law, stiff, state, key, layout)
         if layout == "compact":
-            F, sel = out
-            return np.take_along_axis(geom.angles, sel, -1), F
+            F, angles = out
+            return angles, F
         if layout == "distinct":
             F, cls = out
             return cls, F

@@ -198,6 +198,8 @@ class ExtraPhysics:
         import numpy as _np
         from .effects import EFFECTS
         w = _np.asarray(w, float)
+        if not (self.drag_torque or self.stribeck_torque):
+            return _np.zeros(w.shape)
         s = {"w_in": _np.atleast_1d(w).ravel()}
         t = self.drag_torque * EFFECTS["load_independent_loss"].basis(
             s, self.drag_exponent)[:, 0]

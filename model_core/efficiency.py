@@ -210,7 +210,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> Operat
     def eta0_from(eta0, sel=None):
         """f(eta0): the basic efficiency the losses give at the ring torque that eta0 implies,
         at the points ``sel`` (index array; None: all). Returns (f, losses, T1)."""
-        full = sel is None
+        full = sel is None or sel.size == T_flat.size
         pick = (lambda v: v) if full else (lambda v: v[sel])
         wd = pick(wdir)
         c = torque_coefficients(guarded(eta0, wd), wd, i0)[idx[known]]
@@ -256,11 +256,12 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> Operat
         if active.size == 0:
             break
         f2, L2, T12 = eta0_from(x2, active)
-        x0[active], g0[active] = xb, gb
-        x1[active], f1[active], g1[active], T1[active] = x2, f2, f2 - x2, T12
+        at = slice(None) if active.size == T_flat.size else active   # all: no index copies
+        x0[at], g0[at] = xb, gb
+        x1[at], f1[at], g1[at], T1[at] = x2, f2, f2 - x2, T12
         for arr, n in zip(L, LOSS_NAMES):
-            arr[active] = getattr(L2, n)
-        active = active[np.abs(g1[active]) > _FIXED_POINT_TOL]
+            arr[at] = getattr(L2, n)
+        active = active[np.abs(f2 - x2) > _FIXED_POINT_TOL]
 
     def reproduced(eta0, T1, sel):
         wd = wdir[sel]

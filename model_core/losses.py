@@ -191,12 +191,8 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
     if ring_index is None:
         F_EV, F_EH = contact.eccentric_bearing_force(design, phi, F, Q)
     else:
-        d_index = disc_index if dcls is None else dcls[disc_index]
-        # the eccentric bearing at each distinct pair (ring class, disc problem) once
-        pairs, pair_index = np.unique(ring_index * (Q.shape[-2] + 1) + d_index,
-                                      return_inverse=True)
-        pair_index = pair_index.reshape(-1)
-        r_i, d_i = np.divmod(pairs, Q.shape[-2] + 1)
+        d_index, r_i, d_i, pair_index = _bearing_pairs(ring_index, disc_index, dcls,
+                                                       Q.shape[-2])
         F_EV, F_EH = contact.eccentric_bearing_force(design, phi, F, Q, r_i, d_i)
         PL5, PL6 = PL5[..., ring_index], PL6[..., ring_index]
         PL2, PL3 = PL2[..., d_index], PL3[..., d_index]
@@ -206,6 +202,27 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
     if ring_index is not None:
         PL1 = PL1[..., pair_index]
     return PL1, PL2, PL3, PL5, PL6
+
+
+_PAIR_CACHE: dict = {}
+
+
+def _bearing_pairs(ring_index, disc_index, dcls, n_disc):
+    """Distinct (ring class, disc problem) pairs of the gear positions, for the eccentric
+    bearing: (disc index of each position, ring and disc index of each pair, pair of each
+    position). Cached on the (cached) index arrays themselves."""
+    key = (id(ring_index), id(disc_index), id(dcls), n_disc)
+    hit = _PAIR_CACHE.get(key)
+    if hit is not None and hit[0] is ring_index and hit[1] is disc_index and hit[2] is dcls:
+        return hit[3]
+    d_index = disc_index if dcls is None else dcls[disc_index]
+    pairs, pair_index = np.unique(ring_index * (n_disc + 1) + d_index, return_inverse=True)
+    r_i, d_i = np.divmod(pairs, n_disc + 1)
+    out = (d_index, r_i, d_i, pair_index.reshape(-1))
+    if len(_PAIR_CACHE) > 64:
+        _PAIR_CACHE.clear()
+    _PAIR_CACHE[key] = (ring_index, disc_index, dcls, out)
+    return out
 
 
 def contact_states(design, ring_torque, w2_rel, n_positions=None):
@@ -316,4 +333,6 @@ def partial_losses(design, ring_torque, w2_rel, n_positions=None, state=None,
     """Partial losses (W) averaged over a full mesh cycle; arrays shaped like the inputs."""
     _, by_pos = partial_losses_by_position(design, ring_torque, w2_rel, n_positions, state,
                                            dedup, disc_torque, ring_flow)
-    return PartialLosses(*(getattr(by_pos, n).mean(-1) for n in LOSS_NAMES))
+    # the mean over the positions (np.add.reduce / m is what ndarray.mean computes)
+    return PartialLosses(*(np.add.reduce(getattr(by_pos, n), -1) / by_pos.PL1.shape[-1]
+                           for n in LOSS_NAMES))
