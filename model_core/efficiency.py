@@ -236,34 +236,53 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
             x = np.where(T1 != 0, (L.total + pick(P_idle)) / (np.abs(T1) * pick(base)), 0.0)
         return np.where(wd > 0, 1.0 - x, 1.0 / (1.0 + x)), L, T1
 
-    # secant iteration on g(eta0) = f(eta0) - eta0, started from the frictionless point; each
-    # point stops when it has converged (the others go on alone), and iterates are kept in the
-    # physical range [lo, 1] (f <= 1 always: the losses are not negative)
+    # secant iteration on the fixed point eta0 = f(eta0), started from the frictionless point;
+    # each point stops when it has converged (the others go on alone), and iterates are kept in
+    # the physical range [lo, 1] (f <= 1 always: the losses are not negative). The variable is
+    # u = eta0 where shaft 1 drives relatively and u = 1/eta0 where it is driven: then f is
+    # 1 - x or 1/(1 + x), and the loss ratio x = P_L/|T1 w1'| is about affine in u (Coulomb
+    # losses keep x constant, speed-only losses make it grow as 1/|T1|, and |T1| goes as 1/u
+    # or as 1/(i0 u - 1) through Kreines' rule), so the secant on G(u) = u(f) - u is nearly
+    # exact even where the losses rival the power (on g = f - eta0 it crawled there)
+    inv = wdir < 0
+
+    def to_u(e, m):
+        return np.where(m, 1.0 / e, e)
+
     x0 = np.ones_like(T_flat)
     f0, _, _ = eta0_from(x0)
+    g_one = f0 - 1.0                       # g(1) <= 0: the upper end of every bracket
     x1 = np.clip(f0, lo, 1.0)
     f1, L, T1 = eta0_from(x1)
     L = [np.array(getattr(L, n), float) for n in LOSS_NAMES]
-    g0, g1 = f0 - x0, f1 - x1
-    # points whose iterate leaves the physical range go to the bracketed solver below
-    stuck = f0 < lo
+    u0, u1 = x0.copy(), to_u(x1, inv)
+    G0, G1 = to_u(f0, inv) - u0, to_u(f1, inv) - u1
+    g1 = f1 - x1
+    # points whose iterate leaves the physical range go to the bracketed solver below (a
+    # first step below lo is clipped: the secant from (1, g(1)) and (lo, g(lo)) goes on)
+    stuck = np.zeros(T_flat.shape, bool)
     active = np.flatnonzero((np.abs(g1) > _FIXED_POINT_TOL) & ~stuck)
     for _ in range(_FIXED_POINT_MAX):
         if active.size == 0:
             break
-        xa, xb, ga, gb = x0[active], x1[active], g0[active], g1[active]
-        denom = gb - ga
+        ua, ub, Ga, Gb = u0[active], u1[active], G0[active], G1[active]
+        denom = Gb - Ga
         safe = np.abs(denom) > 1e-300
-        x2 = np.where(safe, xb - gb * (xb - xa) / np.where(safe, denom, 1.0), f1[active])
+        u2 = np.where(safe, ub - Gb * (ub - ua) / np.where(safe, denom, 1.0), ub + Gb)
+        inv_a = inv[active]
+        x2 = np.where(inv_a, 1.0 / np.where(u2 > 0, u2, np.inf), u2)
         # an iterate outside the physical range hands its point to the bracketed solver
         out = ~((x2 >= lo[active]) & (x2 <= 1.0))
         stuck[active[out]] = True
-        active, x2, xb, gb = active[~out], x2[~out], xb[~out], gb[~out]
+        keep = ~out
+        active, x2, u2, ub, Gb, inv_a = (active[keep], x2[keep], u2[keep], ub[keep], Gb[keep],
+                                         inv_a[keep])
         if active.size == 0:
             break
         f2, L2, T12 = eta0_from(x2, active)
         at = slice(None) if active.size == T_flat.size else active   # all: no index copies
-        x0[at], g0[at] = xb, gb
+        u0[at], G0[at] = ub, Gb
+        u1[at], G1[at] = u2, to_u(f2, inv_a) - u2
         x1[at], f1[at], g1[at], T1[at] = x2, f2, f2 - x2, T12
         for arr, n in zip(L, LOSS_NAMES):
             arr[at] = getattr(L2, n)
@@ -284,6 +303,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         # the locking pole; such points are solved again on the bracket (lo, 1], where
         # g(1) <= 0, by regula falsi (Illinois); no root above lo where g(lo) < 0
         lo_b = lo[bad]
+        x_last, g_last = x1.copy(), g1.copy()
         f_lo, L_lo, T1_lo = eta0_from(lo_b, bad)
         g_lo = f_lo - lo_b
         solvable[bad] = g_lo >= 0
@@ -293,11 +313,15 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         for arr, n in zip(L, LOSS_NAMES):
             arr[bad] = getattr(L_lo, n)
         keep = g_lo >= 0
+        xl, gl = x_last[bad][keep], g_last[bad][keep]
+        Ls = [arr[bad][keep] for arr in L]
         bad, a_, ga_ = bad[keep], lo_b[keep], g_lo[keep]
-        b_ = np.ones_like(a_)
-        gb_ = eta0_from(b_, bad)[0] - b_ if bad.size else b_
         xs, fs, Ts, gs = a_.copy(), ga_ + a_, T1[bad], ga_.copy()
-        Ls = [arr[bad] for arr in L]
+        # the bracket (lo, 1], narrowed by the secant's last point in range
+        b_, gb_ = np.ones_like(a_), g_one[bad]
+        inside = (xl > a_) & (xl < b_)
+        a_, ga_ = np.where(inside & (gl >= 0), xl, a_), np.where(inside & (gl >= 0), gl, ga_)
+        b_, gb_ = np.where(inside & (gl < 0), xl, b_), np.where(inside & (gl < 0), gl, gb_)
         live = np.ones(bad.size, bool)
         side = np.zeros(bad.size)   # Illinois: which end was kept last (+1 b, -1 a)
         for _ in range(_BRACKET_MAX):
