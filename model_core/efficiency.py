@@ -53,14 +53,20 @@ def _state_subset(state, sel):
     """The warm-start entries of the contact solver (arrays or tuples of arrays over the
     points, leading axis) at the points ``sel``."""
     return {k: (tuple(a[sel] for a in v) if isinstance(v, tuple) else v[sel])
-            for k, v in state.items()}
+            for k, v in state.items() if not _is_memo(k)}
+
+
+def _is_memo(key):
+    """Keys of the loss model's memo of whole roller sides (losses._memoised): kept for the
+    whole batch only."""
+    return isinstance(key, tuple) and isinstance(key[0], str) and key[0].startswith("memo")
 
 
 def _state_update(state, sub, sel):
     """Write the warm-start entries ``sub`` at the points ``sel`` back into ``state``."""
     for k, v in sub.items():
         old = state.get(k)
-        if old is None:
+        if old is None or _is_memo(k):
             continue
         for o, n in (zip(old, v) if isinstance(v, tuple) else ((old, v),)):
             if o.shape[1:] == n.shape[1:]:
@@ -225,8 +231,13 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         # losses makes the disc side carry |T2| = i0 eta0^w |T1| (less than the ring side's
         # frictionless share when the ring drives, more when the disc drives), so the disc
         # rollers' and the eccentric bearing's forces follow the power-flow direction
-        Td = (np.abs(T1) * i0 * np.where(wd > 0, eta0, 1.0 / np.maximum(eta0, 1e-3))
-              if physical else None)
+        # (with the torque known on shaft 2 that is |T2| itself, the same in every iteration)
+        if not physical:
+            Td = None
+        elif known == "2":
+            Td = np.abs(pick(T_flat))
+        else:
+            Td = np.abs(T1) * i0 * np.where(wd > 0, eta0, 1.0 / np.maximum(eta0, 1e-3))
         sub = state if full else _state_subset(state, sel)
         L = partial_losses(design, np.abs(T1), pick(w2p_f), state=sub, disc_torque=Td,
                            ring_flow=wd if physical else None, dedup=dedup)
