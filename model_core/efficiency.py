@@ -99,11 +99,14 @@ def torque_coefficients(eta0, w, i0):
     eta0 [1] basic efficiency, w = +1 where shaft 1 drives in the relative motion (T2 = -i0
     eta0 T1) and -1 where it is driven (T2 = -i0 T1/eta0); a driven ring needs eta0 > 0: at
     eta0 = 0 no torque reaches it (ValueError, naming the points)."""
-    eta0, w = np.broadcast_arrays(np.asarray(eta0, float), np.asarray(w, float))
-    driven = w <= 0
-    if np.any(driven & ~(eta0 > 0)):
-        raise ValueError(f"basic efficiency eta0 = {eta0[driven & ~(eta0 > 0)].flat[0]!r} with "
-                         "the ring driven: Kreines' rule needs eta0 > 0 there")
+    eta0 = np.asarray(eta0, float)
+    driven = np.asarray(w) <= 0
+    if eta0.shape != driven.shape:
+        eta0, driven = np.broadcast_arrays(eta0, driven)
+    bad = driven & ~(eta0 > 0)
+    if bad.any():
+        raise ValueError(f"basic efficiency eta0 = {eta0[bad].flat[0]!r} with the ring driven: "
+                         "Kreines' rule needs eta0 > 0 there")
     c2 = -i0 * np.divide(1.0, eta0, out=eta0.copy(), where=driven)
     return np.ones_like(c2), c2, -(1.0 + c2)
 
@@ -243,8 +246,8 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
                            ring_flow=wd if physical else None, dedup=dedup)
         if not full:
             _state_update(state, sub, sel)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            x = np.where(T1 != 0, (L.total + pick(P_idle)) / (np.abs(T1) * pick(base)), 0.0)
+        num = L.total + pick(P_idle)
+        x = np.divide(num, np.abs(T1) * pick(base), out=np.zeros_like(num), where=T1 != 0)
         return np.where(wd > 0, 1.0 - x, 1.0 / (1.0 + x)), L, T1
 
     # secant iteration on the fixed point eta0 = f(eta0), started from the frictionless point;

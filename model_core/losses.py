@@ -335,6 +335,9 @@ def _mesh_entries(design, n_positions, gears, dedup):
     return hit
 
 
+_ALPHA_CACHE: dict = {}   # (z1, k, n_positions) -> mesh positions (read-only)
+
+
 def partial_losses_by_position(design, ring_torque, w2_rel, n_positions=None, state=None,
                                dedup=True, disc_torque=None, ring_flow=None):
     """Partial losses of the whole drive (both gears) at each mesh position, W.
@@ -349,7 +352,12 @@ def partial_losses_by_position(design, ring_torque, w2_rel, n_positions=None, st
     friction in the ring rollers' force balance); None: frictionless forces (the paper).
     Returns (alpha, PartialLosses with arrays shaped (..., n_alpha)).
     """
-    alpha = mesh_positions(design, n_positions)
+    key = (design.z1, design.n_disc_rollers, int(n_positions or design.n_positions))
+    alpha = _ALPHA_CACHE.get(key)
+    if alpha is None:
+        alpha = mesh_positions(design, n_positions)
+        alpha.flags.writeable = False
+        _ALPHA_CACHE[key] = alpha
     m = alpha.size
     T1 = np.abs(np.asarray(ring_torque, float))
     Tc = T1 * design.z_c / design.z1
