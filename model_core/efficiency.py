@@ -195,7 +195,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
     T_flat, w1p_f = T_known.reshape(-1), np.broadcast_to(w1p, shape).reshape(-1)
     w2p_f = np.broadcast_to(w2p, shape).reshape(-1)
     # direction of the relative power flow from the frictionless torques
-    c_free = torque_coefficients(np.ones_like(T_flat), np.ones_like(T_flat), i0)
+    c_free = torque_coefficients(1.0, 1.0, i0)
     T1_free = T_flat / c_free[idx[known]]
     wdir = np.where(T1_free * w1p_f >= 0, 1.0, -1.0)
     base = np.abs(w1p_f)
@@ -383,12 +383,16 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
     locked = flow_into_S & ((eta0 <= i0) | ~solvable)
     # no steady solution at all (locked with the torque given on S, or losses above the power)
     undefined = ~solvable | (locked & (known == "S"))
-    nan = np.full_like(eta0, np.nan)
-    torques = {k: np.where(undefined, nan, v) for k, v in torques.items()}
+    if undefined.any():
+        def blank(v):
+            return np.where(undefined, np.nan, v)
+    else:
+        def blank(v):
+            return np.array(v, float)
+    torques = {k: blank(v) for k, v in torques.items()}
     torques[a] = torques[a] + T_extra
-    L = PartialLosses(*(np.where(undefined, nan, getattr(L, n)) for n in LOSS_NAMES),
-                      P_extra=np.where(undefined, nan, T_extra * w[a]),
-                      **{k: np.where(undefined, nan, v) for k, v in idle.items()})
+    L = PartialLosses(*(blank(getattr(L, n)) for n in LOSS_NAMES),
+                      P_extra=blank(T_extra * w[a]), **{k: blank(v) for k, v in idle.items()})
     p_a, p_b = torques[a] * w[a], torques[b] * w[b]
     p_in = np.where(forward, p_a, p_b)
     p_out = -np.where(forward, p_b, p_a)
