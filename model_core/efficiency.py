@@ -22,7 +22,7 @@ Operating point: the loss model gives P_L(|T1|, w2 - wS) from the frictionless c
 at the ring torque T1. The basic efficiency follows from Eq. (28) on the relative motion,
 eta0 = 1 - P_L/|T1 w1'| (w = +1) or 1/(1 + P_L/|T1 w1'|) (w = -1, shaft 2 drives relatively),
 and T1 from the given input torque depends on eta0 through Kreines' rule: a scalar fixed point,
-solved by a vectorised secant iteration. The efficiency of the mode is then Eq. (28) directly,
+solved per point by a vectorised secant iteration (regula falsi where it fails). The efficiency of the mode is then Eq. (28) directly,
 1 - P_L/P_in, which equals the Kreines formula (a test checks it).
 """
 from __future__ import annotations
@@ -36,8 +36,9 @@ from .errors import CycloidInputError
 from .losses import LOSS_NAMES, PartialLosses, partial_losses
 
 #: on g(eta0) = f(eta0) - eta0 [1]. T1 depends on eta0 through 1/(i0 eta0 - 1) in the modes
-#: with S driving (i0 = 16/15: about 40 times amplified), so 1e-9 left the losses converged to
-#: only ~1e-8; 1e-12 costs one secant step on part of the points and leaves ~1e-11
+#: with S driving (i0 = 14/15: about 10 times amplified, without bound near the locking limit
+#: eta0 = i0 when back-driven), so 1e-9 left the losses converged to only ~1e-8 (measured:
+#: 2e-8); 1e-12 costs one more secant step on part of the points
 _FIXED_POINT_TOL = 1e-12
 _FIXED_POINT_MAX = 30
 #: lower end of the searched basic efficiency [1]: below 0.1 % no drive runs
@@ -375,7 +376,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
     eta0 = f1   # consistent with the losses L evaluated at T1
     c = torque_coefficients(guarded_full(eta0), wdir, i0)
     # all torques from T1 and eta0, so that Kreines' rule and the energy balance hold exactly;
-    # the known torque is reproduced to the fixed-point tolerance (about 1e-9 relative)
+    # the known torque is reproduced to the fixed-point tolerance (checked to 1e-7 in ``ok``)
     torques = {"1": T1 * c[0], "2": T1 * c[1], "S": T1 * c[2]}
     forward = (T_known * w[a] >= 0) if known == a else (T_known * w[b] <= 0)
     flow_into_S = np.where(forward, b == "S", a == "S")
