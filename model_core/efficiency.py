@@ -363,7 +363,14 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
             gb_[i] = np.where(up, np.where(side[i] > 0, 0.5 * gb_[i], gb_[i]), gm)
             ga_[i] = np.where(up, gm, np.where(side[i] < 0, 0.5 * ga_[i], ga_[i]))
             side[i] = np.where(up, 1.0, -1.0)
-            live[i] = (gm != 0) & (b_[i] - a_[i] > _BRACKET_RTOL * b_[i])
+            # done: converged as the secant's points are, with the known torque reproduced
+            # to 1e-10 (near the locking pole only adjacent floats get there)
+            wd = wdir[bad[i]]
+            c_k = torque_coefficients(guarded(fm, wd), wd, i0)[idx[known]]
+            T_k = T_flat[bad[i]]
+            done = (np.abs(gm) <= _FIXED_POINT_TOL) & (np.abs(Tm * c_k - T_k)
+                                                       <= 1e-10 * np.abs(T_k))
+            live[i] = (gm != 0) & (b_[i] - a_[i] > _BRACKET_RTOL * b_[i]) & ~done
         x1[bad], f1[bad], T1[bad] = xs, fs, Ts
         for arr, ls in zip(L, Ls):
             arr[bad] = ls
