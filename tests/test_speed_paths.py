@@ -48,11 +48,11 @@ def _assert_same(a, b, rtol=RTOL):
                                    err_msg=k)
 
 
-def _points(mode):
-    """Driving speeds (rad/s) and torques (N*m) spanning a map; back-driving modes (1S, 2S)
-    with the torque on the driving shaft 1 or 2, so power flows into S."""
-    rpm = np.array([500.0, 1500.0, 2800.0])
-    T = np.array([0.1, 0.4, 0.85])
+def _points(mode, n=3):
+    """Driving speeds (rad/s) and torques (N*m) spanning a map (n x n); back-driving modes (1S,
+    2S) with the torque on the driving shaft 1 or 2, so power flows into S."""
+    rpm = np.linspace(500.0, 2800.0, n)
+    T = np.linspace(0.1, 0.85, n)
     if mode[0] != "S":     # shaft 1 or 2 drives: geared down speed, geared up torque
         rpm, T = rpm / 15, T * 15
     W, TT = np.meshgrid(rpm_to_rad_s(rpm), T, indexing="ij")
@@ -76,7 +76,7 @@ def test_fast_losses_equal_the_straightforward_path(name, mode):
 @pytest.mark.parametrize("mode", ["S1", "2S", "21"])
 def test_a_point_in_a_map_is_the_point_alone(name, mode):
     d = DESIGNS[name]
-    W, T = _points(mode)
+    W, T = _points(mode, 5)   # more points than efficiency._PAIR_START_MAX
     batch = _outputs(operating_point(d, mode, W, T))
     for i in range(W.shape[0]):
         for j in range(W.shape[1]):
