@@ -212,7 +212,9 @@ class _Geometry:
             ratio = np.where(T_old > 0, T / np.where(T_old > 0, T_old, 1.0), 0.0)
             scaled = rot0 + (rot_old - rot0) * (ratio if linear else ratio ** 0.9)
             rot = np.where((rot_old * l_m > c_m) & (T_old > 0), scaled, rot)
-        linear = law == "linear"
+        T_k = T / stiffness
+        if not linear:
+            l2 = (10.0 / 9.0) * l2
         for it in range(_NEWTON_ITERATIONS):
             if it == 1 and l.shape[0] > 1:
                 # after one step every rotation is right of its root and only decreases: a
@@ -222,17 +224,17 @@ class _Geometry:
                 rows = np.any(self._l * r_max - self._c > 0, axis=1)
                 if not rows.all():
                     l, l2, c = l[rows], l2[rows], c[rows]
+            # the balance divided by the stiffness: sum l Q/K - T/K (Q/K = d or d^(10/9))
             d = l * rot - c
             np.maximum(d, 0.0, out=d)
             if linear:
-                t = stiffness * np.add.reduce(l * d, axis=0)
-                dt = stiffness * np.add.reduce(l2 * (d > 0), axis=0)
+                t = np.add.reduce(l * d, axis=0)
+                dt = np.add.reduce(l2 * (d > 0), axis=0)
             else:
                 q = np.cbrt(np.cbrt(d))
-                t = stiffness * np.add.reduce(l * q * d, axis=0)
-                dt = (10.0 / 9.0) * stiffness * np.add.reduce(l2 * q, axis=0)
-            pos = dt > 0
-            step = np.where(pos, (t - T) / np.where(pos, dt, 1.0), 0.0)
+                t = np.add.reduce(l * q * d, axis=0)
+                dt = np.add.reduce(l2 * q, axis=0)     # l2 carries the 10/9 here
+            step = np.divide(t - T_k, dt, out=np.zeros_like(t), where=dt > 0)
             rot = rot - step
             if (np.abs(step) <= _NEWTON_RTOL * np.abs(rot)).all():
                 break
