@@ -140,7 +140,7 @@ class _Geometry:
 
     __slots__ = ("angles", "levers", "clear", "rep_levers", "rep_clear", "cls", "inv", "_l", "_l2",
                  "_c", "_l_m", "_c_m", "_no_clearance", "_sum_l2", "_sum_l19", "_compact_cache",
-                 "_cls_flat")
+                 "_cls_flat", "_l2_109", "_rot0")
 
     def __init__(self, angles, levers, clear, dedup=True):
         # a roller at the end of the loaded half (sin = 0 up to rounding, e.g. sin(pi) = 1.2e-16)
@@ -175,6 +175,8 @@ class _Geometry:
         self._sum_l2 = np.sum(lpos * lpos, axis=-1)
         self._sum_l19 = np.sum(lpos ** (19.0 / 9.0), axis=-1)
         self._compact_cache = {}
+        self._l2_109 = (10.0 / 9.0) * self._l2
+        self._rot0 = np.maximum(self._c_m / self._l_m, 0.0)
         self._cls_flat = np.ascontiguousarray(self.cls[:, 0])
 
     @property
@@ -198,12 +200,14 @@ class _Geometry:
         if self._no_clearance:
             return rot_free
         ex = (slice(None),) + (None,) * (T.ndim - 1)
-        l, l2, c = self._l[ex], self._l2[ex], self._c[ex]
+        l, c = self._l[ex], self._c[ex]
+        # the balance's slope carries 10/9 with Palmgren's law (Q/K = d^(10/9))
+        l2 = self._l2[ex] if linear else self._l2_109[ex]
         l_m, c_m = self._l_m, self._c_m
-        # start: the clearance of the most loaded roller closed, then the free rotation. Any
-        # start with contact is safe: from the left of the root of this increasing convex
+        # start: the clearance of the most loaded roller closed (rot0), then the free rotation.
+        # Any start with contact is safe: from the left of the root of this increasing convex
         # function, Newton's first step lands right of it, then converges monotonically.
-        rot0 = np.maximum(c_m / l_m, 0.0)
+        rot0 = self._rot0
         rot = rot0 + rot_free
         if guess is not None:
             # warm start from the solution (rot_old, T_old): its part beyond the clearance
@@ -213,8 +217,6 @@ class _Geometry:
             scaled = rot0 + (rot_old - rot0) * (ratio if linear else ratio ** 0.9)
             rot = np.where((rot_old * l_m > c_m) & (T_old > 0), scaled, rot)
         T_k = T / stiffness
-        if not linear:
-            l2 = (10.0 / 9.0) * l2
         for it in range(_NEWTON_ITERATIONS):
             if it == 1 and l.shape[0] > 1:
                 # after one step every rotation is right of its root and only decreases: a
