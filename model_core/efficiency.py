@@ -172,6 +172,98 @@ class OperatingPoint:
         return np.where(self.flow_forward, fwd, rev)
 
 
+def _secant(eta0_from, x0, f0, x1, f1, T1, L, lo, inv):
+    """Secant iteration on the fixed point eta0 = f(eta0) per point, from the evaluated pair
+    (x0, f0), (x1, f1) (with the ring torques T1 and losses L at x1, updated in place).
+
+    Each point stops when |f - eta0| <= _FIXED_POINT_TOL (the others go on alone); iterates
+    stay in the physical range [lo, 1] (f <= 1 always: the losses are not negative), and a
+    point whose next iterate would leave it is marked ``stuck`` for the bracketed solver. The
+    variable is u = eta0 where shaft 1 drives relatively and u = 1/eta0 where it is driven
+    (``inv``): then f is 1 - x or 1/(1 + x), and the loss ratio x = P_L/|T1 w1'| is about
+    affine in u (Coulomb losses keep x constant, speed-only losses make it grow as 1/|T1|, and
+    |T1| goes as 1/u or as 1/(i0 u - 1) through Kreines' rule), so the secant on
+    G(u) = u(f) - u is nearly exact even where the losses rival the power (on g = f - eta0
+    it crawled there). Returns (x1, f1, g1, T1, stuck)."""
+    def to_u(e, m):
+        return np.where(m, 1.0 / e, e)
+
+    u0, u1 = x0.copy(), to_u(x1, inv)
+    G0, G1 = to_u(f0, inv) - u0, to_u(f1, inv) - u1
+    g1 = f1 - x1
+    stuck = np.zeros(x1.shape, bool)
+    active = np.flatnonzero(np.abs(g1) > _FIXED_POINT_TOL)
+    for _ in range(_FIXED_POINT_MAX):
+        if active.size == 0:
+            break
+        ua, ub, Ga, Gb = u0[active], u1[active], G0[active], G1[active]
+        denom = Gb - Ga
+        safe = np.abs(denom) > 1e-300
+        u2 = np.where(safe, ub - Gb * (ub - ua) / np.where(safe, denom, 1.0), ub + Gb)
+        inv_a = inv[active]
+        x2 = np.where(inv_a, 1.0 / np.where(u2 > 0, u2, np.inf), u2)
+        out = ~((x2 >= lo[active]) & (x2 <= 1.0))
+        stuck[active[out]] = True
+        keep = ~out
+        active, x2, u2, ub, Gb, inv_a = (active[keep], x2[keep], u2[keep], ub[keep], Gb[keep],
+                                         inv_a[keep])
+        if active.size == 0:
+            break
+        f2, L2, T12 = eta0_from(x2, active)
+        at = slice(None) if active.size == x1.size else active   # all: no index copies
+        u0[at], G0[at] = ub, Gb
+        u1[at], G1[at] = u2, to_u(f2, inv_a) - u2
+        x1[at], f1[at], g1[at], T1[at] = x2, f2, f2 - x2, T12
+        for arr, name in zip(L, LOSS_NAMES):
+            arr[at] = getattr(L2, name)
+        active = active[np.abs(f2 - x2) > _FIXED_POINT_TOL]
+    return x1, f1, g1, T1, stuck
+
+
+def _regula_falsi(eta0_from, sel, a, ga, gb, x_last, g_last, T1, Ls, converged):
+    """Regula falsi (Illinois) on the bracket (a, 1] with g(a) = ga >= 0 >= g(1) = gb, at the
+    points ``sel`` where the secant failed, narrowed first by the secant's last point in range
+    (x_last, g_last). Keeps each point's best evaluation (smallest |g|: near the locking pole g
+    is steep, so even the float next to the root leaves |g| ~ 1e-12); a point stops when
+    |g| <= _FIXED_POINT_TOL and ``converged(f, T1, points)``, or when its bracket is down to
+    adjacent floats. Returns (x, f, T1, losses) of the best evaluations; T1 and Ls hold the
+    values at a on entry."""
+    xs, fs, Ts, gs = a.copy(), ga + a, T1.copy(), ga.copy()
+    Ls = [np.array(arr, float) for arr in Ls]
+    b = np.ones_like(a)
+    inside = (x_last > a) & (x_last < b)
+    up0, down0 = inside & (g_last >= 0), inside & (g_last < 0)
+    a, ga = np.where(up0, x_last, a), np.where(up0, g_last, ga)
+    b, gb = np.where(down0, x_last, b), np.where(down0, g_last, gb)
+    live = np.ones(sel.size, bool)
+    side = np.zeros(sel.size)   # Illinois: which end was kept last (+1 b, -1 a)
+    for _ in range(_BRACKET_MAX):
+        if not live.any():
+            break
+        i = np.flatnonzero(live)
+        den = ga[i] - gb[i]
+        m = np.where(den != 0, (a[i] * -gb[i] + b[i] * ga[i]) / np.where(den != 0, den, 1.0),
+                     0.5 * (a[i] + b[i]))
+        m = np.where((m > a[i]) & (m < b[i]), m, 0.5 * (a[i] + b[i]))
+        fm, Lm, Tm = eta0_from(m, sel[i])
+        gm = fm - m
+        better = np.abs(gm) < np.abs(gs[i])
+        j = i[better]
+        xs[j], fs[j], Ts[j], gs[j] = m[better], fm[better], Tm[better], gm[better]
+        for arr, name in zip(Ls, LOSS_NAMES):
+            arr[j] = getattr(Lm, name)[better]
+        up = gm >= 0
+        a[i] = np.where(up, m, a[i])
+        b[i] = np.where(up, b[i], m)
+        # Illinois: halve the retained end's value when the same end is kept twice
+        gb[i] = np.where(up, np.where(side[i] > 0, 0.5 * gb[i], gb[i]), gm)
+        ga[i] = np.where(up, gm, np.where(side[i] < 0, 0.5 * ga[i], ga[i]))
+        side[i] = np.where(up, 1.0, -1.0)
+        done = (np.abs(gm) <= _FIXED_POINT_TOL) & converged(fm, Tm, sel[i])
+        live[i] = (gm != 0) & (b[i] - a[i] > _BRACKET_RTOL * b[i]) & ~done
+    return xs, fs, Ts, Ls
+
+
 def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
                     dedup=True) -> OperatingPoint:
     """Solve the drive at driving-shaft speed w_in (rad/s, signed) and one known torque:
@@ -264,19 +356,9 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         x = np.divide(num, np.abs(T1) * pick(base), out=np.zeros_like(num), where=T1 != 0)
         return np.where(wd > 0, 1.0 - x, 1.0 / (1.0 + x)), L, T1
 
-    # secant iteration on the fixed point eta0 = f(eta0), started from the frictionless point;
-    # each point stops when it has converged (the others go on alone), and iterates are kept in
-    # the physical range [lo, 1] (f <= 1 always: the losses are not negative). The variable is
-    # u = eta0 where shaft 1 drives relatively and u = 1/eta0 where it is driven: then f is
-    # 1 - x or 1/(1 + x), and the loss ratio x = P_L/|T1 w1'| is about affine in u (Coulomb
-    # losses keep x constant, speed-only losses make it grow as 1/|T1|, and |T1| goes as 1/u
-    # or as 1/(i0 u - 1) through Kreines' rule), so the secant on G(u) = u(f) - u is nearly
-    # exact even where the losses rival the power (on g = f - eta0 it crawled there)
+    # the secant on the fixed point eta0 = f(eta0) (_secant), started from the frictionless
+    # point; u = 1/eta0 where the ring is driven relatively
     inv = wdir < 0
-
-    def to_u(e, m):
-        return np.where(m, 1.0 / e, e)
-
     x0 = np.ones_like(T_flat)
     n = T_flat.size
     if n <= _PAIR_START_MAX:
@@ -293,38 +375,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         f1, L, T1 = eta0_from(x1)
         L = [np.array(getattr(L, k), float) for k in LOSS_NAMES]
     g_one = f0 - 1.0                       # g(1) <= 0: the upper end of every bracket
-    u0, u1 = x0.copy(), to_u(x1, inv)
-    G0, G1 = to_u(f0, inv) - u0, to_u(f1, inv) - u1
-    g1 = f1 - x1
-    # points whose iterate leaves the physical range go to the bracketed solver below (a
-    # first step below lo is clipped: the secant from (1, g(1)) and (lo, g(lo)) goes on)
-    stuck = np.zeros(T_flat.shape, bool)
-    active = np.flatnonzero((np.abs(g1) > _FIXED_POINT_TOL) & ~stuck)
-    for _ in range(_FIXED_POINT_MAX):
-        if active.size == 0:
-            break
-        ua, ub, Ga, Gb = u0[active], u1[active], G0[active], G1[active]
-        denom = Gb - Ga
-        safe = np.abs(denom) > 1e-300
-        u2 = np.where(safe, ub - Gb * (ub - ua) / np.where(safe, denom, 1.0), ub + Gb)
-        inv_a = inv[active]
-        x2 = np.where(inv_a, 1.0 / np.where(u2 > 0, u2, np.inf), u2)
-        # an iterate outside the physical range hands its point to the bracketed solver
-        out = ~((x2 >= lo[active]) & (x2 <= 1.0))
-        stuck[active[out]] = True
-        keep = ~out
-        active, x2, u2, ub, Gb, inv_a = (active[keep], x2[keep], u2[keep], ub[keep], Gb[keep],
-                                         inv_a[keep])
-        if active.size == 0:
-            break
-        f2, L2, T12 = eta0_from(x2, active)
-        at = slice(None) if active.size == T_flat.size else active   # all: no index copies
-        u0[at], G0[at] = ub, Gb
-        u1[at], G1[at] = u2, to_u(f2, inv_a) - u2
-        x1[at], f1[at], g1[at], T1[at] = x2, f2, f2 - x2, T12
-        for arr, n in zip(L, LOSS_NAMES):
-            arr[at] = getattr(L2, n)
-        active = active[np.abs(f2 - x2) > _FIXED_POINT_TOL]
+    x1, f1, g1, T1, stuck = _secant(eta0_from, x0, f0, x1, f1, T1, L, lo, inv)
 
     def reproduced(eta0, T1, sel):
         wd = wdir[sel]
@@ -348,55 +399,24 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         # without a steady solution: the values at the bracket's lower end (torques and losses
         # are reported NaN below, eta0 is the basic efficiency the losses give there)
         x1[bad], f1[bad], T1[bad] = lo_b, f_lo, T1_lo
-        for arr, n in zip(L, LOSS_NAMES):
-            arr[bad] = getattr(L_lo, n)
+        for arr, name in zip(L, LOSS_NAMES):
+            arr[bad] = getattr(L_lo, name)
         keep = g_lo >= 0
-        xl, gl = x_last[bad][keep], g_last[bad][keep]
-        Ls = [arr[bad][keep] for arr in L]
-        bad, a_, ga_ = bad[keep], lo_b[keep], g_lo[keep]
-        xs, fs, Ts, gs = a_.copy(), ga_ + a_, T1[bad], ga_.copy()
-        # the bracket (lo, 1], narrowed by the secant's last point in range
-        b_, gb_ = np.ones_like(a_), g_one[bad]
-        inside = (xl > a_) & (xl < b_)
-        a_, ga_ = np.where(inside & (gl >= 0), xl, a_), np.where(inside & (gl >= 0), gl, ga_)
-        b_, gb_ = np.where(inside & (gl < 0), xl, b_), np.where(inside & (gl < 0), gl, gb_)
-        live = np.ones(bad.size, bool)
-        side = np.zeros(bad.size)   # Illinois: which end was kept last (+1 b, -1 a)
-        for _ in range(_BRACKET_MAX):
-            if not live.any():
-                break
-            i = np.flatnonzero(live)
-            den = ga_[i] - gb_[i]
-            m = np.where(den != 0, (a_[i] * -gb_[i] + b_[i] * ga_[i]) / np.where(den != 0, den, 1.0),
-                         0.5 * (a_[i] + b_[i]))
-            m = np.where((m > a_[i]) & (m < b_[i]), m, 0.5 * (a_[i] + b_[i]))
-            fm, Lm, Tm = eta0_from(m, bad[i])
-            gm = fm - m
-            # keep the best point (smallest |g|): near the locking pole g is steep, so even the
-            # float next to the root leaves |g| ~ 1e-12
-            better = np.abs(gm) < np.abs(gs[i])
-            j = i[better]
-            xs[j], fs[j], Ts[j], gs[j] = m[better], fm[better], Tm[better], gm[better]
-            for arr, n in zip(Ls, LOSS_NAMES):
-                arr[j] = getattr(Lm, n)[better]
-            up = gm >= 0
-            a_[i] = np.where(up, m, a_[i])
-            b_[i] = np.where(up, b_[i], m)
-            # Illinois: halve the retained end's value when the same end is kept twice
-            gb_[i] = np.where(up, np.where(side[i] > 0, 0.5 * gb_[i], gb_[i]), gm)
-            ga_[i] = np.where(up, gm, np.where(side[i] < 0, 0.5 * ga_[i], ga_[i]))
-            side[i] = np.where(up, 1.0, -1.0)
-            # done: converged as the secant's points are, with the known torque reproduced
-            # to 1e-10 (near the locking pole only adjacent floats get there)
-            wd = wdir[bad[i]]
-            c_k = torque_coefficients(guarded(fm, wd), wd, i0)[idx[known]]
-            T_k = T_flat[bad[i]]
-            done = (np.abs(gm) <= _FIXED_POINT_TOL) & (np.abs(Tm * c_k - T_k)
-                                                       <= 1e-10 * np.abs(T_k))
-            live[i] = (gm != 0) & (b_[i] - a_[i] > _BRACKET_RTOL * b_[i]) & ~done
-        x1[bad], f1[bad], T1[bad] = xs, fs, Ts
-        for arr, ls in zip(L, Ls):
-            arr[bad] = ls
+        bad = bad[keep]
+        if bad.size:
+            def converged(fm, Tm, sel):
+                # converged as the secant's points are, with the known torque reproduced to
+                # 1e-10 (near the locking pole only adjacent floats get there)
+                wd = wdir[sel]
+                c_k = torque_coefficients(guarded(fm, wd), wd, i0)[idx[known]]
+                return np.abs(Tm * c_k - T_flat[sel]) <= 1e-10 * np.abs(T_flat[sel])
+
+            xs, fs, Ts, Ls = _regula_falsi(
+                eta0_from, bad, lo_b[keep], g_lo[keep], g_one[bad], x_last[bad],
+                g_last[bad], T1[bad], [arr[bad] for arr in L], converged)
+            x1[bad], f1[bad], T1[bad] = xs, fs, Ts
+            for arr, ls in zip(L, Ls):
+                arr[bad] = ls
     L = PartialLosses(*(arr.reshape(shape) for arr in L))
     f1, T1, solvable = f1.reshape(shape), T1.reshape(shape), solvable.reshape(shape)
     wdir = wdir.reshape(shape)
