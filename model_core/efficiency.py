@@ -69,6 +69,14 @@ def _is_memo(key):
     return isinstance(key, tuple) and isinstance(key[0], str) and key[0].startswith("memo")
 
 
+def _covers(sel, n):
+    """Whether the index array ``sel`` lists each of the points 0..n-1 (np.unique would import
+    numpy.ma, 15 ms, on its first call)."""
+    seen = np.zeros(n, bool)
+    seen[sel] = True
+    return bool(seen.all())
+
+
 def _state_update(state, sub, sel, n=None):
     """Write the warm-start entries ``sub`` at the points ``sel`` back into ``state`` (a point
     listed twice keeps its last entry); entries ``state`` lacks are created when ``sel`` covers
@@ -77,7 +85,7 @@ def _state_update(state, sub, sel, n=None):
         if _is_memo(k):
             continue
         old = state.get(k)
-        if old is None and n is not None and np.unique(sel).size == n:
+        if old is None and n is not None and _covers(sel, n):
             old = state[k] = (tuple(np.empty((n,) + a.shape[1:]) for a in v)
                               if isinstance(v, tuple) else np.empty((n,) + v.shape[1:]))
         if old is None:
