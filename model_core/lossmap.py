@@ -31,13 +31,15 @@ class ModeMap:
 
     Bilinear in (ln |tau_out|, ln |w_in|), clamped at the grid edges; ``out_of_range`` counts
     the clamped look-ups (below the grid the losses' shares and eta0 of the edge are used; at
-    zero speed or torque the losses vanish with the power).
+    zero speed or torque the losses vanish with the power). ``dedup=False`` builds it by the
+    straightforward per-position path of the losses (the reference; same tables to ~1e-12).
     """
 
     #: torque nodes: 48 (was 36) because the physical profile's load-independent losses make
     #: eta0 curve as 1/|tau| at light load; 36 left 1.1e-3 of interpolation error in eta at
     #: 1000 r/min, 0.3 N*m (S2), 48 leaves 0.6e-3
-    def __init__(self, design, mode, torque_max, speed_max, n_torque=48, n_speed=28, span=1e-3):
+    def __init__(self, design, mode, torque_max, speed_max, n_torque=48, n_speed=28, span=1e-3,
+                 dedup=True):
         if not (torque_max > 0 and speed_max > 0):
             raise ValueError("the map needs positive torque and speed ranges")
         self.a, self.b, self.h = kinematics.parse_mode(mode)
@@ -54,7 +56,8 @@ class ModeMap:
         self._wdir = {}
         for forward in (True, False):
             # forward: the load absorbs power, tau_out * w_out < 0
-            op = operating_point(design, self.mode, WW, T_out=(-sign_b if forward else sign_b) * TT)
+            op = operating_point(design, self.mode, WW,
+                                 T_out=(-sign_b if forward else sign_b) * TT, dedup=dedup)
             shares = np.stack([np.broadcast_to(getattr(op.losses, n), WW.shape)
                                for n in MAP_LOSS_NAMES], -1)
             # shares of PL1..PL6 and the load-independent PL_support, PL_seal, PL_churn: they

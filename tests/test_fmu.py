@@ -242,3 +242,21 @@ def test_load_unload_load_in_one_process(fmu):
     etas = [simulate_fmu(fmu, stop_time=0.05, output_interval=0.01, input=inp,
                          output=["eta"])["eta"][-1] for _ in range(3)]
     assert etas[0] > 0.6 and etas[0] == etas[1] == etas[2]
+
+
+def test_the_profile_is_a_parameter(fmu):
+    """profile = 'paper' (with the paper's load-dependent losses) gives the paper profile's
+    numbers; the default gives the physical profile's; a bad profile is an fmi2Error naming
+    the field."""
+    paper = DriveDesign(profile="paper", losses="load_dependent")
+    for params, design in (({}, DriveDesign()),
+                           ({"profile": "paper", "losses": "load_dependent"}, paper)):
+        inst = Instance(fmu, mode="S1", exact=True, **params)
+        inst.step(w_in=250.0, tau_out=-7.0)
+        op = operating_point(design, "S1", 250.0, T_out=-7.0)
+        assert inst.get("eta")[0] == pytest.approx(float(op.eta), rel=1e-9)
+        inst.close()
+    assert float(operating_point(paper, "S1", 250.0, T_out=-7.0).eta) < 0.7 < float(
+        operating_point(DriveDesign(), "S1", 250.0, T_out=-7.0).eta)
+    with pytest.raises(Exception):
+        Instance(fmu, "bad", mode="S1", profile="bogus")

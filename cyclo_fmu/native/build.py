@@ -108,6 +108,7 @@ UNITS = {
     "rad": (dict(rad=1), (("deg", 180.0 / math.pi),)),
     "s": (dict(s=1), ()),
     "N/m": (dict(kg=1, s=-2), (("N/mm", 1e-3),)),
+    "K": (dict(K=1), ()),
 }
 DISPLAY = {"rad/s": "r/min", "m": "mm", "m2/s": "mm2/s", "rad": "deg", "N/m": "N/mm"}
 

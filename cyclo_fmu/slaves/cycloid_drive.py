@@ -88,6 +88,14 @@ DESIGN_PARAMETERS = [
     ("thermal_tau", "extra", "thermal_tau", "s", "warm-up time constant", Real),
     ("drag_exponent", "extra", "drag_exponent", "1",
      "exponent p of the drag's speed law (|w|/300 rad/s)^p", Real),
+    # the model (design [model]); after the others, so that their value references stay
+    ("profile", None, "profile", None, "model profile: physical (correct kinematics, roll or "
+     "skid, Stribeck pin law, friction in the force balance, load-independent losses) or "
+     "paper (what the paper computed)", String),
+    ("losses", None, "losses", None, "losses that enter: all or load_dependent (the paper "
+     "profile always uses load_dependent)", String),
+    ("operating_temperature", None, "operating_temperature", "K",
+     "grease temperature (physical profile; sets the viscosity by Walther's law)", Real),
 ]
 
 #: min/max of the parameters (the modelDescription's; checked at initialization). Lengths,
@@ -101,7 +109,8 @@ PARAMETER_LIMITS = dict(
                                 "drag_torque", "stribeck_torque", "stribeck_speed",
                                 "input_inertia", "thermal_tau")},
     mu_boundary=(0.0, 1.0), mu_rolling=(0.0, 1.0), thermal_loss_change=(-1.0, None),
-    mode_number=(0, 6), map_torque_max=(0.0, None), map_speed_max=(0.0, None))
+    mode_number=(0, 6), map_torque_max=(0.0, None), map_speed_max=(0.0, None),
+    operating_temperature=(0.0, None))
 
 #: partial losses with an output each: the paper's load-dependent ones, then the physical
 #: profile's load-independent ones (zero with losses = "load_dependent"); they sum to P_loss
