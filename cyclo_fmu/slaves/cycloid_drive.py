@@ -236,6 +236,7 @@ class CycloidDrive(UnitSlave):
         self._w_last = None
         self._map = None
         self._map_key = None
+        self._last_inputs = None
         self._design = None
         self._warned_range = False
 
@@ -306,6 +307,7 @@ class CycloidDrive(UnitSlave):
         except (core.CycloidInputError, TypeError, ValueError) as exc:
             self.fail(f"invalid parameter: {exc}")
         self._theta, self._w_last, self._slope_key = 0.0, None, None
+        self._last_inputs = None
 
     def _evaluate_init(self):
         if self._in_init:   # a read in Initialization Mode: commit no dynamic state
@@ -326,6 +328,17 @@ class CycloidDrive(UnitSlave):
         w_in, tau_ext, alpha = self.w_in, self.tau_out, self.alpha_in
         if not (math.isfinite(w_in) and math.isfinite(tau_ext) and math.isfinite(alpha)):
             self.require_finite(w_in=w_in, tau_out=tau_ext, alpha_in=alpha)
+        inputs = (w_in, tau_ext, alpha)
+        if inputs == self._last_inputs:
+            # the same inputs as the last step, bit for bit (a steady state: 88 % of the
+            # paper scenario's steps), and no time-dependent physics: the outputs stand
+            return
+        self._last_inputs = None
+        self._solve(t, dt, w_in, tau_ext, alpha)
+        if not self._dynamic_extra:
+            self._last_inputs = inputs
+
+    def _solve(self, t, dt, w_in, tau_ext, alpha):
         J_r = self.J_out * self._ratio_out
         tau_out = tau_ext - J_r * alpha          # the load including the output inertia
         self._update_at(t, dt, w_in, tau_out)
