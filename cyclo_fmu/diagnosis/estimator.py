@@ -197,13 +197,22 @@ class Diagnoser:
         generic = Term("generic", None, tuple(range(k0, k0 + Gb.shape[1])),
                        tuple(groups), ("N*m",) * len(groups), (-np.inf,) * len(groups),
                        (np.inf,) * len(groups))
-        # the steady part of the generic basis: smooth functions of the operating point only
-        op = [i for i, g in enumerate(groups) if g.startswith("operating point")]
-        steady = Term("generic", None, tuple(k0 + i for i in op), tuple(groups[i] for i in op),
-                      ("N*m",) * len(op), (-np.inf,) * len(op), (np.inf,) * len(op))
+        def part(keep):
+            idx = [i for i, g in enumerate(groups) if keep(g)]
+            return Term("generic", None, tuple(k0 + i for i in idx),
+                        tuple(groups[i] for i in idx), ("N*m",) * len(idx),
+                        (-np.inf,) * len(idx), (np.inf,) * len(idx))
+        # the structure test tries the whole generic basis and each of its groups alone: a
+        # group that holds nothing (e.g. time polynomials) extrapolates badly into a held-out
+        # time-ordered fold and would hide, in the whole basis's held-out error, what another
+        # group explains. ``steady``: the smooth functions of the operating point only
+        names = list(dict.fromkeys(groups))
+        steady = [part(lambda g: g.startswith("operating point"))] + [
+            part(lambda g, n=n: g == n) for n in names if n.startswith("operating point")]
+        structure = [generic] + [part(lambda g, n=n: g == n) for n in names] + steady[:1]
         X = np.hstack(cols + [Gb]) if cols else Gb
         return {"rp": rp, "sig": sig, "y": y, "X": X, "options": options, "generic": generic,
-                "steady": steady,
+                "steady": steady, "structure": structure,
                 "groups": groups, "blocks": blocks, "m": m, "dt": dt, "T_model_f": T_model_f,
                 "loaded": loaded}
 
@@ -349,7 +358,7 @@ class Diagnoser:
         self._stage("structure")
         # the honest unknown: what the generic basis still explains next to the selection
         withdrawn = []
-        with_g = prob.fit(S.terms + (generic,))
+        with_g = self._best_next_to(prob, S.terms, P["structure"])
         present = (S.bic - with_g.bic >= DELTA_BIC and explained(S, with_g) >= min_expl)
         if present:
             for t in S.terms:
@@ -360,7 +369,7 @@ class Diagnoser:
                     withdrawn.append(t.effect)
             if withdrawn:
                 S = prob.fit(tuple(t for t in S.terms if t.effect not in withdrawn))
-                with_g = prob.fit(S.terms + (generic,))
+                with_g = self._best_next_to(prob, S.terms, P["structure"])
         base = prob.fit(())
         fr = None
         for t in S.terms:
@@ -374,11 +383,16 @@ class Diagnoser:
                 "friction": fr, "opts": opts, "path": sel.path, "weights": w}
 
     @staticmethod
-    def _keeps_place(prob, terms, t, generic, min_expl) -> bool:
+    def _best_next_to(prob, terms, bases):
+        """The fit of ``terms`` plus the one basis of ``bases`` with the smallest held-out
+        error."""
+        return min((prob.fit(tuple(terms) + (b,)) for b in bases), key=lambda f: f.cv_mse)
+
+    def _keeps_place(self, prob, terms, t, bases, min_expl) -> bool:
         """Does term ``t`` of the selection ``terms`` still earn its place (BIC and held-out
-        RMS) when ``generic`` is fitted next to it?"""
-        full = prob.fit(tuple(terms) + (generic,))
-        rest = prob.fit(tuple(x for x in terms if x != t) + (generic,))
+        RMS) next to the basis of ``bases`` that best replaces it?"""
+        rest = self._best_next_to(prob, tuple(x for x in terms if x != t), bases)
+        full = prob.fit(tuple(terms) + (rest.terms[-1],))
         return rest.bic - full.bic >= DELTA_BIC and explained(rest, full) >= min_expl
 
     @staticmethod
@@ -525,7 +539,7 @@ class Diagnoser:
         follows = {}
         if present:
             # which group of the generic basis carries it: the held-out RMS lost without it
-            g = st["P"]["generic"]
+            g = with_g.terms[-1]
             for group in dict.fromkeys(g.names):
                 idx = tuple(c for c, n in zip(g.cols, g.names) if n != group)
                 names = tuple(n for n in g.names if n != group)
@@ -544,7 +558,7 @@ class Diagnoser:
                   f"order {2 * k:g} (2x roller pass)": 2 * k}
         # the slow structure the generic basis holds, taken out before the order and spectral
         # analysis (its changes between holds would leak into their standard errors)
-        g = st["P"]["generic"]
+        g = with_g.terms[-1]
         v, _ = with_g.of(g)
         slow = st["P"]["X"][:, list(g.cols)] @ v
         r_raw = r_raw.copy()
