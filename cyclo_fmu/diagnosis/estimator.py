@@ -360,7 +360,12 @@ class Diagnoser:
         withdrawn = []
         with_g = self._best_next_to(prob, S.terms, P["structure"])
         present = (S.bic - with_g.bic >= DELTA_BIC and explained(S, with_g) >= min_expl)
-        if present:
+        # the selected effects are doubted (must keep their place next to the generic basis)
+        # as soon as structure beyond them is very strongly evidenced and of a practical size
+        # (MIN_EXPLAINED_NM); the noise-scaled threshold decides what is reported, not whether
+        # a named effect may be holding part of an unknown one
+        doubt = (S.bic - with_g.bic >= DELTA_BIC and explained(S, with_g) >= MIN_EXPLAINED_NM)
+        if present or doubt:
             for t in S.terms:
                 if t.effect in forced:
                     continue
