@@ -11,12 +11,14 @@ The chain (each step a function of this package):
 3. stepwise selection of the set of effects (``selection.stepwise``) on BIC and blocked
    cross-validation inside physical bounds; the friction level re-linearised once when it is
    off by more than ``FRICTION_RELINEARISE``; the selection repeated with one fold left out
-   at a time (stability);
-4. the honest unknown: does the generic basis still explain the residual? If so the
-   mismatch is reported as unexplained (where it sits, what it follows) and selected effects
-   that do not keep their place next to the generic basis are withdrawn rather than allowed
-   to absorb it; shaft orders outside the library and spectral peaks at fixed frequencies
-   count as structure too;
+   at a time (stability); a time drift (warm-up) that a steady function of the operating
+   point replaces is not named (the selection is made again without it);
+4. the honest unknown: does the generic basis (whole, or one of its groups) still explain the
+   residual? If so the mismatch is reported as unexplained (where it sits, what it follows);
+   once structure beyond the selection is very strongly evidenced, selected effects that do
+   not keep their place next to the generic basis are withdrawn rather than allowed to absorb
+   it; shaft orders outside the library, spectral peaks at fixed frequencies and bursts at
+   most reversals count as structure too;
 5. look-alikes (effects the data cannot tell apart) with the runs that separate them.
 """
 from __future__ import annotations
@@ -386,10 +388,16 @@ class Diagnoser:
                 rest = prob.fit(tuple(x for x in with_g.terms if x != t))
                 if rest.bic - with_g.bic < DELTA_BIC or explained(rest, with_g) < min_expl:
                     withdrawn.append(t.effect)
-            if withdrawn:     # selected again without them (the rest inside its bounds)
-                S = self._select(prob, selectable, min_expl, forced_terms,
-                                 exclude=tuple(unstable) + tuple(confounded)
-                                 + tuple(withdrawn)).fit
+            if withdrawn:
+                S = prob.fit(tuple(t for t in S.terms if t.effect not in withdrawn))
+                # a term pushed outside its bounds by the withdrawal is not that effect either
+                while not S.admissible:
+                    out = [t for t in S.terms if t.effect not in forced and not np.all(
+                        (S.of(t)[0] >= t.lower) & (S.of(t)[0] <= t.upper))]
+                    if not out:
+                        break
+                    withdrawn += [t.effect for t in out]
+                    S = prob.fit(tuple(t for t in S.terms if t not in out))
                 with_g = self._best_next_to(prob, S.terms, P["structure"])
         # forward driving only: would the transducer gain error (not selectable) explain what
         # is left? Said in a note, with the run that decides, never named
