@@ -209,13 +209,13 @@ def cmd_efficiency(args) -> int:
         print(f"  efficiency eta = {100 * float(op.eta):.2f} %   basic efficiency eta0 = "
               f"{100 * float(op.eta0):.3f} %")
     print("  partial losses:")
-    for k in LOSS_NAMES:
-        share = f"{100 * losses[k] / p_in:6.2f} %" if p_in > 0 else "   n/a"
-        print(f"    {k}  {losses[k]:9.3f} W  {share} of input   {LOSS_DESCRIPTIONS[k]}")
-    for k, v in result.get("idle_losses_W", {}).items():
+    from model_core.drag import IDLE_DESCRIPTIONS
+    rows = [(k, losses[k], LOSS_DESCRIPTIONS[k]) for k in LOSS_NAMES]
+    rows += [(k, v, IDLE_DESCRIPTIONS[k]) for k, v in result.get("idle_losses_W", {}).items()]
+    for k, v, text in rows:
         share = f"{100 * v / p_in:6.2f} %" if p_in > 0 else "   n/a"
-        print(f"    {k}  {v:9.3f} W  {share} of input")
-    print(f"    sum  {result['loss_power_W']:9.3f} W")
+        print(f"    {k:10}  {v:9.3f} W  {share} of input   {text}")
+    print(f"    {'sum':10}  {result['loss_power_W']:9.3f} W")
     print(f"  profile {design.profile}, losses {design.losses}")
     if "rollers" in result:
         print(f"  grease at {result['grease_temperature_C']:.1f} degC, "

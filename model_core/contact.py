@@ -139,7 +139,8 @@ class _Geometry:
     of distinct contact problems (cached per design and positions)."""
 
     __slots__ = ("angles", "levers", "clear", "rep_levers", "rep_clear", "cls", "inv", "_l", "_l2",
-                 "_c", "_l_m", "_c_m", "_no_clearance", "_sum_l2", "_sum_l19")
+                 "_c", "_l_m", "_c_m", "_no_clearance", "_sum_l2", "_sum_l19", "_compact_cache",
+                 "_cls_flat", "_l2_109", "_rot0")
 
     def __init__(self, angles, levers, clear, dedup=True):
         # a roller at the end of the loaded half (sin = 0 up to rounding, e.g. sin(pi) = 1.2e-16)
@@ -173,6 +174,10 @@ class _Geometry:
         self._no_clearance = bool(np.all(self.rep_clear[lpos > 0] == 0))
         self._sum_l2 = np.sum(lpos * lpos, axis=-1)
         self._sum_l19 = np.sum(lpos ** (19.0 / 9.0), axis=-1)
+        self._compact_cache = {}
+        self._l2_109 = (10.0 / 9.0) * self._l2
+        self._rot0 = np.maximum(self._c_m / self._l_m, 0.0)
+        self._cls_flat = np.ascontiguousarray(self.cls[:, 0])
 
     @property
     def n_distinct(self):
@@ -195,12 +200,14 @@ class _Geometry:
         if self._no_clearance:
             return rot_free
         ex = (slice(None),) + (None,) * (T.ndim - 1)
-        l, l2, c = self._l[ex], self._l2[ex], self._c[ex]
+        l, c = self._l[ex], self._c[ex]
+        # the balance's slope carries 10/9 with Palmgren's law (Q/K = d^(10/9))
+        l2 = self._l2[ex] if linear else self._l2_109[ex]
         l_m, c_m = self._l_m, self._c_m
-        # start: the clearance of the most loaded roller closed, then the free rotation. Any
-        # start with contact is safe: from the left of the root of this increasing convex
+        # start: the clearance of the most loaded roller closed (rot0), then the free rotation.
+        # Any start with contact is safe: from the left of the root of this increasing convex
         # function, Newton's first step lands right of it, then converges monotonically.
-        rot0 = np.maximum(c_m / l_m, 0.0)
+        rot0 = self._rot0
         rot = rot0 + rot_free
         if guess is not None:
             # warm start from the solution (rot_old, T_old): its part beyond the clearance
@@ -209,26 +216,45 @@ class _Geometry:
             ratio = np.where(T_old > 0, T / np.where(T_old > 0, T_old, 1.0), 0.0)
             scaled = rot0 + (rot_old - rot0) * (ratio if linear else ratio ** 0.9)
             rot = np.where((rot_old * l_m > c_m) & (T_old > 0), scaled, rot)
-        linear = law == "linear"
-        for _ in range(_NEWTON_ITERATIONS):
+        T_k = T / stiffness
+        for it in range(_NEWTON_ITERATIONS):
+            if it == 1 and l.shape[0] > 1:
+                # after one step every rotation is right of its root and only decreases: a
+                # roller out of contact at the largest rotation of the batch stays out, and
+                # its terms (zeros) are dropped from the sums
+                r_max = rot.reshape(-1, self.n_distinct).max(0)
+                rows = np.any(self._l * r_max - self._c > 0, axis=1)
+                if not rows.all():
+                    l, l2, c = l[rows], l2[rows], c[rows]
+            # the balance divided by the stiffness: sum l Q/K - T/K (Q/K = d or d^(10/9))
             d = l * rot - c
             np.maximum(d, 0.0, out=d)
             if linear:
-                t = stiffness * np.add.reduce(l * d, axis=0)
-                dt = stiffness * np.add.reduce(l2 * (d > 0), axis=0)
+                t = np.add.reduce(l * d, axis=0)
+                dt = np.add.reduce(l2 * (d > 0), axis=0)
             else:
                 q = np.cbrt(np.cbrt(d))
-                t = stiffness * np.add.reduce(l * q * d, axis=0)
-                dt = (10.0 / 9.0) * stiffness * np.add.reduce(l2 * q, axis=0)
-            pos = dt > 0
-            step = np.where(pos, (t - T) / np.where(pos, dt, 1.0), 0.0)
+                t = np.add.reduce(l * q * d, axis=0)
+                dt = np.add.reduce(l2 * q, axis=0)     # l2 carries the 10/9 here
+            step = np.divide(t - T_k, dt, out=np.zeros_like(t), where=dt > 0)
             rot = rot - step
-            if np.all(np.abs(step) <= _NEWTON_RTOL * np.abs(rot)):
+            if (np.abs(step) <= _NEWTON_RTOL * np.abs(rot)).all():
                 break
         return rot
 
-    def forces(self, torque, law, stiffness, state=None, key=None):
-        """Forces (N) at every position, shape (..., m, n), for gear torque(s) (...)."""
+    def forces(self, torque, law, stiffness, state=None, key=None, layout="positions"):
+        """Forces (N) for gear torque(s) T (...), in one of three layouts:
+
+        - "positions": at every position, shape (..., m, n); returns F.
+        - "compact": at every position, only the rollers that carry load at some point of the
+          batch (padded with unloaded ones, whose forces are exactly zero): returns (F, phi),
+          F shaped (..., m, n_c) for the rollers at the angles phi (m, n_c). Sums
+          over the rollers are those of "positions" (the dropped terms are zeros).
+        - "distinct": at the distinct problems only (rollers as sorted in the problem): returns
+          (F, cls), F (..., n_d, n) and ``cls`` (m,) the problem of each position. Anything
+          that depends on the forces alone (not on the rollers' angles) is the same at all
+          positions of a problem.
+        """
         T = np.asarray(torque, float)
         guess = None if state is None else state.get(key)
         if guess is not None and guess[0].shape != T.shape + (self.n_distinct,):
@@ -236,12 +262,39 @@ class _Geometry:
         rot = self.solve(T, law, stiffness, guess)
         if state is not None:
             state[key] = (rot, T[..., None])
-        d = self._l[(slice(None),) + (None,) * T.ndim] * rot - self._c[
-            (slice(None),) + (None,) * T.ndim]
-        f = contact_force(d, law, stiffness)
-        f = np.where((self._l[(slice(None),) + (None,) * T.ndim] > 0) & (T[..., None] > 0),
-                     f, 0.0)
-        return np.moveaxis(f, 0, -1)[..., self.cls, self.inv]
+        if layout != "compact":
+            ex = (slice(None),) + (None,) * T.ndim
+            f = contact_force(self._l[ex] * rot - self._c[ex], law, stiffness)
+            f = np.where((self._l[ex] > 0) & (T[..., None] > 0), f, 0.0)
+            f = f.transpose(tuple(range(1, f.ndim)) + (0,))
+            return (f, self._cls_flat) if layout == "distinct" else f[..., self.cls, self.inv]
+        # a roller can carry load somewhere in the batch only if it does at the largest
+        # rotation (the approach l*rot - Delta grows with rot)
+        r_max = rot.reshape(-1, self.n_distinct).max(0) if rot.size else np.zeros(
+            self.n_distinct)
+        loaded = (self._l * r_max - self._c > 0) & (self._l > 0)           # (n, n_d)
+        angles, l_s, c_s, cls = self._compact(loaded)
+        # the same approach l*rot - Delta per roller as above, at the selected rollers only
+        f = contact_force(l_s * rot[..., cls, None] - c_s, law, stiffness)
+        return np.where((l_s > 0) & (T[..., None, None] > 0), f, 0.0), angles
+
+    def _compact(self, loaded):
+        """Rollers kept at each position for the rollers ``loaded`` (n, n_d) of the distinct
+        problems: (their angles (m, n_c), levers and clearances, the problem of each
+        position); cached per pattern (few occur)."""
+        key = loaded.tobytes()
+        hit = self._compact_cache.get(key)
+        if hit is None:
+            at_pos = loaded.T[self.cls, self.inv]                              # (m, n)
+            n_c = max(int(at_pos.sum(-1).max()), 1)
+            sel = np.argsort(~at_pos, axis=-1, kind="stable")[:, :n_c]
+            roller = np.take_along_axis(self.inv, sel, -1)
+            hit = (np.take_along_axis(self.angles, sel, -1), self._l.T[self.cls, roller],
+                   self._c.T[self.cls, roller], self._cls_flat)
+            if len(self._compact_cache) > 256:
+                self._compact_cache.clear()
+            self._compact_cache[key] = hit
+        return hit
 
 
 _GEOMETRY_CACHE: dict = {}
@@ -267,13 +320,22 @@ def loaded_half_angles(psi, n):
     return np.take_along_axis(ang, order, -1)
 
 
-def _roller_set_forces(design, gear_torque, state, key, geom, width, dedup):
-    """Solve the distinct problems of one roller set and scatter the forces to all positions."""
+def _roller_set_forces(design, gear_torque, state, key, geom, width, dedup, layout="positions"):
+    """Solve the distinct problems of one roller set and scatter the forces to all positions
+    (layout: see ``_Geometry.forces``; "compact" returns the selected rollers' angles, and
+    "distinct" the class of each position in place of the angles)."""
     stiff = (design.linear_stiffness if design.contact_law == "linear"
              else palmgren_stiffness(width))
     T = np.asarray(gear_torque, float)
     if dedup:
-        return geom.angles, geom.forces(T, design.contact_law, stiff, state, key)
+        out = geom.forces(T, design.contact_law, stiff, state, key, layout)
+        if layout == "compact":
+            F, angles = out
+            return angles, F
+        if layout == "distinct":
+            F, cls = out
+            return cls, F
+        return geom.angles, out
     # reference path: every position on its own, the general solver
     levers, clear = geom.levers, geom.clear
     full = T.shape + levers.shape
@@ -288,7 +350,8 @@ def _psi_key(psi):
     return psi, psi.tobytes()
 
 
-def ring_roller_forces(design, gear_torque, psi, state=None, key="ring", dedup=True):
+def ring_roller_forces(design, gear_torque, psi, state=None, key="ring", dedup=True,
+                       layout="positions"):
     """Normal forces F_Ni (N) between tooth and ring rollers (Eqs. 10-12).
 
     gear_torque: torque T_c (N*m) the ring rollers exert on one cycloid gear about its centre,
@@ -297,7 +360,8 @@ def ring_roller_forces(design, gear_torque, psi, state=None, key="ring", dedup=T
     ``state``: optional dict that keeps the solved rotations under ``key``, for a warm start of
     the next call with nearby torques at the same positions. Positions presenting the same set
     of lever arms and clearances are solved once (``dedup=False``: every position on its own,
-    the reference path; the results agree to ~1e-14).
+    the reference path; the results agree to ~1e-14). ``layout="compact"`` (with dedup):
+    only the rollers that carry load somewhere in the batch, see ``_Geometry.forces``.
     """
     psi, pbytes = _psi_key(psi)
 
@@ -308,15 +372,18 @@ def ring_roller_forces(design, gear_torque, psi, state=None, key="ring", dedup=T
                                                          design.profile_modification))
     geom = _cached_geometry(("ring", design.z1, design.e, design.lam, design.delta_z,
                              design.profile_modification, pbytes), make)
-    return _roller_set_forces(design, gear_torque, state, key, geom, design.b1, dedup)
+    return _roller_set_forces(design, gear_torque, state, key, geom, design.b1, dedup, layout)
 
 
-def disc_roller_forces(design, gear_torque, psi, state=None, key="disc", dedup=True):
+def disc_roller_forces(design, gear_torque, psi, state=None, key="disc", dedup=True,
+                       layout="positions"):
     """Normal forces F_Kj (N) between disc rollers and holes (Eqs. 13-16).
 
     Returns (theta, F) for the rollers of the loaded half, shapes (m, n) and (..., m, n),
     n = ceil(k/2); every force is parallel to the line of centres. ``state``, ``dedup``: as in
-    ``ring_roller_forces``.
+    ``ring_roller_forces``. ``layout="distinct"`` (with dedup): returns (cls, F) with F at
+    the distinct contact problems only, (..., n_d, n), and cls (m,) the problem of each
+    position (the disc rollers' losses depend on their forces alone).
     """
     psi, pbytes = _psi_key(psi)
     c = geometry.hole_clearance(design.D_cz, design.d_v2, design.e)
@@ -326,7 +393,7 @@ def disc_roller_forces(design, gear_torque, psi, state=None, key="disc", dedup=T
         levers = geometry.disc_roller_levers(theta, design.r_w)
         return _Geometry(theta, levers, np.full_like(levers, c))
     geom = _cached_geometry(("disc", design.n_disc_rollers, design.r_w, c, pbytes), make)
-    return _roller_set_forces(design, gear_torque, state, key, geom, design.b2, dedup)
+    return _roller_set_forces(design, gear_torque, state, key, geom, design.b2, dedup, layout)
 
 
 def eccentric_bearing_force(design, phi, F_ring, F_disc, ring_index=None, disc_index=None):

@@ -22,7 +22,7 @@ Operating point: the loss model gives P_L(|T1|, w2 - wS) from the frictionless c
 at the ring torque T1. The basic efficiency follows from Eq. (28) on the relative motion,
 eta0 = 1 - P_L/|T1 w1'| (w = +1) or 1/(1 + P_L/|T1 w1'|) (w = -1, shaft 2 drives relatively),
 and T1 from the given input torque depends on eta0 through Kreines' rule: a scalar fixed point,
-solved by a vectorised secant iteration. The efficiency of the mode is then Eq. (28) directly,
+solved per point by a vectorised secant iteration (regula falsi where it fails). The efficiency of the mode is then Eq. (28) directly,
 1 - P_L/P_in, which equals the Kreines formula (a test checks it).
 """
 from __future__ import annotations
@@ -35,8 +35,64 @@ from . import kinematics
 from .errors import CycloidInputError
 from .losses import LOSS_NAMES, PartialLosses, partial_losses
 
-_FIXED_POINT_TOL = 1e-9   # on eta0: the known torque is then reproduced to ~1e-8
+#: on g(eta0) = f(eta0) - eta0 [1]. T1 depends on eta0 through 1/(i0 eta0 - 1) in the modes
+#: with S driving (i0 = 14/15: about 10 times amplified, without bound near the locking limit
+#: eta0 = i0 when back-driven), so 1e-9 left the losses converged to only ~1e-8 (measured:
+#: 2e-8); 1e-12 costs one more secant step on part of the points
+_FIXED_POINT_TOL = 1e-12
 _FIXED_POINT_MAX = 30
+#: up to this many points, the secant's first two points are evaluated in one call (a few
+#: points cost what one does); the second is _PAIR_START [1], a typical basic efficiency, so
+#: the secant interpolates between it and the frictionless 1. One operating point then takes
+#: 4.3 (paper) or 4.7 (physical) loss evaluations instead of 5.1 or 5.4 (bench's speed range)
+_PAIR_START_MAX = 16
+_PAIR_START = 0.96
+#: lower end of the searched basic efficiency [1]: below 0.1 % no drive runs
+_ETA0_FLOOR = 1e-3
+#: regula falsi on the bracket (points where the secant fails): the bracket's relative width
+#: at the end, adjacent floats (near the locking pole eta0 = i0 the ring torque is
+#: extremely sensitive to eta0), and the most steps (the bisection it replaces took 60)
+_BRACKET_RTOL = 2 * np.finfo(float).eps
+_BRACKET_MAX = 100
+
+
+def _state_subset(state, sel):
+    """The warm-start entries of the contact solver (arrays or tuples of arrays over the
+    points, leading axis) at the points ``sel``."""
+    return {k: (tuple(a[sel] for a in v) if isinstance(v, tuple) else v[sel])
+            for k, v in state.items() if not _is_memo(k)}
+
+
+def _is_memo(key):
+    """Keys of the loss model's memo of whole roller sides (losses._memoised): kept for the
+    whole batch only."""
+    return isinstance(key, tuple) and isinstance(key[0], str) and key[0].startswith("memo")
+
+
+def _covers(sel, n):
+    """Whether the index array ``sel`` lists each of the points 0..n-1 (np.unique would import
+    numpy.ma, 15 ms, on its first call)."""
+    seen = np.zeros(n, bool)
+    seen[sel] = True
+    return bool(seen.all())
+
+
+def _state_update(state, sub, sel, n=None):
+    """Write the warm-start entries ``sub`` at the points ``sel`` back into ``state`` (a point
+    listed twice keeps its last entry); entries ``state`` lacks are created when ``sel`` covers
+    all ``n`` points."""
+    for k, v in sub.items():
+        if _is_memo(k):
+            continue
+        old = state.get(k)
+        if old is None and n is not None and _covers(sel, n):
+            old = state[k] = (tuple(np.empty((n,) + a.shape[1:]) for a in v)
+                              if isinstance(v, tuple) else np.empty((n,) + v.shape[1:]))
+        if old is None:
+            continue
+        for o, new in (zip(old, v) if isinstance(v, tuple) else ((old, v),)):
+            if o.shape[1:] == new.shape[1:]:
+                o[sel] = new
 
 
 def kreines_efficiency(mode: str, eta0, i0):
@@ -60,8 +116,20 @@ def basic_efficiency(T1, T2, w1, w2):
 
 
 def torque_coefficients(eta0, w, i0):
-    """(c1, c2, cS) with T_shaft = c * T1 by Kreines' rule and the torque balance."""
-    c2 = -i0 * np.where(w > 0, eta0, 1.0 / eta0)
+    """(c1, c2, cS) with T_shaft = c * T1 by Kreines' rule and the torque balance.
+
+    eta0 [1] basic efficiency, w = +1 where shaft 1 drives in the relative motion (T2 = -i0
+    eta0 T1) and -1 where it is driven (T2 = -i0 T1/eta0); a driven ring needs eta0 > 0: at
+    eta0 = 0 no torque reaches it (ValueError, naming the points)."""
+    eta0 = np.asarray(eta0, float)
+    driven = np.asarray(w) <= 0
+    if eta0.shape != driven.shape:
+        eta0, driven = np.broadcast_arrays(eta0, driven)
+    bad = driven & ~(eta0 > 0)
+    if bad.any():
+        raise ValueError(f"basic efficiency eta0 = {eta0[bad].flat[0]!r} with the ring driven: "
+                         "Kreines' rule needs eta0 > 0 there")
+    c2 = -i0 * np.divide(1.0, eta0, out=eta0.copy(), where=driven)
     return np.ones_like(c2), c2, -(1.0 + c2)
 
 
@@ -112,10 +180,108 @@ class OperatingPoint:
         return np.where(self.flow_forward, fwd, rev)
 
 
-def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> OperatingPoint:
+def _secant(eta0_from, x0, f0, x1, f1, T1, L, lo, inv):
+    """Secant iteration on the fixed point eta0 = f(eta0) per point, from the evaluated pair
+    (x0, f0), (x1, f1) (with the ring torques T1 and losses L at x1, updated in place).
+
+    Each point stops when |f - eta0| <= _FIXED_POINT_TOL (the others go on alone); iterates
+    stay in the physical range [lo, 1] (f <= 1 always: the losses are not negative), and a
+    point whose next iterate would leave it is marked ``stuck`` for the bracketed solver. The
+    variable is u = eta0 where shaft 1 drives relatively and u = 1/eta0 where it is driven
+    (``inv``): then f is 1 - x or 1/(1 + x), and the loss ratio x = P_L/|T1 w1'| is about
+    affine in u (Coulomb losses keep x constant, speed-only losses make it grow as 1/|T1|, and
+    |T1| goes as 1/u or as 1/(i0 u - 1) through Kreines' rule), so the secant on
+    G(u) = u(f) - u is nearly exact even where the losses rival the power (on g = f - eta0
+    it crawled there). Returns (x1, f1, g1, T1, stuck)."""
+    def to_u(e, m):
+        return np.where(m, 1.0 / e, e)
+
+    u0, u1 = x0.copy(), to_u(x1, inv)
+    G0, G1 = to_u(f0, inv) - u0, to_u(f1, inv) - u1
+    g1 = f1 - x1
+    stuck = np.zeros(x1.shape, bool)
+    active = np.flatnonzero(np.abs(g1) > _FIXED_POINT_TOL)
+    for _ in range(_FIXED_POINT_MAX):
+        if active.size == 0:
+            break
+        ua, ub, Ga, Gb = u0[active], u1[active], G0[active], G1[active]
+        denom = Gb - Ga
+        safe = np.abs(denom) > 1e-300
+        u2 = np.where(safe, ub - Gb * (ub - ua) / np.where(safe, denom, 1.0), ub + Gb)
+        inv_a = inv[active]
+        x2 = np.where(inv_a, 1.0 / np.where(u2 > 0, u2, np.inf), u2)
+        out = ~((x2 >= lo[active]) & (x2 <= 1.0))
+        stuck[active[out]] = True
+        keep = ~out
+        active, x2, u2, ub, Gb, inv_a = (active[keep], x2[keep], u2[keep], ub[keep], Gb[keep],
+                                         inv_a[keep])
+        if active.size == 0:
+            break
+        f2, L2, T12 = eta0_from(x2, active)
+        at = slice(None) if active.size == x1.size else active   # all: no index copies
+        u0[at], G0[at] = ub, Gb
+        u1[at], G1[at] = u2, to_u(f2, inv_a) - u2
+        x1[at], f1[at], g1[at], T1[at] = x2, f2, f2 - x2, T12
+        for arr, name in zip(L, LOSS_NAMES):
+            arr[at] = getattr(L2, name)
+        active = active[np.abs(f2 - x2) > _FIXED_POINT_TOL]
+    return x1, f1, g1, T1, stuck
+
+
+def _regula_falsi(eta0_from, sel, a, ga, gb, x_last, g_last, T1, Ls, converged):
+    """Regula falsi (Illinois) on the bracket (a, 1] with g(a) = ga >= 0 >= g(1) = gb, at the
+    points ``sel`` where the secant failed, narrowed first by the secant's last point in range
+    (x_last, g_last). Keeps each point's best evaluation (smallest |g|: near the locking pole g
+    is steep, so even the float next to the root leaves |g| ~ 1e-12); a point stops when
+    |g| <= _FIXED_POINT_TOL and ``converged(f, T1, points)``, or when its bracket is down to
+    adjacent floats. Returns (x, f, T1, losses) of the best evaluations; T1 and Ls hold the
+    values at a on entry."""
+    xs, fs, Ts, gs = a.copy(), ga + a, T1.copy(), ga.copy()
+    Ls = [np.array(arr, float) for arr in Ls]
+    b = np.ones_like(a)
+    inside = (x_last > a) & (x_last < b)
+    up0, down0 = inside & (g_last >= 0), inside & (g_last < 0)
+    a, ga = np.where(up0, x_last, a), np.where(up0, g_last, ga)
+    b, gb = np.where(down0, x_last, b), np.where(down0, g_last, gb)
+    live = np.ones(sel.size, bool)
+    side = np.zeros(sel.size)   # Illinois: which end was kept last (+1 b, -1 a)
+    for _ in range(_BRACKET_MAX):
+        if not live.any():
+            break
+        i = np.flatnonzero(live)
+        den = ga[i] - gb[i]
+        m = np.where(den != 0, (a[i] * -gb[i] + b[i] * ga[i]) / np.where(den != 0, den, 1.0),
+                     0.5 * (a[i] + b[i]))
+        m = np.where((m > a[i]) & (m < b[i]), m, 0.5 * (a[i] + b[i]))
+        fm, Lm, Tm = eta0_from(m, sel[i])
+        gm = fm - m
+        better = np.abs(gm) < np.abs(gs[i])
+        j = i[better]
+        xs[j], fs[j], Ts[j], gs[j] = m[better], fm[better], Tm[better], gm[better]
+        for arr, name in zip(Ls, LOSS_NAMES):
+            arr[j] = getattr(Lm, name)[better]
+        up = gm >= 0
+        a[i] = np.where(up, m, a[i])
+        b[i] = np.where(up, b[i], m)
+        # Illinois: halve the retained end's value when the same end is kept twice
+        gb[i] = np.where(up, np.where(side[i] > 0, 0.5 * gb[i], gb[i]), gm)
+        ga[i] = np.where(up, gm, np.where(side[i] < 0, 0.5 * ga[i], ga[i]))
+        side[i] = np.where(up, 1.0, -1.0)
+        done = (np.abs(gm) <= _FIXED_POINT_TOL) & converged(fm, Tm, sel[i])
+        live[i] = (gm != 0) & (b[i] - a[i] > _BRACKET_RTOL * b[i]) & ~done
+    return xs, fs, Ts, Ls
+
+
+def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
+                    dedup=True) -> OperatingPoint:
     """Solve the drive at driving-shaft speed w_in (rad/s, signed) and one known torque:
     T_in, the torque delivered into the driving shaft, or T_out, the torque the load applies on
-    the driven shaft (both as applied by the outside; N*m, signed). Arrays broadcast (maps)."""
+    the driven shaft (both as applied by the outside; N*m, signed). Arrays broadcast (maps).
+
+    Every point is solved on its own (a point in a map gives what it gives alone, to ~1e-12):
+    the fixed point in eta0 by a secant iteration per point, stopped per point, with a
+    regula falsi on (lo, 1] where the secant fails. ``dedup=False``: the losses by the
+    straightforward per-position path (losses.partial_losses), the reference of the fast one."""
     a, b, h = kinematics.parse_mode(mode)
     if (T_in is None) == (T_out is None):
         raise CycloidInputError("torque", None, "give exactly one of T_in and T_out")
@@ -138,88 +304,137 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> Operat
     w = kinematics.shaft_speeds(mode, w_in, design.z1)
     w1p, w2p = kinematics.relative_speeds(w["1"], w["2"], w["S"])
     idx = {"1": 0, "2": 1, "S": 2}
+    # the solver works on flat arrays of the points (subsets of them are iterated on their own)
+    shape = T_known.shape
+    T_flat, w1p_f = T_known.reshape(-1), np.broadcast_to(w1p, shape).reshape(-1)
+    w2p_f = np.broadcast_to(w2p, shape).reshape(-1)
     # direction of the relative power flow from the frictionless torques
-    c_free = torque_coefficients(np.ones_like(T_known), np.ones_like(T_known), i0)
-    T1_free = T_known / c_free[idx[known]]
-    wdir = np.where(T1_free * w1p >= 0, 1.0, -1.0)
-    base = np.abs(w1p)
-    def guarded(eta0):
-        # with the known torque on S and shaft 2 driving relatively (w = -1), T1 = T_S/(i0/eta0 - 1)
-        # has a pole at the locking limit eta0 = i0: keep off it (such points are locked)
+    c_free = torque_coefficients(1.0, 1.0, i0)
+    T1_free = T_flat / c_free[idx[known]]
+    wdir = np.where(T1_free * w1p_f >= 0, 1.0, -1.0)
+    base = np.abs(w1p_f)
+    physical = design.profile == "physical"
+    # the physical range of eta0 searched: (lo, 1]; with the known torque on S and shaft 2
+    # driving relatively (w = -1), T1 = T_S/(i0/eta0 - 1) has a pole at the locking limit
+    # eta0 = i0, so such points are searched above it (below, they are locked)
+    lo = np.where((wdir < 0) & (known == "S"), i0 * (1 + 1e-9), _ETA0_FLOOR)
+
+    def guarded(eta0, wd):
         if known != "S":
             return eta0
-        return np.where(wdir < 0, np.maximum(eta0, i0 * (1 + 1e-9)), eta0)
-
-    def ring_torque(eta0):
-        c = torque_coefficients(guarded(eta0), wdir, i0)[idx[known]]
-        return T_known / c
+        return np.where(wd < 0, np.maximum(eta0, i0 * (1 + 1e-9)), eta0)
 
     state = {}   # warm start of the contact solutions between iterations
     # load-independent losses (physical profile, losses = "all"): they depend on the speeds
     # only; loss power is frame-invariant, so they enter eta0 like the gear's own losses
-    if design.profile == "physical" and design.losses == "all":
+    if physical and design.losses == "all":
         from . import drag, thermal
         idle = drag.idle_losses(design, w, thermal.lubricant_viscosity(design))
-        idle = {k: np.broadcast_to(v, T_known.shape) for k, v in idle.items()}
+        idle = {k: np.broadcast_to(v, shape) for k, v in idle.items()}
     else:
         idle = {}
-    P_idle = sum(idle.values()) if idle else 0.0
+    P_idle = (np.broadcast_to(sum(idle.values()), shape).reshape(-1) if idle
+              else np.zeros_like(T_flat))
 
-    def eta0_from(eta0):
-        T1 = ring_torque(eta0)
+    def eta0_from(eta0, sel=None):
+        """f(eta0): the basic efficiency the losses give at the ring torque that eta0 implies,
+        at the points ``sel`` (index array; None: all). Returns (f, losses, T1)."""
+        full = sel is None or sel.size == T_flat.size
+        pick = (lambda v: v) if full else (lambda v: v[sel])
+        wd = pick(wdir)
+        c = torque_coefficients(guarded(eta0, wd), wd, i0)[idx[known]]
+        T1 = pick(T_flat) / c
         # physical profile: friction in the force balance. The gear's torque balance with its
         # losses makes the disc side carry |T2| = i0 eta0^w |T1| (less than the ring side's
         # frictionless share when the ring drives, more when the disc drives), so the disc
         # rollers' and the eccentric bearing's forces follow the power-flow direction
-        Td = (np.abs(T1) * i0 * np.where(wdir > 0, eta0, 1.0 / np.maximum(eta0, 1e-3))
-              if design.profile == "physical" else None)
-        L = partial_losses(design, np.abs(T1), w2p, state=state, disc_torque=Td,
-                           ring_flow=wdir if design.profile == "physical" else None)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            x = np.where(T1 != 0, (L.total + P_idle) / (np.abs(T1) * base), 0.0)
-        return np.where(wdir > 0, 1.0 - x, 1.0 / (1.0 + x)), L, T1
+        # (with the torque known on shaft 2 that is |T2| itself, the same in every iteration)
+        if not physical:
+            Td = None
+        elif known == "2":
+            Td = np.abs(pick(T_flat))
+        else:
+            Td = np.abs(T1) * i0 * np.where(wd > 0, eta0, 1.0 / np.maximum(eta0, 1e-3))
+        sub = state if full else _state_subset(state, sel)
+        L = partial_losses(design, np.abs(T1), pick(w2p_f), state=sub, disc_torque=Td,
+                           ring_flow=wd if physical else None, dedup=dedup)
+        if not full:
+            _state_update(state, sub, sel, T_flat.size)
+        num = L.total + pick(P_idle)
+        x = np.divide(num, np.abs(T1) * pick(base), out=np.zeros_like(num), where=T1 != 0)
+        return np.where(wd > 0, 1.0 - x, 1.0 / (1.0 + x)), L, T1
 
-    # secant iteration on g(eta0) = f(eta0) - eta0, started from the frictionless point
-    x0 = np.ones_like(T_known)
-    f0, _, _ = eta0_from(x0)
-    x1 = f0
-    f1, L, T1 = eta0_from(x1)
-    g0, g1 = f0 - x0, f1 - x1
-    for _ in range(_FIXED_POINT_MAX):
-        if np.all(np.abs(g1) <= _FIXED_POINT_TOL):
-            break
-        denom = g1 - g0
-        safe = np.abs(denom) > 1e-300
-        x2 = np.where(safe, x1 - g1 * (x1 - x0) / np.where(safe, denom, 1.0), f1)
-        x0, g0 = x1, g1
-        x1 = x2
+    # the secant on the fixed point eta0 = f(eta0) (_secant), started from the frictionless
+    # point; u = 1/eta0 where the ring is driven relatively
+    inv = wdir < 0
+    x0 = np.ones_like(T_flat)
+    n = T_flat.size
+    if n <= _PAIR_START_MAX:
+        # a few points cost what one does (numpy's per-call overhead): evaluate the secant's
+        # first two points together, the frictionless one and _PAIR_START below it
+        x1 = np.maximum(np.full(n, _PAIR_START), lo)
+        both = np.concatenate([np.arange(n), np.arange(n)])
+        f01, L01, T101 = eta0_from(np.concatenate([x0, x1]), both)
+        f0, f1, T1 = f01[:n], f01[n:], T101[n:]
+        L = [np.array(getattr(L01, k)[n:], float) for k in LOSS_NAMES]
+    else:
+        f0, _, _ = eta0_from(x0)
+        x1 = np.clip(f0, lo, 1.0)
         f1, L, T1 = eta0_from(x1)
-        g1 = f1 - x1
-    # the secant can fail where the losses rival the power (very light load) or run into the
-    # locking pole; such points are solved again by bisection on the bracket (lo, 1], where
-    # g(1) <= 0. No root above lo: self-locking (known torque on S, w = -1) or a stall.
-    lo = np.where((wdir < 0) & (known == "S"), i0 * (1 + 1e-9), 1e-3)
+        L = [np.array(getattr(L, k), float) for k in LOSS_NAMES]
+    g_one = f0 - 1.0                       # g(1) <= 0: the upper end of every bracket
+    x1, f1, g1, T1, stuck = _secant(eta0_from, x0, f0, x1, f1, T1, L, lo, inv)
 
-    def reproduced(eta0, T1):
-        c_k = torque_coefficients(guarded(eta0), wdir, i0)[idx[known]]
-        return np.abs(T1 * c_k - T_known) <= 1e-7 * np.abs(T_known) + 1e-300
+    def reproduced(eta0, T1, sel):
+        wd = wdir[sel]
+        c_k = torque_coefficients(guarded(eta0, wd), wd, i0)[idx[known]]
+        return np.abs(T1 * c_k - T_flat[sel]) <= 1e-7 * np.abs(T_flat[sel]) + 1e-300
 
-    ok = (np.abs(g1) <= 10 * _FIXED_POINT_TOL) & (f1 > lo) & (f1 <= 1) & reproduced(f1, T1)
+    allp = np.arange(T_flat.size)
+    ok = (~stuck & (np.abs(g1) <= 10 * _FIXED_POINT_TOL) & (f1 > lo) & (f1 <= 1)
+          & reproduced(f1, T1, allp))
     solvable = np.ones_like(ok)
-    if not np.all(ok):
-        g_lo = eta0_from(lo)[0] - lo
-        solvable = g_lo >= 0
-        a_, b_ = lo.copy(), np.ones_like(lo)
-        for _ in range(60):
-            mid = 0.5 * (a_ + b_)
-            gm = eta0_from(np.where(ok, x1, mid))[0] - mid
-            a_, b_ = np.where(gm >= 0, mid, a_), np.where(gm >= 0, b_, mid)
-        x1 = np.where(ok, x1, 0.5 * (a_ + b_))
-        f1, L, T1 = eta0_from(x1)
+    bad = np.flatnonzero(~ok)
+    if bad.size:
+        # the secant can fail where the losses rival the power (very light load) or run into
+        # the locking pole; such points are solved again on the bracket (lo, 1], where
+        # g(1) <= 0, by regula falsi (Illinois); no root above lo where g(lo) < 0
+        lo_b = lo[bad]
+        x_last, g_last = x1.copy(), g1.copy()
+        f_lo, L_lo, T1_lo = eta0_from(lo_b, bad)
+        g_lo = f_lo - lo_b
+        solvable[bad] = g_lo >= 0
+        # without a steady solution: the values at the bracket's lower end (torques and losses
+        # are reported NaN below, eta0 is the basic efficiency the losses give there)
+        x1[bad], f1[bad], T1[bad] = lo_b, f_lo, T1_lo
+        for arr, name in zip(L, LOSS_NAMES):
+            arr[bad] = getattr(L_lo, name)
+        keep = g_lo >= 0
+        bad = bad[keep]
+        if bad.size:
+            def converged(fm, Tm, sel):
+                # converged as the secant's points are, with the known torque reproduced to
+                # 1e-10 (near the locking pole only adjacent floats get there)
+                wd = wdir[sel]
+                c_k = torque_coefficients(guarded(fm, wd), wd, i0)[idx[known]]
+                return np.abs(Tm * c_k - T_flat[sel]) <= 1e-10 * np.abs(T_flat[sel])
+
+            xs, fs, Ts, Ls = _regula_falsi(
+                eta0_from, bad, lo_b[keep], g_lo[keep], g_one[bad], x_last[bad],
+                g_last[bad], T1[bad], [arr[bad] for arr in L], converged)
+            x1[bad], f1[bad], T1[bad] = xs, fs, Ts
+            for arr, ls in zip(L, Ls):
+                arr[bad] = ls
+    L = PartialLosses(*(arr.reshape(shape) for arr in L))
+    f1, T1, solvable = f1.reshape(shape), T1.reshape(shape), solvable.reshape(shape)
+    wdir = wdir.reshape(shape)
+
+    def guarded_full(eta0):
+        return guarded(eta0, wdir)
     eta0 = f1   # consistent with the losses L evaluated at T1
-    c = torque_coefficients(guarded(eta0), wdir, i0)
+    c = torque_coefficients(guarded_full(eta0), wdir, i0)
     # all torques from T1 and eta0, so that Kreines' rule and the energy balance hold exactly;
-    # the known torque is reproduced to the fixed-point tolerance (about 1e-9 relative)
+    # the known torque is reproduced to the fixed-point tolerance (checked to 1e-7 in ``ok``)
     torques = {"1": T1 * c[0], "2": T1 * c[1], "S": T1 * c[2]}
     forward = (T_known * w[a] >= 0) if known == a else (T_known * w[b] <= 0)
     flow_into_S = np.where(forward, b == "S", a == "S")
@@ -227,12 +442,16 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None) -> Operat
     locked = flow_into_S & ((eta0 <= i0) | ~solvable)
     # no steady solution at all (locked with the torque given on S, or losses above the power)
     undefined = ~solvable | (locked & (known == "S"))
-    nan = np.full_like(eta0, np.nan)
-    torques = {k: np.where(undefined, nan, v) for k, v in torques.items()}
+    if undefined.any():
+        def blank(v):
+            return np.where(undefined, np.nan, v)
+    else:
+        def blank(v):
+            return np.array(v, float)
+    torques = {k: blank(v) for k, v in torques.items()}
     torques[a] = torques[a] + T_extra
-    L = PartialLosses(*(np.where(undefined, nan, getattr(L, n)) for n in LOSS_NAMES),
-                      P_extra=np.where(undefined, nan, T_extra * w[a]),
-                      **{k: np.where(undefined, nan, v) for k, v in idle.items()})
+    L = PartialLosses(*(blank(getattr(L, n)) for n in LOSS_NAMES),
+                      P_extra=blank(T_extra * w[a]), **{k: blank(v) for k, v in idle.items()})
     p_a, p_b = torques[a] * w[a], torques[b] * w[b]
     p_in = np.where(forward, p_a, p_b)
     p_out = -np.where(forward, p_b, p_a)

@@ -103,15 +103,49 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
     the ring rollers' normal forces carry the friction's moment
     (friction.ring_friction_arm_ratio). diag: a dict collecting roller states (contact_states).
     """
-    fr, lub = design.friction, design.lubricant
-    physical = design.profile == "physical"
+    fr = design.friction
     nu = thermal.lubricant_viscosity(design)
-    eta = lub.density * nu
+    eta = design.lubricant.density * nu
     T = np.asarray(gear_torque, float)
     W = np.asarray(w2_rel, float)[..., None, None]
+    # the ring and the disc side each only when its inputs changed since the last call with
+    # this state (in the fixed point in eta0 one side often keeps its torque: the known one)
+    memo = state if (dedup and diag is None) else None
+    phi, F, PL5, PL6 = _memoised(
+        memo, ("memo ring", gear), (T, W, ring_flow),
+        lambda: _ring_side(design, T, W, psi_ring, state, gear, dedup, diag, ring_flow, eta))
+    T_d = T if disc_torque is None else np.asarray(disc_torque, float)
+    dcls, Q, PL2, PL3 = _memoised(
+        memo, ("memo disc", gear), (T_d, W),
+        lambda: _disc_side(design, T_d, W, psi_disc, state, gear, dedup, diag, eta))
+    W2 = W[..., 0]
+    # eccentric bearing: relative speed of its rings is |w_p - w_S| = |w2 - wS| (Eq. 21)
+    if ring_index is None:
+        F_EV, F_EH = contact.eccentric_bearing_force(design, phi, F, Q)
+    else:
+        d_index, r_i, d_i, pair_index = _bearing_pairs(ring_index, disc_index, dcls,
+                                                       Q.shape[-2])
+        F_EV, F_EH = contact.eccentric_bearing_force(design, phi, F, Q, r_i, d_i)
+        PL5, PL6 = PL5[..., ring_index], PL6[..., ring_index]
+        PL2, PL3 = PL2[..., d_index], PL3[..., d_index]
+    F_E = np.hypot(F_EV, F_EH)
+    Om = np.abs(W2)
+    PL1 = friction.skf_frictional_moment(F_E, Om, design.d_p, design.D_p, nu, fr) * Om
+    if ring_index is not None:
+        PL1 = PL1[..., pair_index]
+    return PL1, PL2, PL3, PL5, PL6
+
+
+def _ring_side(design, T, W, psi_ring, state, gear, dedup, diag, ring_flow, eta):
+    """Ring rollers of one gear (see _gear_losses): (phi, F, PL5, PL6), the losses per
+    position (class)."""
+    fr = design.friction
+    physical = design.profile == "physical"
+    nu = thermal.lubricant_viscosity(design)
     # ring rollers (z1 per position)
+    # dedup: only the rollers that carry load somewhere in the batch (the others add zeros)
     phi, F = contact.ring_roller_forces(design, T, psi_ring, state, ("ring", gear),
-                                           dedup=dedup)
+                                        dedup=dedup, layout="compact" if dedup else "positions")
     omega_r = velocities.relative_ring_speed(W, design.z1)
     r_c = design.d_v1 / 2
     v_rt = velocities.profile_velocity(phi, design.e, design.z1, design.lam, r_c, omega_r)
@@ -152,10 +186,22 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
                                                 r_c)
         k = 1.0 / (1.0 - np.asarray(ring_flow, float)[..., None] * rho1)
         PL5, PL6, F = PL5 * k, PL6 * k, F * k[..., None]
+    return phi, F, PL5, PL6
+
+
+def _disc_side(design, T_d, W, psi_disc, state, gear, dedup, diag, eta):
+    """Disc rollers of one gear (see _gear_losses): (dcls, Q, PL2, PL3), at the distinct
+    contact problems (dcls: the problem of each position class; None without dedup)."""
+    fr = design.friction
+    physical = design.profile == "physical"
+    nu = thermal.lubricant_viscosity(design)
     # disc rollers (k per position)
-    T_d = T if disc_torque is None else np.asarray(disc_torque, float)
-    theta, Q = contact.disc_roller_forces(design, T_d, psi_disc, state, ("disc", gear),
-                                          dedup=dedup)
+    # dedup: the disc rollers' losses depend on their forces alone, so they are evaluated at
+    # the distinct contact problems (dcls: the problem of each position class)
+    dcls, Q = contact.disc_roller_forces(design, T_d, psi_disc, state, ("disc", gear),
+                                         dedup=dedup, layout="distinct" if dedup else "positions")
+    if not dedup:
+        dcls = None
     W2 = W[..., 0]
     v_r2 = velocities.disc_rolling_speed(design.D_cz, W2)[..., None]
     PL2 = friction.rolling_resistance_loss(fr.rolling_disc, Q, v_r2)
@@ -182,15 +228,48 @@ def _gear_losses(design, gear_torque, w2_rel, psi_ring, psi_disc, state=None, ge
         M = friction.skf_frictional_moment(Q, spin2, design.d_o2, design.d_v2, nu, fr)
         PL3 = (M * spin2).sum(-1)
     PL2 = PL2.sum(-1)
-    # eccentric bearing: relative speed of its rings is |w_p - w_S| = |w2 - wS| (Eq. 21)
-    F_EV, F_EH = contact.eccentric_bearing_force(design, phi, F, Q, ring_index, disc_index)
-    if ring_index is not None:
-        PL5, PL6 = PL5[..., ring_index], PL6[..., ring_index]
-        PL2, PL3 = PL2[..., disc_index], PL3[..., disc_index]
-    F_E = np.hypot(F_EV, F_EH)
-    Om = np.abs(W2)
-    PL1 = friction.skf_frictional_moment(F_E, Om, design.d_p, design.D_p, nu, fr) * Om
-    return PL1, PL2, PL3, PL5, PL6
+    return dcls, Q, PL2, PL3
+
+
+def _same(a, b):
+    if a is None or b is None:
+        return a is b
+    a, b = np.asarray(a), np.asarray(b)
+    return a.shape == b.shape and np.array_equal(a, b)
+
+
+def _memoised(memo, key, inputs, compute):
+    """compute(), or its result of the last call under ``key`` in ``memo`` (the operating
+    point's state dict) when the inputs are the same (compared exactly; stored as copies)."""
+    if memo is None:
+        return compute()
+    hit = memo.get(key)
+    if hit is not None and all(_same(a, b) for a, b in zip(hit[0], inputs)):
+        return hit[1]
+    out = compute()
+    memo[key] = (tuple(None if a is None else np.array(a, copy=True) for a in inputs), out)
+    return out
+
+
+_PAIR_CACHE: dict = {}
+
+
+def _bearing_pairs(ring_index, disc_index, dcls, n_disc):
+    """Distinct (ring class, disc problem) pairs of the gear positions, for the eccentric
+    bearing: (disc index of each position, ring and disc index of each pair, pair of each
+    position). Cached on the (cached) index arrays themselves."""
+    key = (id(ring_index), id(disc_index), id(dcls), n_disc)
+    hit = _PAIR_CACHE.get(key)
+    if hit is not None and hit[0] is ring_index and hit[1] is disc_index and hit[2] is dcls:
+        return hit[3]
+    d_index = disc_index if dcls is None else dcls[disc_index]
+    pairs, pair_index = np.unique(ring_index * (n_disc + 1) + d_index, return_inverse=True)
+    r_i, d_i = np.divmod(pairs, n_disc + 1)
+    out = (d_index, r_i, d_i, pair_index.reshape(-1))
+    if len(_PAIR_CACHE) > 64:
+        _PAIR_CACHE.clear()
+    _PAIR_CACHE[key] = (ring_index, disc_index, dcls, out)
+    return out
 
 
 def contact_states(design, ring_torque, w2_rel, n_positions=None):
@@ -256,6 +335,9 @@ def _mesh_entries(design, n_positions, gears, dedup):
     return hit
 
 
+_ALPHA_CACHE: dict = {}   # (z1, k, n_positions) -> mesh positions (read-only)
+
+
 def partial_losses_by_position(design, ring_torque, w2_rel, n_positions=None, state=None,
                                dedup=True, disc_torque=None, ring_flow=None):
     """Partial losses of the whole drive (both gears) at each mesh position, W.
@@ -270,7 +352,12 @@ def partial_losses_by_position(design, ring_torque, w2_rel, n_positions=None, st
     friction in the ring rollers' force balance); None: frictionless forces (the paper).
     Returns (alpha, PartialLosses with arrays shaped (..., n_alpha)).
     """
-    alpha = mesh_positions(design, n_positions)
+    key = (design.z1, design.n_disc_rollers, int(n_positions or design.n_positions))
+    alpha = _ALPHA_CACHE.get(key)
+    if alpha is None:
+        alpha = mesh_positions(design, n_positions)
+        alpha.flags.writeable = False
+        _ALPHA_CACHE[key] = alpha
     m = alpha.size
     T1 = np.abs(np.asarray(ring_torque, float))
     Tc = T1 * design.z_c / design.z1
@@ -301,4 +388,6 @@ def partial_losses(design, ring_torque, w2_rel, n_positions=None, state=None,
     """Partial losses (W) averaged over a full mesh cycle; arrays shaped like the inputs."""
     _, by_pos = partial_losses_by_position(design, ring_torque, w2_rel, n_positions, state,
                                            dedup, disc_torque, ring_flow)
-    return PartialLosses(*(getattr(by_pos, n).mean(-1) for n in LOSS_NAMES))
+    # the mean over the positions (np.add.reduce / m is what ndarray.mean computes)
+    return PartialLosses(*(np.add.reduce(getattr(by_pos, n), -1) / by_pos.PL1.shape[-1]
+                           for n in LOSS_NAMES))

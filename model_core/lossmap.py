@@ -17,7 +17,11 @@ import numpy as np
 
 from . import kinematics
 from .efficiency import operating_point
+from .drag import IDLE_NAMES
 from .losses import LOSS_NAMES
+
+#: the partial losses a map carries: the load-dependent ones, then the load-independent ones
+MAP_LOSS_NAMES = LOSS_NAMES + IDLE_NAMES
 
 _SHAFT_INDEX = {"1": 0, "2": 1, "S": 2}
 
@@ -27,13 +31,15 @@ class ModeMap:
 
     Bilinear in (ln |tau_out|, ln |w_in|), clamped at the grid edges; ``out_of_range`` counts
     the clamped look-ups (below the grid the losses' shares and eta0 of the edge are used; at
-    zero speed or torque the losses vanish with the power).
+    zero speed or torque the losses vanish with the power). ``dedup=False`` builds it by the
+    straightforward per-position path of the losses (the reference; same tables to ~1e-12).
     """
 
     #: torque nodes: 48 (was 36) because the physical profile's load-independent losses make
     #: eta0 curve as 1/|tau| at light load; 36 left 1.1e-3 of interpolation error in eta at
     #: 1000 r/min, 0.3 N*m (S2), 48 leaves 0.6e-3
-    def __init__(self, design, mode, torque_max, speed_max, n_torque=48, n_speed=28, span=1e-3):
+    def __init__(self, design, mode, torque_max, speed_max, n_torque=48, n_speed=28, span=1e-3,
+                 dedup=True):
         if not (torque_max > 0 and speed_max > 0):
             raise ValueError("the map needs positive torque and speed ranges")
         self.a, self.b, self.h = kinematics.parse_mode(mode)
@@ -50,11 +56,12 @@ class ModeMap:
         self._wdir = {}
         for forward in (True, False):
             # forward: the load absorbs power, tau_out * w_out < 0
-            op = operating_point(design, self.mode, WW, T_out=(-sign_b if forward else sign_b) * TT)
-            shares = np.stack([getattr(op.losses, n) for n in LOSS_NAMES], -1)
-            # shares of PL1..PL6 among themselves: they sum to the whole loss (with losses =
-            # "all" the load-independent part, which has no output of its own, is spread over
-            # them in proportion; eta0 carries it exactly)
+            op = operating_point(design, self.mode, WW,
+                                 T_out=(-sign_b if forward else sign_b) * TT, dedup=dedup)
+            shares = np.stack([np.broadcast_to(getattr(op.losses, n), WW.shape)
+                               for n in MAP_LOSS_NAMES], -1)
+            # shares of PL1..PL6 and the load-independent PL_support, PL_seal, PL_churn: they
+            # sum to the whole loss, which eta0 carries exactly
             shares = shares / np.maximum(shares.sum(-1, keepdims=True), 1e-300)
             table = np.concatenate([op.eta0[..., None], shares], -1)
             # below the lightest load that runs (losses above the power, or locked with the
@@ -80,7 +87,7 @@ class ModeMap:
         self._lw = [math.log(w) for w in W]
         self.torque_range = (float(T[0]), float(T[-1]))
         self.speed_range = (float(W[0]), float(W[-1]))
-        self.names = LOSS_NAMES
+        self.names = MAP_LOSS_NAMES
         self.out_of_range = 0
 
     def _interp(self, table, t, w):
@@ -106,7 +113,7 @@ class ModeMap:
         """Steady state at driving speed w_in (rad/s) and load torque tau_out (N*m, applied by
         the load on the driven shaft). Returns (speeds, torques, losses, eta, eta0, locked,
         forward): speeds and torques as tuples over shafts (1, 2, S), losses a list in
-        LOSS_NAMES order (W), eta the efficiency of the actual flow (0 without power or when
+        MAP_LOSS_NAMES order (W), eta the efficiency of the actual flow (0 without power or when
         locked)."""
         r1, r2, rS = self.ratio
         speeds = (r1 * w_in, r2 * w_in, rS * w_in)

@@ -22,12 +22,13 @@ class EfficiencyMap:
     input_power: np.ndarray
 
 
-def efficiency_map(design, mode, speeds, torques) -> EfficiencyMap:
+def efficiency_map(design, mode, speeds, torques, dedup=True) -> EfficiencyMap:
     """Evaluate the drive on the grid speeds x torques (1-D arrays, rad/s and N*m), every point
-    mesh-cycle averaged with its contacts solved; one vectorised pass."""
+    mesh-cycle averaged with its contacts solved; one vectorised pass (``dedup``: see
+    efficiency.operating_point)."""
     speeds = np.asarray(speeds, float)
     torques = np.asarray(torques, float)
     W, T = np.meshgrid(speeds, torques, indexing="ij")
-    op = operating_point(design, mode, W, T)
+    op = operating_point(design, mode, W, T, dedup=dedup)
     return EfficiencyMap(mode=op.mode, speeds=speeds, torques=torques, eta=op.eta, eta0=op.eta0,
                          locked=op.locked, losses=op.losses.as_dict(), input_power=op.input_power)

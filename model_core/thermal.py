@@ -61,8 +61,16 @@ def lubricant_viscosity(design):
     lub = design.lubricant
     if design.profile == "paper":
         return lub.kinematic_viscosity
-    return float(walther_viscosity(design.operating_temperature, lub.kinematic_viscosity,
-                                   lub.kinematic_viscosity_100))
+    key = (design.operating_temperature, lub.kinematic_viscosity, lub.kinematic_viscosity_100)
+    nu = _VISCOSITY_CACHE.get(key)
+    if nu is None:
+        if len(_VISCOSITY_CACHE) > 256:
+            _VISCOSITY_CACHE.clear()
+        nu = _VISCOSITY_CACHE[key] = float(walther_viscosity(*key))
+    return nu
+
+
+_VISCOSITY_CACHE: dict = {}   # (temperature, nu40, nu100) -> nu: the loss model asks per call
 
 
 def solve_heat_balance(design, mode, w_in, T_in, ambient=None, tol=0.01, max_iter=50):

@@ -136,6 +136,25 @@ def test_outputs_valid_after_initialization(fmu):
     inst.close()
 
 
+PARTS = ("PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal", "PL_churn")
+
+
+@pytest.mark.parametrize("exact", [False, True])
+def test_load_independent_losses_have_their_own_outputs(fmu, exact):
+    """The physical profile's seal, support-bearing and churning losses come out under their
+    own names, equal to the core's at the operating point (map: within its interpolation),
+    and with the load-dependent ones they make up P_loss."""
+    inst = Instance(fmu, mode="S1", exact=exact)
+    inst.step(w_in=250.0, tau_out=-7.0)
+    op = operating_point(DriveDesign(), "S1", 250.0, T_out=-7.0)
+    got = dict(zip(PARTS, inst.get(*PARTS)))
+    for n in ("PL_support", "PL_seal", "PL_churn"):
+        assert got[n] == pytest.approx(float(getattr(op.losses, n)), rel=1e-9 if exact else 2e-2)
+        assert got[n] > 0
+    assert sum(got.values()) == pytest.approx(inst.get("P_loss")[0], rel=1e-9)
+    inst.close()
+
+
 def test_energy_balance_every_step_all_quadrants(fmu):
     inst = Instance(fmu, mode="S2")
     rng = np.random.default_rng(1)
@@ -144,7 +163,7 @@ def test_energy_balance_every_step_all_quadrants(fmu):
         tau = rng.uniform(-9, 9)
         inst.step(w_in=w, tau_out=tau)
         tau_in, w_out, p_loss, parts = inst.get("tau_in", "w_out", "P_loss")[0], \
-            inst.get("w_out")[0], inst.get("P_loss")[0], inst.get("PL1", "PL2", "PL3", "PL5", "PL6")
+            inst.get("w_out")[0], inst.get("P_loss")[0], inst.get(*PARTS)
         assert tau_in * w + tau * w_out == pytest.approx(p_loss, rel=1e-9, abs=1e-12)
         assert p_loss >= 0
         assert sum(parts) == pytest.approx(p_loss, rel=1e-9, abs=1e-12)
@@ -223,3 +242,21 @@ def test_load_unload_load_in_one_process(fmu):
     etas = [simulate_fmu(fmu, stop_time=0.05, output_interval=0.01, input=inp,
                          output=["eta"])["eta"][-1] for _ in range(3)]
     assert etas[0] > 0.6 and etas[0] == etas[1] == etas[2]
+
+
+def test_the_profile_is_a_parameter(fmu):
+    """profile = 'paper' (with the paper's load-dependent losses) gives the paper profile's
+    numbers; the default gives the physical profile's; a bad profile is an fmi2Error naming
+    the field."""
+    paper = DriveDesign(profile="paper", losses="load_dependent")
+    for params, design in (({}, DriveDesign()),
+                           ({"profile": "paper", "losses": "load_dependent"}, paper)):
+        inst = Instance(fmu, mode="S1", exact=True, **params)
+        inst.step(w_in=250.0, tau_out=-7.0)
+        op = operating_point(design, "S1", 250.0, T_out=-7.0)
+        assert inst.get("eta")[0] == pytest.approx(float(op.eta), rel=1e-9)
+        inst.close()
+    assert float(operating_point(paper, "S1", 250.0, T_out=-7.0).eta) < 0.7 < float(
+        operating_point(DriveDesign(), "S1", 250.0, T_out=-7.0).eta)
+    with pytest.raises(Exception):
+        Instance(fmu, "bad", mode="S1", profile="bogus")

@@ -32,7 +32,7 @@ GCC = shutil.which("gcc") or shutil.which("cc")
 pytestmark = pytest.mark.skipif(GCC is None, reason="no C compiler")
 
 OUT = ("w_out", "tau_in", "tau_housing", "P_loss", "PL1", "PL2", "PL3", "PL5", "PL6", "eta",
-       "eta0", "P_extra", "P_stored")
+       "eta0", "P_extra", "P_stored", "PL_support", "PL_seal", "PL_churn")
 #: agreement required with the Python FMU (issue 7)
 RTOL = 1e-9
 #: absolute floor for values that are zero in one FMU and a rounding residue in the other [W,
@@ -182,7 +182,7 @@ def test_model_description_metadata(native, fmu):
     assert init["w_out"] == {"w_in", "mode", "mode_number"}
     assert {"drag_torque", "ripple_1x", "tau_out"} <= init["tau_in"]
     assert "drag_torque" not in init["tau_housing"]
-    assert len(out) == len(init) == 14
+    assert len(out) == len(init) == 17       # 16 Real outputs and locked
 
 
 # -- the C host ------------------------------------------------------------------------------
@@ -339,7 +339,7 @@ class CExtra(ctypes.Structure):
 
 class CSolution(ctypes.Structure):
     _fields_ = [("speeds", ctypes.c_double * 3), ("torques", ctypes.c_double * 3),
-                ("losses", ctypes.c_double * 5), ("eta", ctypes.c_double),
+                ("losses", ctypes.c_double * 8), ("eta", ctypes.c_double),
                 ("eta0", ctypes.c_double), ("locked", ctypes.c_int),
                 ("forward", ctypes.c_int), ("out_of_range", ctypes.c_int)]
 

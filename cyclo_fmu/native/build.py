@@ -72,7 +72,7 @@ EXTRA = (
      "(|w|/300 rad/s)^p (0 to 2)"),
 )
 
-#: Outputs, in the order of the C state's out[] (value references 10..22), then ``locked``.
+#: Outputs, in the order of the C state's out[] (value references 10..25), then ``locked``.
 OUTPUTS = (
     ("w_out", "rad/s", "AngularVelocity", "speed of the driven shaft"),
     ("tau_in", "N.m", "Torque", "torque the driver applies on the driving shaft"),
@@ -89,6 +89,10 @@ OUTPUTS = (
      "ripple, warm-up) at the driving shaft"),
     ("P_stored", "W", "Power", "power into stored energy at the driving shaft: kinetic energy of "
      "input_inertia and the ripples' zero-mean exchange (part of P_extra, not a loss)"),
+    ("PL_support", "W", "Power", "partial loss PL_support: support bearings of the shafts "
+     "(load-independent)"),
+    ("PL_seal", "W", "Power", "partial loss PL_seal: shaft lip seals"),
+    ("PL_churn", "W", "Power", "partial loss PL_churn: grease sheared at the orbiting gears' faces"),
 )
 
 #: SI base-unit exponents and display units (name, factor: display = factor * SI value)
@@ -104,6 +108,7 @@ UNITS = {
     "rad": (dict(rad=1), (("deg", 180.0 / math.pi),)),
     "s": (dict(s=1), ()),
     "N/m": (dict(kg=1, s=-2), (("N/mm", 1e-3),)),
+    "K": (dict(K=1), ()),
 }
 DISPLAY = {"rad/s": "r/min", "m": "mm", "m2/s": "mm2/s", "rad": "deg", "N/m": "N/mm"}
 
@@ -331,7 +336,8 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
     deps = {"w_out": (["w_in"], ["w_in"] + mode_p)}
     for name in ("tau_in", "P_loss", "eta", "P_extra", "P_stored"):
         deps[name] = (both, both + mode_p + steady)
-    for name in ("tau_housing", "PL1", "PL2", "PL3", "PL5", "PL6", "eta0", "locked"):
+    for name in ("tau_housing", "PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal",
+                 "PL_churn", "eta0", "locked"):
         deps[name] = (both, both + mode_p)
 
     def unknown(name, which):
@@ -546,7 +552,7 @@ native C (no Python). The loss map of the design below is built in: |tau_out| fr
 rad/s, log-spaced; outside, eta0 is held at the edge (the losses keep scaling with the power).</p>
 <p>Ports as Modelica flanges: a torque is what the outside applies on the reducer's shaft, so
 the power into the reducer at a shaft is tau*w. Inputs w_in, tau_out; outputs w_out, tau_in,
-tau_housing, P_loss, PL1..PL6, eta, eta0, locked, P_extra.</p>
+tau_housing, P_loss, PL1..PL6, PL_support, PL_seal, PL_churn, eta, eta0, locked, P_extra.</p>
 <h2>Design (fixed at build time)</h2><pre>{escape(design_to_toml(design))}</pre>
 <p>License: MIT (cyclo-fmu). The FMI headers in sources/ are the Modelica Association's,
 2-clause BSD.</p>

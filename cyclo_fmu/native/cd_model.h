@@ -12,7 +12,7 @@
 #define CD_MODEL_H
 
 #define CD_N_MODES 6
-#define CD_N_LOSSES 5          /* PL1, PL2, PL3, PL5, PL6 */
+#define CD_N_LOSSES 8          /* PL1, PL2, PL3, PL5, PL6, PL_support, PL_seal, PL_churn */
 #define CD_N_COLS (1 + CD_N_LOSSES)   /* eta0, then the shares of the partial losses */
 
 /* One operating mode (driving shaft a, driven shaft b, held shaft h; 0 = ring 1, 1 = disc 2,

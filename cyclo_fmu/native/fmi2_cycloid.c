@@ -27,14 +27,14 @@
 #define VR_W_IN 0
 #define VR_TAU_OUT 1
 #define VR_OUT0 10
-#define N_OUT 13
+#define N_OUT 16
 #define VR_EXTRA0 30
 #define VR_MODE_NUMBER 0
 #define VR_LOCKED 10
 #define VR_MODE 0
 
 enum { O_W_OUT, O_TAU_IN, O_TAU_HOUSING, O_P_LOSS, O_PL1, O_PL2, O_PL3, O_PL5, O_PL6, O_ETA,
-       O_ETA0, O_P_EXTRA, O_P_STORED };
+       O_ETA0, O_P_EXTRA, O_P_STORED, O_PL_SUPPORT, O_PL_SEAL, O_PL_CHURN };
 
 static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "drag_torque", "stribeck_torque", "stribeck_speed", "input_inertia", "ripple_1x",
@@ -194,6 +194,9 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     s->out[O_PL3] = r.losses[2];
     s->out[O_PL5] = r.losses[3];
     s->out[O_PL6] = r.losses[4];
+    s->out[O_PL_SUPPORT] = r.losses[5];
+    s->out[O_PL_SEAL] = r.losses[6];
+    s->out[O_PL_CHURN] = r.losses[7];
     if (steady) tau_in += cd_steady_torque(&s->extra, w_in);
     if (dynamic) {
         /* CycloidDrive._dynamic_torque */

@@ -50,7 +50,7 @@ QUANTITIES = {"rad/s": "AngularVelocity", "N.m": "Torque", "W": "Power", "m": "L
               "m2/s": "KinematicViscosity", "kg/m3": "Density", "kg.m2": "MomentOfInertia",
               "s": "Time", "rad": "Angle", "Hz": "Frequency", "1": "DimensionlessRatio",
               "N.m.s/rad": "RotationalDampingConstant", "N.m/rad": "RotationalSpringConstant",
-              "rad/s2": "AngularAcceleration"}
+              "rad/s2": "AngularAcceleration", "K": "ThermodynamicTemperature"}
 
 # SI base-unit exponents of the units we use (FMI 2.0 BaseUnit attributes)
 UNITS = {
@@ -68,6 +68,7 @@ UNITS = {
     "Hz": dict(s=-1),
     "N.m.s/rad": dict(kg=1, m=2, s=-1, rad=-1),
     "N.m/rad": dict(kg=1, m=2, s=-2, rad=-1),
+    "K": dict(K=1),
 }
 
 

@@ -82,6 +82,14 @@ DESIGN_PARAMETERS = [
     ("thermal_tau", "extra", "thermal_tau", "s", "warm-up time constant", Real),
     ("drag_exponent", "extra", "drag_exponent", "1",
      "exponent p of the drag's speed law (|w|/300 rad/s)^p", Real),
+    # the model (design [model]); after the others, so that their value references stay
+    ("profile", None, "profile", None, "model profile: physical (correct kinematics, roll or "
+     "skid, Stribeck pin law, friction in the force balance, load-independent losses) or "
+     "paper (what the paper computed)", String),
+    ("losses", None, "losses", None, "losses that enter: all or load_dependent (the paper "
+     "profile always uses load_dependent)", String),
+    ("operating_temperature", None, "operating_temperature", "K",
+     "grease temperature (physical profile; sets the viscosity by Walther's law)", Real),
 ]
 
 #: min/max of the parameters (the modelDescription's; checked at initialization). Lengths,
@@ -95,9 +103,14 @@ PARAMETER_LIMITS = dict(
                                 "drag_torque", "stribeck_torque", "stribeck_speed",
                                 "input_inertia", "thermal_tau")},
     mu_boundary=(0.0, 1.0), mu_rolling=(0.0, 1.0), thermal_loss_change=(-1.0, None),
-    mode_number=(0, 6), map_torque_max=(0.0, None), map_speed_max=(0.0, None))
+    mode_number=(0, 6), map_torque_max=(0.0, None), map_speed_max=(0.0, None),
+    operating_temperature=(0.0, None))
 
-OUTPUT_LOSSES = ("PL1", "PL2", "PL3", "PL5", "PL6")
+#: partial losses with an output each: the paper's load-dependent ones, then the physical
+#: profile's load-independent ones (zero with losses = "load_dependent"); they sum to P_loss
+#: less P_extra
+OUTPUT_LOSSES = ("PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal", "PL_churn")
+_LOSS_TEXT = {**core.losses.LOSS_DESCRIPTIONS, **core.drag.IDLE_DESCRIPTIONS}
 #: rad/s^2; below this driving-shaft acceleration J_load is the secant over this value (the
 #: inertial torque it stands for, J_out r * 1 rad/s^2, is below the torque transducers' noise)
 _ALPHA_MIN = 1.0
@@ -143,9 +156,8 @@ class CycloidDrive(UnitSlave):
                     depends=both)
         self.output("P_loss", 0.0, "W", "total power loss tau_in*w_in + tau_out*w_out - P_stored "
                     "(>= 0)", depends=both)
-        for n in OUTPUT_LOSSES:
-            self.output(n, 0.0, "W", f"partial loss {n}: {core.losses.LOSS_DESCRIPTIONS[n]}",
-                        depends=both)
+        for n in OUTPUT_LOSSES[:5]:
+            self.output(n, 0.0, "W", f"partial loss {n}: {_LOSS_TEXT[n]}", depends=both)
         self.output("eta", 0.0, "1", "efficiency of the actual power flow (0 without power or "
                     "when locked)", depends=both, quantity="Efficiency", display="%")
         self.output("eta0", 1.0, "1", "basic efficiency (carrier held)", depends=both,
@@ -164,6 +176,8 @@ class CycloidDrive(UnitSlave):
         self.output("P_stored", 0.0, "W", "power into stored energy at the driving shaft: "
                     "kinetic energy of input_inertia and the ripples' zero-mean exchange (part "
                     "of P_extra, not a loss)", depends=both)
+        for n in OUTPUT_LOSSES[5:]:      # after the older outputs: their value references stay
+            self.output(n, 0.0, "W", f"partial loss {n}: {_LOSS_TEXT[n]}", depends=both)
         self._theta = 0.0
         self._slope_key = None
         self._w_last = None
@@ -292,7 +306,8 @@ class CycloidDrive(UnitSlave):
             self.w_out = speeds[ib]
             self.tau_in = self._tau_in_gear = torques[ia]
             self.tau_housing = torques[ih]
-            self.PL1, self.PL2, self.PL3, self.PL5, self.PL6 = losses
+            for n, v in zip(OUTPUT_LOSSES, losses):
+                setattr(self, n, v)
             if self._steady_extra:
                 self.tau_in += float(self._design.extra.steady_torque(w_in))
         else:

@@ -34,10 +34,7 @@ from model_core import CycloidInputError, DriveDesign
 from model_core.design import design_from_dict, design_from_toml, design_to_dict
 from model_core.paper import BenchEnvelope
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib
+import tomllib
 
 METHODS = ("grid", "lhs", "table")
 #: Largest number of designs one spec may ask for [1]: each costs about 40 ms for two modes on

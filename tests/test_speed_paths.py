@@ -1,0 +1,100 @@
+"""The fast paths of the core give what the straightforward ones give (issue 8, item 8).
+
+- Losses: solving each distinct contact problem once, ring forces only for the rollers that
+  carry load in the batch, disc losses at the distinct problems, the eccentric bearing per
+  distinct pair (``dedup=True``) against every mesh position and contact problem on its own
+  (``dedup=False``), through the whole operating point, both profiles, forward and back-driven
+  modes and needle rollers.
+- The fixed point in eta0: a point in a map is solved on its own, so it gives what it gives
+  alone (the earlier global iteration stopped when the last point converged and left the
+  others ~1e-8 apart, up to 1.5e-5 in mode 21 of the physical profile).
+- The physical ModeMap raises no divide-by-zero (the secant used to leave 0 < eta0 <= 1).
+"""
+import warnings
+
+import numpy as np
+import pytest
+
+from model_core import DriveDesign, operating_point, rpm_to_rad_s
+from model_core.efficiency import torque_coefficients
+from model_core.lossmap import ModeMap
+from model_core.losses import LOSS_NAMES
+
+RTOL = 1e-9
+
+DESIGNS = {
+    "paper": DriveDesign(profile="paper"),
+    "physical": DriveDesign(profile="physical"),
+    "physical-needle": DriveDesign(profile="physical", ring_rollers="needle",
+                                   disc_rollers="needle"),
+}
+
+
+def _outputs(op):
+    out = {"eta": op.eta, "eta0": op.eta0, "locked": op.locked}
+    out.update({"T" + k: v for k, v in op.torques.items()})
+    out.update({n: getattr(op.losses, n) for n in LOSS_NAMES})
+    out["loss_total"] = op.losses.total
+    return out
+
+
+def _assert_same(a, b, rtol=RTOL):
+    for k in a:
+        x, y = np.asarray(a[k], float), np.asarray(b[k], float)
+        np.testing.assert_array_equal(np.isnan(x), np.isnan(y), err_msg=k)
+        ok = ~np.isnan(x)
+        np.testing.assert_allclose(x[ok], y[ok], rtol=rtol,
+                                   atol=1e-12 * (np.max(np.abs(y[ok])) if ok.any() else 0),
+                                   err_msg=k)
+
+
+def _points(mode, n=3):
+    """Driving speeds (rad/s) and torques (N*m) spanning a map (n x n); back-driving modes (1S,
+    2S) with the torque on the driving shaft 1 or 2, so power flows into S."""
+    rpm = np.linspace(500.0, 2800.0, n)
+    T = np.linspace(0.1, 0.85, n)
+    if mode[0] != "S":     # shaft 1 or 2 drives: geared down speed, geared up torque
+        rpm, T = rpm / 15, T * 15
+    W, TT = np.meshgrid(rpm_to_rad_s(rpm), T, indexing="ij")
+    return W, TT
+
+
+@pytest.mark.parametrize("name", list(DESIGNS))
+@pytest.mark.parametrize("mode", ["S1", "S2", "1S", "2S", "12"])
+def test_fast_losses_equal_the_straightforward_path(name, mode):
+    d = DESIGNS[name]
+    if name == "physical-needle" and mode not in ("S1", "2S"):
+        pytest.skip("needle rollers: one forward and one back-driven mode suffice")
+    W, T = _points(mode)
+    fast = operating_point(d, mode, W, T)
+    slow = operating_point(d, mode, W, T, dedup=False)
+    assert np.isfinite(fast.eta).any()
+    _assert_same(_outputs(fast), _outputs(slow))
+
+
+@pytest.mark.parametrize("name", ["paper", "physical"])
+@pytest.mark.parametrize("mode", ["S1", "2S", "21"])
+def test_a_point_in_a_map_is_the_point_alone(name, mode):
+    d = DESIGNS[name]
+    W, T = _points(mode, 5)   # more points than efficiency._PAIR_START_MAX
+    batch = _outputs(operating_point(d, mode, W, T))
+    for i in range(W.shape[0]):
+        for j in range(W.shape[1]):
+            alone = _outputs(operating_point(d, mode, W[i, j], T[i, j]))
+            _assert_same({k: v[i, j] for k, v in batch.items()}, alone)
+
+
+@pytest.mark.parametrize("mode", ["S1", "S2"])
+def test_physical_modemap_without_runtime_warnings(mode):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        m = ModeMap(DESIGNS["physical"], mode, 30.0, 350.0)
+    eta0 = np.concatenate([m._arrays[True][..., 0], m._arrays[False][..., 0]])
+    assert np.all((eta0 > 0) & (eta0 <= 1))
+
+
+def test_kreines_coefficients_need_a_positive_eta0_when_the_ring_is_driven():
+    c = torque_coefficients(np.array([0.0, 0.5]), np.array([1.0, -1.0]), 0.9)
+    np.testing.assert_allclose(c[1], [-0.0, -1.8])
+    with pytest.raises(ValueError, match="eta0"):
+        torque_coefficients(np.array([0.0]), np.array([-1.0]), 0.9)
