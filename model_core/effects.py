@@ -65,6 +65,11 @@ class Effect:
     synth_default: tuple = ({}, None)   # (values, shape) the synthesiser hides by default
     requires: tuple = ()       # signals it needs (e.g. "sens_nu")
     temperature_form: bool = False   # with a temperature column the shape becomes (T - T0)
+    #: the effect changes the torque at a fixed operating point over time (a warm-up): it is
+    #: named only when it explains what no steady function of the operating point explains
+    #: (a recording that visits its operating points in time order makes any smooth function
+    #: of the operating point correlate with time)
+    time_drift: bool = False
 
     def basis(self, s: dict, shape=None) -> np.ndarray:
         """Columns (n_samples, n_params) whose combination with the parameters is the torque."""
@@ -173,7 +178,7 @@ EFFECTS = {
                    "(or per 10 K with a temperature column)"),),
         shape=TAU_GRID, shape_name="tau", shape_unit="s",
         separating_run="a cold start held at one operating point, with a temperature channel",
-        synth_default=({"loss_change": 0.12}, 150.0), temperature_form=True),
+        synth_default=({"loss_change": 0.12}, 150.0), temperature_form=True, time_drift=True),
     "viscosity_drift": Effect(
         "viscosity_drift",
         "the lubricant's viscosity changes as the drive warms (first order in time, or with the "
@@ -184,7 +189,7 @@ EFFECTS = {
         separating_run="a cold start with a temperature channel at several speeds (viscosity "
                        "losses change sign with speed, a friction level does not)",
         synth_default=({"ln_viscosity_change": -0.8}, 300.0), requires=("sens_nu",),
-        temperature_form=True),
+        temperature_form=True, time_drift=True),
     "inertia": Effect(
         "inertia", "unmodelled rotating inertia on the input side: torque J dw/dt",
         (Parameter("J", "kg*m^2", 0.0, 1e-2, "inertia referred to the input shaft"),),

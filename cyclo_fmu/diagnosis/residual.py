@@ -192,6 +192,11 @@ EVENT_WINDOW = 0.1
 SIGN_SHARE = 0.02
 #: binomial tail probability below which bursts are tied to events, not chance
 BURST_P = 1e-6
+#: [1] share of the reversals of one kind that must carry a burst before the bursts are called
+#: a transient of the drive (lost motion, compliance): such a transient is taken up at every
+#: reversal; bursts at a part of them are the transients of a quasi-static replay at a hard
+#: reversal (the model's own inertia and losses through a fast speed change), not missing physics
+REVERSAL_SHARE = 0.75
 
 
 def _near(t, events, window):
@@ -221,19 +226,28 @@ def _steps(t, x, factor=20.0):
 def bursts(t, spikes, w, T_out) -> dict:
     """Where the excluded spike blocks sit: at speed reversals, at torque reversals, at steps of
     load or speed, or elsewhere; ``tied``: the events whose bursts are too many for chance
-    (binomial tail below ``BURST_P``)."""
+    (binomial tail below ``BURST_P``) and, for reversals, that sit at ``REVERSAL_SHARE`` of
+    them at least; ``events_with_burst``: {kind: (events with a burst, events)}."""
     n = int(spikes.sum())
     out = {"count": n, "at": {}, "tied": []}
     if n == 0:
         return out
     left = spikes.copy()
+    out["events_with_burst"] = {}
     for name, events in (("speed reversals", _reversals(t, w)),
                          ("torque reversals", _reversals(t, T_out)),
                          ("load or speed steps", np.union1d(_steps(t, T_out), _steps(t, w)))):
-        near = _near(t, np.sort(events), EVENT_WINDOW)
+        events = np.sort(events)
+        near = _near(t, events, EVENT_WINDOW)
         k = int((left & near).sum())
         out["at"][name] = k
-        if k >= 3:
+        # how many of the events carry a burst
+        hit = np.zeros(len(events), bool)
+        for tb in t[left & near]:
+            hit |= np.abs(events - tb) <= EVENT_WINDOW
+        out["events_with_burst"][name] = (int(hit.sum()), len(events))
+        every = "reversal" not in name or hit.sum() >= REVERSAL_SHARE * len(events)
+        if k >= 3 and every:
             from scipy.stats import binom
             p0 = max(float(near.mean()), 1e-12)
             if binom.sf(k - 1, n, p0) < BURST_P:
