@@ -63,22 +63,54 @@ def palmgren_idle_moment(n_rpm, nu_mm2_s, dm_mm, f0):
                     160e-7 * f0 * dm_mm ** 3) * (n > 0)
 
 
-def idle_losses(design, speeds, nu):
-    """Load-independent losses [W] at the shaft speeds ``speeds`` {"1","2","S": rad/s} with
-    the grease's kinematic viscosity nu [m^2/s]; a dict keyed IDLE_NAMES."""
+def idle_torques(design, speeds, nu):
+    """Torques [N*m] the outside must apply on each shaft to keep it turning against the
+    load-independent drag, per partial loss.
+
+    Parameters
+    ----------
+    design : DriveDesign
+    speeds : dict
+        Shaft speeds {"1", "2", "S": rad/s} (scalars or arrays, signed).
+    nu : float
+        Kinematic viscosity of the grease [m^2/s].
+
+    Returns
+    -------
+    dict
+        ``{name: {"1": T1, "2": T2, "S": TS}}`` for name in IDLE_NAMES. A shaft's support
+        bearings and seal act on it alone, T = sign(w) M (M = 2 M0 for the two bearings; the
+        seal's M = P/|w| = SEAL_POWER_COEFF d^2 * 60/(2 pi), constant); the grease drag acts
+        between the eccentric S and the disc 2 (the orbiting gear's faces against the disc and
+        housing, sheared at e |wS - w2|) as a pair, +M on S and -M on 2 with M = P/|wS - w2|.
+        The held shaft's entry is the housing's reaction (its own speed is zero). The power
+        sum_x T_x w_x of each entry is that loss (``idle_losses``).
+    """
     nu_mm = nu * 1e6
-    sup = 0.0
-    seal = 0.0
+    zero = 0.0 * sum(np.asarray(speeds[x], float) for x in "12S")
+    sup, seal = {}, {}
     for shaft, (d, D) in SUPPORT_BEARINGS.items():
-        w = np.abs(np.asarray(speeds[shaft], float))
+        w = np.asarray(speeds[shaft], float)
         M0 = palmgren_idle_moment(rad_s_to_rpm(w), nu_mm, 0.5 * (d + D) * 1e3, F0_BALL_GREASE)
-        sup = sup + 2 * M0 * 1e-3 * w
-        seal = seal + SEAL_POWER_COEFF * (SEAL_DIAMETERS[shaft] * 1e3) ** 2 * rad_s_to_rpm(w)
-    w_rel = np.abs(np.asarray(speeds["2"], float) - np.asarray(speeds["S"], float))
+        sup[shaft] = zero + 2 * M0 * 1e-3 * np.sign(w)
+        seal[shaft] = zero + (SEAL_POWER_COEFF * (SEAL_DIAMETERS[shaft] * 1e3) ** 2
+                              * rad_s_to_rpm(1.0) * np.sign(w))
+    w_rel = np.asarray(speeds["S"], float) - np.asarray(speeds["2"], float)
     # face area of a gear: an annulus from the eccentric bearing's seat to the tooth root
     r_out = design.r_p - design.e - design.d_v1 / 2
     r_in = design.D_p / 2
     area = np.pi * (r_out ** 2 - r_in ** 2)
     eta = design.lubricant.density * nu
-    churn = N_FACES * eta * (design.e * w_rel) ** 2 * area / FACE_GAP
+    # Couette drag P = N eta (e w_rel)^2 A / h, as a torque pair M = P / |w_rel|
+    M_churn = zero + N_FACES * eta * design.e ** 2 * w_rel * area / FACE_GAP
+    churn = {"1": zero, "2": -M_churn, "S": M_churn}
     return {"PL_support": sup, "PL_seal": seal, "PL_churn": churn}
+
+
+def idle_losses(design, speeds, nu):
+    """Load-independent losses [W] at the shaft speeds ``speeds`` {"1","2","S": rad/s} with
+    the grease's kinematic viscosity nu [m^2/s]; a dict keyed IDLE_NAMES: the power
+    sum_x T_x w_x of each entry of ``idle_torques``."""
+    torques = idle_torques(design, speeds, nu)
+    return {name: sum(t[x] * np.asarray(speeds[x], float) for x in "12S")
+            for name, t in torques.items()}

@@ -155,6 +155,8 @@ class OperatingPoint:
     input_power: np.ndarray
     output_power: np.ndarray
     i0: float
+    drag_torques: dict = None
+
 
     @property
     def driving(self) -> str:
@@ -173,8 +175,18 @@ class OperatingPoint:
         return self.losses.total
 
     @property
+    def gear_torques(self) -> dict:
+        """The torques on the gear itself (N*m per shaft): ``torques`` less ``drag_torques``,
+        what the outside spends on the drag at the shafts (load-independent losses, design.extra).
+        They obey Kreines' rule with eta0 exactly."""
+        drag = self.drag_torques or {}
+        return {k: v - drag.get(k, 0.0) for k, v in self.torques.items()}
+
+    @property
     def eta_kreines(self) -> np.ndarray:
-        """Kreines-formula efficiency of the actual flow from eta0 (equals eta; a check)."""
+        """Kreines-formula efficiency of the gear's flow from eta0 (equals eta without drag at
+        the shafts, i.e. the paper profile or losses = "load_dependent" and no design.extra;
+        a check)."""
         fwd = kreines_efficiency(self.mode, self.eta0, self.i0)
         rev = kreines_efficiency(kinematics.reverse_mode(self.mode), self.eta0, self.i0)
         return np.where(self.flow_forward, fwd, rev)
@@ -272,6 +284,39 @@ def _regula_falsi(eta0_from, sel, a, ga, gb, x_last, g_last, T1, Ls, converged):
     return xs, fs, Ts, Ls
 
 
+def shaft_drag(design, speeds, shape=()):
+    """The load-independent drag at the shafts (physical profile, losses = "all").
+
+    The support bearings, seals and grease drag (``model_core.drag``) act on the shafts, not
+    on the mesh, so they stay outside Kreines' rule: folded into eta0 they would make it
+    meaningless at light load, where they exceed the power the gear transmits (a real drive
+    then still needs its no-load running torque).
+
+    Parameters
+    ----------
+    design : DriveDesign
+    speeds : dict
+        Shaft speeds {"1", "2", "S": rad/s}.
+    shape : tuple
+        Shape to broadcast the results to.
+
+    Returns
+    -------
+    T_drag : dict
+        Torque the outside spends on the drag at each shaft, N*m (zeros without such losses).
+    idle : dict
+        The load-independent partial losses (W) keyed ``drag.IDLE_NAMES`` (empty without).
+    """
+    if design.profile == "physical" and design.losses == "all":
+        from . import drag, thermal
+        idle_t = drag.idle_torques(design, speeds, thermal.lubricant_viscosity(design))
+        idle = {name: np.broadcast_to(sum(t[x] * speeds[x] for x in "12S"), shape)
+                for name, t in idle_t.items()}
+        T_drag = {x: np.broadcast_to(sum(t[x] for t in idle_t.values()), shape) for x in "12S"}
+        return T_drag, idle
+    return {x: np.zeros(shape) for x in "12S"}, {}
+
+
 def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
                     dedup=True) -> OperatingPoint:
     """Solve the drive at driving-shaft speed w_in (rad/s, signed) and one known torque:
@@ -296,12 +341,14 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         raise CycloidInputError("speed", 0.0, "zero input speed gives no direction of motion "
                                 "(the efficiency is undefined at standstill)")
     i0 = design.i0
-    # physics beyond the paper (design.extra): a drag/Stribeck torque at the driving shaft; the
-    # gear itself sees the rest
-    T_extra = design.extra.steady_torque(w_in)
-    if known == a:
-        T_known = T_known - T_extra
     w = kinematics.shaft_speeds(mode, w_in, design.z1)
+    # drag at the shafts, outside the gear (load-independent losses; physics beyond the paper,
+    # design.extra: a drag/Stribeck torque at the driving shaft): the gear itself sees the
+    # known torque less the drag on its shaft
+    T_extra = design.extra.steady_torque(w_in)
+    T_drag, idle = shaft_drag(design, w, T_known.shape)
+    T_drag[a] = T_drag[a] + T_extra
+    T_known = T_known - T_drag[known]
     w1p, w2p = kinematics.relative_speeds(w["1"], w["2"], w["S"])
     idx = {"1": 0, "2": 1, "S": 2}
     # the solver works on flat arrays of the points (subsets of them are iterated on their own)
@@ -325,16 +372,6 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         return np.where(wd < 0, np.maximum(eta0, i0 * (1 + 1e-9)), eta0)
 
     state = {}   # warm start of the contact solutions between iterations
-    # load-independent losses (physical profile, losses = "all"): they depend on the speeds
-    # only; loss power is frame-invariant, so they enter eta0 like the gear's own losses
-    if physical and design.losses == "all":
-        from . import drag, thermal
-        idle = drag.idle_losses(design, w, thermal.lubricant_viscosity(design))
-        idle = {k: np.broadcast_to(v, shape) for k, v in idle.items()}
-    else:
-        idle = {}
-    P_idle = (np.broadcast_to(sum(idle.values()), shape).reshape(-1) if idle
-              else np.zeros_like(T_flat))
 
     def eta0_from(eta0, sel=None):
         """f(eta0): the basic efficiency the losses give at the ring torque that eta0 implies,
@@ -360,7 +397,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
                            ring_flow=wd if physical else None, dedup=dedup)
         if not full:
             _state_update(state, sub, sel, T_flat.size)
-        num = L.total + pick(P_idle)
+        num = L.total
         x = np.divide(num, np.abs(T1) * pick(base), out=np.zeros_like(num), where=T1 != 0)
         return np.where(wd > 0, 1.0 - x, 1.0 / (1.0 + x)), L, T1
 
@@ -448,8 +485,8 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
     else:
         def blank(v):
             return np.array(v, float)
-    torques = {k: blank(v) for k, v in torques.items()}
-    torques[a] = torques[a] + T_extra
+    # the gear's torques plus what the outside spends on the shafts' drag
+    torques = {k: blank(v) + T_drag[k] for k, v in torques.items()}
     L = PartialLosses(*(blank(getattr(L, n)) for n in LOSS_NAMES),
                       P_extra=blank(T_extra * w[a]), **{k: blank(v) for k, v in idle.items()})
     p_a, p_b = torques[a] * w[a], torques[b] * w[b]
@@ -460,4 +497,5 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         eta = np.where(eta > 0, eta, np.nan)
     return OperatingPoint(mode=a + b, flow_forward=forward, speeds=w, torques=torques, eta=eta,
                           eta0=eta0, locked=locked, losses=L, input_power=p_in,
-                          output_power=p_out, i0=i0)
+                          output_power=p_out, i0=i0,
+                          drag_torques={k: np.array(v, float) for k, v in T_drag.items()})

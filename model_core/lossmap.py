@@ -1,12 +1,15 @@
 """A precomputed efficiency map of one operating mode, for time-stepping hosts (FMUs).
 
 ``ModeMap`` solves the full model (efficiency.operating_point, contacts and mesh-cycle average
-included) once, on a log-spaced grid of load torque |tau_out| x driving speed |w_in|, for both
-power-flow directions, and stores the basic efficiency eta0 and the shares of the partial
-losses. A step then costs one bilinear interpolation in plain Python floats (a numpy call per
-step would cost more than the rest of the step): eta0 gives every torque by Kreines' rule, so
+included) once, on a log-spaced grid of the gear's load torque |tau| x driving speed |w_in|,
+for both power-flow directions, and stores the basic efficiency eta0 and the shares of the
+gear's partial losses; the load-independent drag at the shafts (efficiency.shaft_drag: support
+bearings, seals, grease drag; physical profile) is stored over the speed alone, as the torque
+the outside spends on it at each shaft and the three losses over |w_in|. A step then costs one
+bilinear interpolation in plain Python floats (a numpy call per step would cost more than the
+rest of the step): eta0 gives the gear's torques by Kreines' rule and the drag adds its own, so
 the energy balance tau_in w_in + tau_out w_out = P_loss holds exactly at every step, and the
-interpolation error only enters through eta0.
+interpolation error only enters through eta0 and the drag.
 """
 from __future__ import annotations
 
@@ -16,28 +19,37 @@ from bisect import bisect_right
 import numpy as np
 
 from . import kinematics
-from .efficiency import operating_point
+from .efficiency import operating_point, shaft_drag
 from .drag import IDLE_NAMES
 from .losses import LOSS_NAMES
 
 #: the partial losses a map carries: the load-dependent ones, then the load-independent ones
 MAP_LOSS_NAMES = LOSS_NAMES + IDLE_NAMES
 
+#: version of the map's layout (the drag at the shafts kept over the speed alone: 2)
+MAP_LAYOUT = 2
+
 _SHAFT_INDEX = {"1": 0, "2": 1, "S": 2}
+_N_GEAR = len(LOSS_NAMES)
+_N_IDLE = len(IDLE_NAMES)
 
 
 class ModeMap:
-    """eta0 and loss shares of one mode over |tau_out| x |w_in|, both flow directions.
+    """eta0 and loss shares of one mode over |tau| x |w_in|, both flow directions, and the
+    drag at the shafts over |w_in|.
 
-    Bilinear in (ln |tau_out|, ln |w_in|), clamped at the grid edges; ``out_of_range`` counts
-    the clamped look-ups (below the grid the losses' shares and eta0 of the edge are used; at
-    zero speed or torque the losses vanish with the power). ``dedup=False`` builds it by the
-    straightforward per-position path of the losses (the reference; same tables to ~1e-12).
+    The torque axis is the gear's own torque at the driven shaft, tau_out less the torque the
+    driven shaft's drag takes (the same thing without load-independent losses). Bilinear in
+    (ln |tau|, ln |w_in|), clamped at the grid edges; ``out_of_range`` counts the clamped
+    look-ups (below the grid the gear's loss shares and eta0 of the edge are used; at zero
+    speed or torque the gear's losses vanish with its power, the drag with the speed).
+    ``dedup=False`` builds it by the straightforward per-position path of the losses (the
+    reference; same tables to ~1e-12).
     """
 
-    #: torque nodes: 48 (was 36) because the physical profile's load-independent losses make
-    #: eta0 curve as 1/|tau| at light load; 36 left 1.1e-3 of interpolation error in eta at
-    #: 1000 r/min, 0.3 N*m (S2), 48 leaves 0.6e-3
+    #: torque nodes: 48 (was 36) because the physical profile's load-independent losses made
+    #: eta0 curve as 1/|tau| at light load while they were folded into it; 36 left 1.1e-3 of
+    #: interpolation error in eta at 1000 r/min, 0.3 N*m (S2), 48 leaves 0.6e-3
     def __init__(self, design, mode, torque_max, speed_max, n_torque=48, n_speed=28, span=1e-3,
                  dedup=True):
         if not (torque_max > 0 and speed_max > 0):
@@ -52,20 +64,31 @@ class ModeMap:
         W = np.geomspace(speed_max * span, speed_max, n_speed)
         WW, TT = np.meshgrid(W, T, indexing="ij")
         sign_b = math.copysign(1.0, self.ratio[self._k])
+        # the drag at the shafts over the speed (w_in > 0; it is odd in w_in): the three
+        # load-independent losses over w_in (N*m, smooth in ln w) and the torque the outside
+        # spends on it at shafts 1, 2, S; sum_x D_x r_x = sum of the three, so the energy
+        # balance survives the interpolation
+        T_drag, idle = shaft_drag(design, kinematics.shaft_speeds(self.mode, W, design.z1),
+                                  W.shape)
+        idle_rows = [idle.get(n, np.zeros(W.shape)) / W for n in IDLE_NAMES]
+        idle_rows += [T_drag[x] for x in "12S"]
+        self._idle = np.stack(idle_rows, -1).tolist()       # [j_speed][0..2 losses/w, 3..5 D]
+        D_b = np.broadcast_to(T_drag[self.b][:, None], WW.shape)
         self._tables = {}
         self._wdir = {}
         for forward in (True, False):
-            # forward: the load absorbs power, tau_out * w_out < 0
+            # forward: the gear's load absorbs power, tau * w_out < 0; the outside applies the
+            # gear's torque plus what the driven shaft's drag takes
             op = operating_point(design, self.mode, WW,
-                                 T_out=(-sign_b if forward else sign_b) * TT, dedup=dedup)
+                                 T_out=(-sign_b if forward else sign_b) * TT + D_b, dedup=dedup)
             shares = np.stack([np.broadcast_to(getattr(op.losses, n), WW.shape)
-                               for n in MAP_LOSS_NAMES], -1)
-            # shares of PL1..PL6 and the load-independent PL_support, PL_seal, PL_churn: they
-            # sum to the whole loss, which eta0 carries exactly
+                               for n in LOSS_NAMES], -1)
+            # shares of the gear's PL1..PL6: they sum to its loss, which eta0 carries exactly
             shares = shares / np.maximum(shares.sum(-1, keepdims=True), 1e-300)
             table = np.concatenate([op.eta0[..., None], shares], -1)
-            # below the lightest load that runs (losses above the power, or locked with the
-            # torque on S) hold the values of the lightest running load along the torque axis
+            # below the lightest load that runs (the gear's losses above its power, or locked
+            # with the torque on S) hold the values of the lightest running load along the
+            # torque axis
             valid = np.isfinite(table).all(-1) & (table[..., 0] > 0)
             if not valid.any():
                 raise ValueError(f"mode {self.mode}: no operating point of the map runs")
@@ -80,15 +103,24 @@ class ModeMap:
             self._arrays[forward] = table
             w1p = (self.ratio[0] - self.ratio[2]) * WW
             # the relative flow direction follows from the known torque's sign alone: read it at
-            # a point that runs (the lightest points may not, with load-independent losses)
-            p1 = (op.torques["1"] * w1p)[valid]
+            # a point that runs
+            p1 = (op.gear_torques["1"] * w1p)[valid]
             self._wdir[forward] = 1 if float(p1.flat[0]) >= 0 else -1
+        self._idle_array = np.asarray(self._idle)
         self._lt = [math.log(t) for t in T]
         self._lw = [math.log(w) for w in W]
         self.torque_range = (float(T[0]), float(T[-1]))
         self.speed_range = (float(W[0]), float(W[-1]))
         self.names = MAP_LOSS_NAMES
         self.out_of_range = 0
+
+    def _interp_speed(self, w):
+        """The drag row at |w_in| = w: linear in ln w, clamped at the grid's edges."""
+        gw, tab = self._lw, self._idle
+        lw = min(max(math.log(w), gw[0]), gw[-1]) if w > 0 else gw[0]
+        j = min(bisect_right(gw, lw) - 1, len(gw) - 2)
+        fw = (lw - gw[j]) / (gw[j + 1] - gw[j])
+        return [(1 - fw) * p + fw * q for p, q in zip(tab[j], tab[j + 1])]
 
     def _interp(self, table, t, w):
         gt, gw = self._lt, self._lw
@@ -114,12 +146,17 @@ class ModeMap:
         the load on the driven shaft). Returns (speeds, torques, losses, eta, eta0, locked,
         forward): speeds and torques as tuples over shafts (1, 2, S), losses a list in
         MAP_LOSS_NAMES order (W), eta the efficiency of the actual flow (0 without power or when
-        locked)."""
+        locked), forward the gear's flow direction."""
         r1, r2, rS = self.ratio
         speeds = (r1 * w_in, r2 * w_in, rS * w_in)
         k = self._k
-        forward = tau_out * speeds[k] <= 0
-        row = self._interp(self._tables[forward], abs(tau_out), abs(w_in))
+        w_abs = abs(w_in)
+        q = self._interp_speed(w_abs)
+        sgn = 1.0 if w_in > 0 else (-1.0 if w_in < 0 else 0.0)
+        drag = (sgn * q[3], sgn * q[4], sgn * q[5])
+        tau = tau_out - drag[k]                 # the gear's own torque at the driven shaft
+        forward = tau * speeds[k] <= 0
+        row = self._interp(self._tables[forward], abs(tau), w_abs)
         eta0 = row[0]
         wdir = self._wdir[forward]
         if wdir > 0:
@@ -130,17 +167,18 @@ class ModeMap:
             e = 1.0 / eta0
         c2 = -self.i0 * e
         c = (1.0, c2, -(1.0 + c2))
-        T1 = tau_out / c[k]
-        torques = (T1, T1 * c2, T1 * c[2])
-        p_loss = torques[0] * speeds[0] + torques[1] * speeds[1] + torques[2] * speeds[2]
-        losses = [s * p_loss for s in row[1:]]
+        T1 = tau / c[k]
+        gear = (T1, T1 * c2, T1 * c[2])
+        p_gear = gear[0] * speeds[0] + gear[1] * speeds[1] + gear[2] * speeds[2]
+        losses = [s * p_gear for s in row[1:]] + [x * w_abs for x in q[:3]]
+        torques = (gear[0] + drag[0], gear[1] + drag[1], gear[2] + drag[2])
         a = _SHAFT_INDEX[self.a]
         p_a, p_b = torques[a] * speeds[a], torques[k] * speeds[k]
         p_in, p_out = (p_a, -p_b) if forward else (p_b, -p_a)
         # Kreines: only power flowing into S from 1 or 2 can lock, when eta0 <= i0
         flow = self.mode if forward else self.b + self.a
         locked = flow[1] == "S" and eta0 <= self.i0
-        eta = p_out / p_in if (p_in > 0 and not locked) else 0.0
+        eta = p_out / p_in if (p_in > 0 and p_out > 0 and not locked) else 0.0
         return speeds, torques, losses, eta, eta0, locked, forward
 
     def solve_arrays(self, w_in, tau_out):
@@ -152,15 +190,22 @@ class ModeMap:
         r = self.ratio
         k = self._k
         speeds = [ri * w_in for ri in r]
-        forward = tau_out * speeds[k] <= 0
         gt, gw = np.asarray(self._lt), np.asarray(self._lw)
         with np.errstate(divide="ignore"):
-            lt = np.clip(np.log(np.abs(tau_out)), gt[0], gt[-1])
             lw = np.clip(np.log(np.abs(w_in)), gw[0], gw[-1])
-        i = np.clip(np.searchsorted(gt, lt, side="right") - 1, 0, len(gt) - 2)
         j = np.clip(np.searchsorted(gw, lw, side="right") - 1, 0, len(gw) - 2)
-        ft = (lt - gt[i]) / (gt[i + 1] - gt[i])
         fw = (lw - gw[j]) / (gw[j + 1] - gw[j])
+        q = (1 - fw)[:, None] * self._idle_array[j] + fw[:, None] * self._idle_array[j + 1] \
+            if w_in.ndim == 1 else \
+            (1 - fw)[..., None] * self._idle_array[j] + fw[..., None] * self._idle_array[j + 1]
+        sgn = np.sign(w_in)
+        drag = [sgn * q[..., 3 + x] for x in range(3)]
+        tau = tau_out - drag[k]
+        forward = tau * speeds[k] <= 0
+        with np.errstate(divide="ignore"):
+            lt = np.clip(np.log(np.abs(tau)), gt[0], gt[-1])
+        i = np.clip(np.searchsorted(gt, lt, side="right") - 1, 0, len(gt) - 2)
+        ft = (lt - gt[i]) / (gt[i + 1] - gt[i])
         eta0 = np.empty_like(w_in)
         for fwd in (True, False):
             tab = self._arrays[fwd][..., 0]
@@ -174,8 +219,8 @@ class ModeMap:
                      if k == 2 else 1.0 / eta0)
         c2 = -self.i0 * e
         c = (np.ones_like(c2), c2, -(1.0 + c2))
-        T1 = tau_out / c[k]
-        torques = [T1 * ci for ci in c]
+        T1 = tau / c[k]
+        torques = [T1 * ci + di for ci, di in zip(c, drag)]
         p_loss = sum(t * w for t, w in zip(torques, speeds))
         a_ = _SHAFT_INDEX[self.a]
         h_ = _SHAFT_INDEX[self.h]

@@ -119,13 +119,17 @@ def experiment_gap(design, envelope=BenchEnvelope(), experiment=PAPER_EXPERIMENT
       .. math:: \eta_0' = \eta_{0,b}\,(1 - k)
 
     - ``a``: a scale on the model's **load-independent losses** (seals, support bearings,
-      churning of ``model_core.drag``), applied to eta0 to first order,
+      churning of ``model_core.drag``: drag at the shafts, outside the gear), to first order
 
-      .. math:: \eta_{0,b} = \eta_{0,L} - a\,(\eta_{0,L} - \eta_{0,A})
+      .. math:: \eta = \eta_K\big((\eta_{0,L} + a\,(\eta_{0,A} - \eta_{0,L}))(1 - k)\big)
+                \,(1 - a\,P_a/P_{in}) - a\,P_b/P_{in}
 
-      with eta0_L the load-dependent model and eta0_A the model with all losses (a = 1 is
-      the model as it is, a = 0 no load-independent loss). The mode efficiency follows from
-      eta0' by Kreines' rule (:func:`model_core.efficiency.kreines_efficiency`).
+      with eta_K Kreines' rule (:func:`model_core.efficiency.kreines_efficiency`), P_a and
+      P_b the model's load-independent losses at the driving and the driven shaft (the driving
+      shaft's are taken before the gear, the driven shaft's after it), and the gear's basic
+      efficiency moved from the load-dependent model's eta0_L toward eta0_A, the gear's at the
+      torques the drag leaves it (linear in a: the drag shifts the gear's torque in proportion
+      to a). a = 1 is the model as it is, a = 0 no load-independent loss; both ends are exact.
 
     Parameters
     ----------
@@ -152,8 +156,8 @@ def experiment_gap(design, envelope=BenchEnvelope(), experiment=PAPER_EXPERIMENT
     from dataclasses import replace as _replace
     from scipy.optimize import least_squares
 
-    from .efficiency import kreines_efficiency, operating_point
-    from .kinematics import basic_ratio
+    from .efficiency import kreines_efficiency, operating_point, shaft_drag
+    from .kinematics import basic_ratio, shaft_speeds
 
     phys = _replace(design, profile="physical")
     d_l, d_a = _replace(phys, losses="load_dependent"), _replace(phys, losses="all")
@@ -162,10 +166,20 @@ def experiment_gap(design, envelope=BenchEnvelope(), experiment=PAPER_EXPERIMENT
     maps = {(m, tag): efficiency_map(d, m, envelope.speeds(), envelope.torques())
             for m in modes for tag, d in (("L", d_l), ("A", d_a))}
 
+    side = {}   # load-independent losses at the driving and the driven shaft / input power
+    for m in modes:
+        mp = maps[(m, "A")]
+        W = np.broadcast_to(mp.speeds[:, None], mp.input_power.shape)
+        sp = shaft_speeds(m, W, design.z1)
+        T_drag, _ = shaft_drag(d_a, sp, W.shape)
+        side[m] = tuple(T_drag[x] * sp[x] / mp.input_power for x in m[:2])
+
     def eta(mode, a, k):
+        # the driving shaft's drag is taken before the gear, the driven shaft's after it
+        p_a, p_b = side[mode]
         e0_l, e0_a = maps[(mode, "L")].eta0, maps[(mode, "A")].eta0
-        e0 = (e0_l - a * (e0_l - e0_a)) * (1.0 - k)
-        return kreines_efficiency(mode, e0, i0)
+        return (kreines_efficiency(mode, (e0_l + a * (e0_a - e0_l)) * (1.0 - k), i0)
+                * (1.0 - a * p_a) - a * p_b)
 
     def stats(x):
         x = np.asarray(x, float)
@@ -189,14 +203,16 @@ def experiment_gap(design, envelope=BenchEnvelope(), experiment=PAPER_EXPERIMENT
     w = rpm_to_rad_s(RATED_CORNER["speed_rpm"])
     t = RATED_CORNER["torque"]
     p_in = w * t
+    op_a = operating_point(d_a, fit_mode, w, t)
     e0_l = float(operating_point(d_l, fit_mode, w, t).eta0)
-    e0_a = float(operating_point(d_a, fit_mode, w, t).eta0)
+    idle = float(op_a.losses.idle)   # drag, seals, churning
+    p_a, p_b = (float(op_a.drag_torques[x] * op_a.speeds[x]) / p_in for x in fit_mode[:2])
 
     def loss(a_, k_):
-        return float(p_in) * (1.0 - float(kreines_efficiency(
-            fit_mode, (e0_l - a_ * (e0_l - e0_a)) * (1.0 - k_), i0)))
+        e0 = e0_l + a_ * (float(op_a.eta0) - e0_l)
+        eta_g = float(kreines_efficiency(fit_mode, e0 * (1.0 - k_), i0))
+        return float(p_in) * (1.0 - eta_g * (1.0 - a_ * p_a) + a_ * p_b)
     out["load_dependent_W"] = loss(0.0, 0.0)
-    idle = float(operating_point(d_a, fit_mode, w, t).losses.idle)   # drag, seals, churning
     out["load_independent_W"] = idle
     out["load_independent_inferred_W"] = a * idle
     out["load_proportional_W"] = loss(a, k) - loss(a, 0.0)

@@ -23,6 +23,8 @@ import tempfile
 import uuid
 import zipfile
 from dataclasses import asdict, dataclass
+
+import numpy as np
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -157,6 +159,7 @@ class ModeData:
     h: int
     wdir: dict
     tables: dict          # forward -> ndarray (n_speed, n_torque, 6)
+    idle: np.ndarray      # (n_speed, 6): the drag at the shafts
     ratio_out: float
     order: float
 
@@ -178,7 +181,8 @@ def export_map(design: DriveDesign, torque_max=MAP_TORQUE_MAX, speed_max=MAP_SPE
         ratio_out = float(unit[b])
         order = design.z1 * abs(float(unit["1"] - unit["S"])) / abs(float(unit[a]))
         modes.append(ModeData(mode, mm.ratio, _SHAFT[a], _SHAFT[b], _SHAFT[h], dict(mm._wdir),
-                              {fwd: mm._arrays[fwd] for fwd in (True, False)}, ratio_out, order))
+                              {fwd: mm._arrays[fwd] for fwd in (True, False)},
+                              np.asarray(mm._idle_array), ratio_out, order))
     return lt, lw, modes
 
 
@@ -220,6 +224,7 @@ def generate_data_c(design, lt, lw, modes, constants, guid, torque_max, speed_ma
     for m in modes:
         for fwd in (False, True):
             arr(f"TAB_{m.name}_{int(fwd)}", m.tables[fwd].ravel().tolist())
+        arr(f"IDLE_{m.name}", m.idle.ravel().tolist())
     lines.append("")
     lines.append("const CDMap CD_MAP = {")
     lines.append(f"    {len(lt)}, {len(lw)}, LT, LW, {_hex(design.i0)},")
@@ -227,7 +232,7 @@ def generate_data_c(design, lt, lw, modes, constants, guid, torque_max, speed_ma
     for m in modes:
         lines.append(f"        {{{_c_string(m.name)}, {{{', '.join(_hex(r) for r in m.ratio)}}}, "
                      f"{m.a}, {m.b}, {m.h}, {{{m.wdir[False]}, {m.wdir[True]}}}, "
-                     f"{{TAB_{m.name}_0, TAB_{m.name}_1}}, {_hex(m.ratio_out)}, "
+                     f"{{TAB_{m.name}_0, TAB_{m.name}_1}}, IDLE_{m.name}, {_hex(m.ratio_out)}, "
                      f"{_hex(m.order)}}},")
     lines.append("    }")
     lines.append("};")

@@ -71,16 +71,40 @@ static int interp(const CDMap *map, const double *table, double t, double w, dou
     return clamped;
 }
 
+/* ModeMap._interp_speed: linear in ln|w|, clamped at the edges */
+static void interp_speed(const CDMap *map, const double *idle, double w, double *row)
+{
+    const double *gw = map->lw;
+    int nw = map->n_speed, j, c;
+    double lw = w > 0 ? fmin(fmax(log(w), gw[0]), gw[nw - 1]) : gw[0];
+    double fw;
+    const double *r0, *r1;
+    j = bisect_right(gw, nw, lw) - 1;
+    if (j > nw - 2) j = nw - 2;
+    fw = (lw - gw[j]) / (gw[j + 1] - gw[j]);
+    r0 = idle + (size_t)j * CD_N_IDLE;
+    r1 = r0 + CD_N_IDLE;
+    for (c = 0; c < CD_N_IDLE; c++) row[c] = (1 - fw) * r0[c] + fw * r1[c];
+}
+
 void cd_solve(const CDMap *map, int mode, double w_in, double tau_out, CDSolution *out)
 {
     const CDMode *m = &map->modes[mode];
-    double row[CD_N_COLS], eta0, e, c2, c[3], T1, p_loss, p_a, p_b, p_in, p_out;
+    double row[CD_N_COLS], q[CD_N_IDLE], drag[3], gear[3];
+    double eta0, e, c2, c[3], T1, tau, sgn, w_abs, p_gear, p_a, p_b, p_in, p_out;
     int k = m->b, forward, wdir, locked, i;
     out->speeds[0] = m->ratio[0] * w_in;
     out->speeds[1] = m->ratio[1] * w_in;
     out->speeds[2] = m->ratio[2] * w_in;
-    forward = tau_out * out->speeds[k] <= 0;
-    out->out_of_range = interp(map, m->table[forward], fabs(tau_out), fabs(w_in), row);
+    w_abs = fabs(w_in);
+    interp_speed(map, m->idle, w_abs, q);
+    sgn = w_in > 0 ? 1.0 : (w_in < 0 ? -1.0 : 0.0);
+    drag[0] = sgn * q[3];
+    drag[1] = sgn * q[4];
+    drag[2] = sgn * q[5];
+    tau = tau_out - drag[k];                /* the gear's own torque at the driven shaft */
+    forward = tau * out->speeds[k] <= 0;
+    out->out_of_range = interp(map, m->table[forward], fabs(tau), w_abs, row);
     eta0 = row[0];
     wdir = m->wdir[forward];
     if (wdir > 0)
@@ -93,20 +117,21 @@ void cd_solve(const CDMap *map, int mode, double w_in, double tau_out, CDSolutio
     c[0] = 1.0;
     c[1] = c2;
     c[2] = -(1.0 + c2);
-    T1 = tau_out / c[k];
-    out->torques[0] = T1;
-    out->torques[1] = T1 * c2;
-    out->torques[2] = T1 * c[2];
-    p_loss = out->torques[0] * out->speeds[0] + out->torques[1] * out->speeds[1]
-             + out->torques[2] * out->speeds[2];
-    for (i = 0; i < CD_N_LOSSES; i++) out->losses[i] = row[1 + i] * p_loss;
+    T1 = tau / c[k];
+    gear[0] = T1;
+    gear[1] = T1 * c2;
+    gear[2] = T1 * c[2];
+    p_gear = gear[0] * out->speeds[0] + gear[1] * out->speeds[1] + gear[2] * out->speeds[2];
+    for (i = 0; i < CD_N_GEAR; i++) out->losses[i] = row[1 + i] * p_gear;
+    for (i = 0; i < 3; i++) out->losses[CD_N_GEAR + i] = q[i] * w_abs;
+    for (i = 0; i < 3; i++) out->torques[i] = gear[i] + drag[i];
     p_a = out->torques[m->a] * out->speeds[m->a];
     p_b = out->torques[k] * out->speeds[k];
     if (forward) { p_in = p_a; p_out = -p_b; }
     else         { p_in = p_b; p_out = -p_a; }
     /* Kreines: only power flowing into S from 1 or 2 can lock, when eta0 <= i0 */
     locked = (forward ? m->b == 2 : m->a == 2) && eta0 <= map->i0;
-    out->eta = (p_in > 0 && !locked) ? p_out / p_in : 0.0;
+    out->eta = (p_in > 0 && p_out > 0 && !locked) ? p_out / p_in : 0.0;
     out->eta0 = eta0;
     out->locked = locked;
     out->forward = forward;

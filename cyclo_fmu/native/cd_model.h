@@ -13,7 +13,10 @@
 
 #define CD_N_MODES 6
 #define CD_N_LOSSES 8          /* PL1, PL2, PL3, PL5, PL6, PL_support, PL_seal, PL_churn */
-#define CD_N_COLS (1 + CD_N_LOSSES)   /* eta0, then the shares of the partial losses */
+#define CD_N_GEAR 5            /* the gear's own partial losses PL1..PL6 */
+#define CD_N_COLS (1 + CD_N_GEAR)     /* eta0, then the shares of the gear's partial losses */
+#define CD_N_IDLE 6            /* drag row: PL_support, PL_seal, PL_churn over |w_in| (N*m),
+                                  then the torque spent on the drag at shafts 1, 2, S (N*m) */
 
 /* One operating mode (driving shaft a, driven shaft b, held shaft h; 0 = ring 1, 1 = disc 2,
  * 2 = eccentric S). */
@@ -23,6 +26,7 @@ typedef struct {
     int a, b, h;
     int wdir[2];               /* [forward]: +1 if the known torque gives e = eta0, else -1 */
     const double *table[2];    /* [forward]: n_speed x n_torque x CD_N_COLS, row-major */
+    const double *idle;        /* n_speed x CD_N_IDLE: the drag at the shafts, w_in > 0 */
     double ratio_out;          /* driven speed per unit driving speed */
     double order;              /* roller-pass order: ripple cycles per driving turn */
 } CDMode;
@@ -30,7 +34,7 @@ typedef struct {
 /* The loss map of one design: all six modes, both power-flow directions. */
 typedef struct {
     int n_torque, n_speed;
-    const double *lt;          /* ln |tau_out| grid, N*m */
+    const double *lt;          /* ln |tau| grid (the gear's torque at the driven shaft), N*m */
     const double *lw;          /* ln |w_in| grid, rad/s */
     double i0;                 /* basic ratio (z1 - 1)/z1 */
     CDMode modes[CD_N_MODES];

@@ -130,8 +130,9 @@ _MAP_DIR = Path(__file__).resolve().parent / "_maps"
 
 
 def _map_key(design, mode, torque_max, speed_max):
-    """What a loss map depends on: the whole design (profile included), mode and ranges."""
-    return (repr(design), mode, float(torque_max), float(speed_max))
+    """What a loss map depends on: the whole design (profile included), mode and ranges, and
+    the map's layout (a map pickled by another version of the core is not used)."""
+    return (repr(design), mode, float(torque_max), float(speed_max), core.lossmap.MAP_LAYOUT)
 
 
 def write_shipped_maps(folder, modes=SHIPPED_MAP_MODES):
@@ -378,7 +379,7 @@ class CycloidDrive(UnitSlave):
         """Driving-shaft torque of the gear alone (map or exact core) at a load torque."""
         if self._map is not None:
             return self._map.solve(w_in, tau_out)[1][self._shaft_index[0]]
-        if w_in == 0 or tau_out == 0:
+        if w_in == 0:
             return 0.0
         op = core.operating_point(self._design, self._mode, w_in, T_out=tau_out)
         return float(op.torques[self._mode[0]]) - float(self._design.extra.steady_torque(w_in))
@@ -438,7 +439,7 @@ class CycloidDrive(UnitSlave):
         h = _held(self._mode)
         w = core.shaft_speeds(self._mode, w_in, self._design.z1)
         self.w_out = float(w[b])
-        if w_in == 0 or tau_out == 0:
+        if w_in == 0:   # standstill: no direction of motion, no drag, no loss
             self.tau_in = self.tau_housing = self._tau_in_gear = 0.0
             for n in OUTPUT_LOSSES:
                 setattr(self, n, 0.0)
