@@ -151,13 +151,20 @@ def cmd_efficiency(args) -> int:
                                 "4000 MPa on the ring rollers, ISO 76)")
     losses = {k: _json_num(v) for k, v in op.losses.as_dict().items()}
     stalled = not bool(op.locked) and not math.isfinite(float(op.torques[b]))
+    # the no-load running torque (the drag at the shafts and the gear's losses at zero load):
+    # a driving torque below it cannot keep the drive turning unless the load drives it
+    w_a = rpm_to_rad_s(args.speed)
+    no_load = float(operating_point(design, a + b, w_a, T_out=0.0).torques[a])
+    below_no_load = args.torque * w_a > 0 and abs(args.torque) < abs(no_load)
+    stalled = stalled or below_no_load
     p_in = float(op.input_power)
     w_out = float(op.speeds[b])
     t_out = -float(op.torques[b])   # torque the output shaft delivers to the load
     flow = op.mode if bool(op.flow_forward) else b + a
     result = {
         "mode": op.mode, "flow_mode": flow, "held_shaft": h,
-        "eta": None if bool(op.locked) else _json_num(op.eta),
+        "eta": None if (bool(op.locked) or below_no_load) else _json_num(op.eta),
+        "no_load_torque_Nm": _json_num(no_load),
         "eta0": _json_num(op.eta0), "locked": bool(op.locked), "stalled": stalled,
         "losses_W": losses,
         "loss_share": {k: (v / p_in if (v is not None and p_in > 0) else None)
@@ -190,7 +197,11 @@ def cmd_efficiency(args) -> int:
         return 0
     if stalled or (bool(op.locked) and not math.isfinite(t_out)):
         why = ("self-locking: the drive cannot be back-driven into S, it holds"
-               if op.locked else "at this light load the drive's losses (the load-independent "
+               if op.locked else
+               f"the driving torque is below the no-load running torque {no_load:.4g} N*m at "
+               "this speed (the drag of the shafts' bearings and seals, the grease, and the "
+               "gear's losses at zero load): the drive stalls unless the load drives it"
+               if below_no_load else "at this light load the drive's losses (the load-independent "
                "drag, seals and churning included) exceed the power it would transmit: no "
                "steady motion (stall)")
         print(f"cycloid drive, mode {op.mode}: no steady state at {args.speed} r/min, "

@@ -55,6 +55,21 @@ SEAL_DIAMETERS = {"S": 0.020, "1": 0.030, "2": 0.030}
 SEAL_POWER_COEFF = 7.7e-6
 
 
+#: Shaft speed [rad/s] below which the drag's torque is taken proportional to the speed,
+#: T = M w / DRAG_SIGN_SPEED, instead of M sign(w). **Assumption**, a regularisation of the
+#: sign of a Coulomb-like moment (seals, Palmgren's M0 at nu n < 2000) for time-stepping
+#: hosts, which cannot resolve the stiction at a standstill: 1 rad/s (about 10 r/min), below
+#: 2 % of the bench's lowest test speed (500 r/min at the input, 33 r/min at the output), so
+#: steady operating points do not see it.
+DRAG_SIGN_SPEED = 1.0
+
+
+def drag_sign(w):
+    """sign(w), linear within +-DRAG_SIGN_SPEED [rad/s] (see there): continuous through a
+    standstill."""
+    return np.clip(np.asarray(w, float) / DRAG_SIGN_SPEED, -1.0, 1.0)
+
+
 def palmgren_idle_moment(n_rpm, nu_mm2_s, dm_mm, f0):
     """Load-independent bearing moment M0 [N*mm] of Palmgren (see module note)."""
     n = np.abs(np.asarray(n_rpm, float))
@@ -80,7 +95,8 @@ def idle_torques(design, speeds, nu):
     dict
         ``{name: {"1": T1, "2": T2, "S": TS}}`` for name in IDLE_NAMES. A shaft's support
         bearings and seal act on it alone, T = sign(w) M (M = 2 M0 for the two bearings; the
-        seal's M = P/|w| = SEAL_POWER_COEFF d^2 * 60/(2 pi), constant); the grease drag acts
+        seal's M = P/|w| = SEAL_POWER_COEFF d^2 * 60/(2 pi), constant; sign(w) is
+        ``drag_sign``, linear within DRAG_SIGN_SPEED of a standstill); the grease drag acts
         between the eccentric S and the disc 2 (the orbiting gear's faces against the disc and
         housing, sheared at e |wS - w2|) as a pair, +M on S and -M on 2 with M = P/|wS - w2|.
         The held shaft's entry is the housing's reaction (its own speed is zero). The power
@@ -92,9 +108,9 @@ def idle_torques(design, speeds, nu):
     for shaft, (d, D) in SUPPORT_BEARINGS.items():
         w = np.asarray(speeds[shaft], float)
         M0 = palmgren_idle_moment(rad_s_to_rpm(w), nu_mm, 0.5 * (d + D) * 1e3, F0_BALL_GREASE)
-        sup[shaft] = zero + 2 * M0 * 1e-3 * np.sign(w)
+        sup[shaft] = zero + 2 * M0 * 1e-3 * drag_sign(w)
         seal[shaft] = zero + (SEAL_POWER_COEFF * (SEAL_DIAMETERS[shaft] * 1e3) ** 2
-                              * rad_s_to_rpm(1.0) * np.sign(w))
+                              * rad_s_to_rpm(1.0) * drag_sign(w))
     w_rel = np.asarray(speeds["S"], float) - np.asarray(speeds["2"], float)
     # face area of a gear: an annulus from the eccentric bearing's seat to the tooth root
     r_out = design.r_p - design.e - design.d_v1 / 2

@@ -107,6 +107,7 @@ class ModeMap:
             p1 = (op.gear_torques["1"] * w1p)[valid]
             self._wdir[forward] = 1 if float(p1.flat[0]) >= 0 else -1
         self._idle_array = np.asarray(self._idle)
+        self._w_low = float(W[0])
         self._lt = [math.log(t) for t in T]
         self._lw = [math.log(w) for w in W]
         self.torque_range = (float(T[0]), float(T[-1]))
@@ -115,9 +116,13 @@ class ModeMap:
         self.out_of_range = 0
 
     def _interp_speed(self, w):
-        """The drag row at |w_in| = w: linear in ln w, clamped at the grid's edges."""
+        """The drag row at |w_in| = w: linear in ln w, clamped at the top of the grid; below
+        its lowest speed proportional to w (the drag's torque is linear in the speed near a
+        standstill, drag.DRAG_SIGN_SPEED, and so are the losses over w)."""
         gw, tab = self._lw, self._idle
-        lw = min(max(math.log(w), gw[0]), gw[-1]) if w > 0 else gw[0]
+        if w < self._w_low:
+            return [x * (w / self._w_low) for x in tab[0]]
+        lw = min(math.log(w), gw[-1])
         j = min(bisect_right(gw, lw) - 1, len(gw) - 2)
         fw = (lw - gw[j]) / (gw[j + 1] - gw[j])
         return [(1 - fw) * p + fw * q for p, q in zip(tab[j], tab[j + 1])]
@@ -195,9 +200,11 @@ class ModeMap:
             lw = np.clip(np.log(np.abs(w_in)), gw[0], gw[-1])
         j = np.clip(np.searchsorted(gw, lw, side="right") - 1, 0, len(gw) - 2)
         fw = (lw - gw[j]) / (gw[j + 1] - gw[j])
-        q = (1 - fw)[:, None] * self._idle_array[j] + fw[:, None] * self._idle_array[j + 1] \
-            if w_in.ndim == 1 else \
-            (1 - fw)[..., None] * self._idle_array[j] + fw[..., None] * self._idle_array[j + 1]
+        q = (1 - fw)[..., None] * self._idle_array[j] + fw[..., None] * self._idle_array[j + 1]
+        # below the grid's lowest speed: proportional to the speed (see _interp_speed)
+        low = np.minimum(np.abs(w_in) / self._w_low, 1.0)
+        q = np.where((np.abs(w_in) < self._w_low)[..., None], self._idle_array[0] * low[..., None],
+                     q)
         sgn = np.sign(w_in)
         drag = [sgn * q[..., 3 + x] for x in range(3)]
         tau = tau_out - drag[k]

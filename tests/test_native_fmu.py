@@ -293,7 +293,10 @@ def test_agrees_at_self_locking_points(native, fmu, mode):
             t = math.copysign(T, w * ratio)          # load drives
             a, b = n.step(w, t), p.step(w, t)
             assert_same(a, b, (mode, w, t))
-            assert a["eta"] == 0.0 if a["locked"] else a["eta"] > 0
+            # a load too light to overcome the drag at the shafts leaves the input driving:
+            # power then enters at both shafts and nothing comes out (eta 0, not locked)
+            both_in = a["tau_in"] * w > 0 and t * a["w_out"] > 0
+            assert a["eta"] == 0.0 if (a["locked"] or both_in) else a["eta"] > 0
             locked += a["locked"]
             unlocked += not a["locked"]
     assert locked >= 8 and unlocked >= 8      # both sides of the locking limit exercised

@@ -160,6 +160,7 @@ class ModeData:
     wdir: dict
     tables: dict          # forward -> ndarray (n_speed, n_torque, 6)
     idle: np.ndarray      # (n_speed, 6): the drag at the shafts
+    w_low: float          # rad/s, the grid's lowest speed
     ratio_out: float
     order: float
 
@@ -182,7 +183,7 @@ def export_map(design: DriveDesign, torque_max=MAP_TORQUE_MAX, speed_max=MAP_SPE
         order = design.z1 * abs(float(unit["1"] - unit["S"])) / abs(float(unit[a]))
         modes.append(ModeData(mode, mm.ratio, _SHAFT[a], _SHAFT[b], _SHAFT[h], dict(mm._wdir),
                               {fwd: mm._arrays[fwd] for fwd in (True, False)},
-                              np.asarray(mm._idle_array), ratio_out, order))
+                              np.asarray(mm._idle_array), mm._w_low, ratio_out, order))
     return lt, lw, modes
 
 
@@ -227,7 +228,7 @@ def generate_data_c(design, lt, lw, modes, constants, guid, torque_max, speed_ma
         arr(f"IDLE_{m.name}", m.idle.ravel().tolist())
     lines.append("")
     lines.append("const CDMap CD_MAP = {")
-    lines.append(f"    {len(lt)}, {len(lw)}, LT, LW, {_hex(design.i0)},")
+    lines.append(f"    {len(lt)}, {len(lw)}, LT, LW, {_hex(design.i0)}, {_hex(modes[0].w_low)},")
     lines.append("    {")
     for m in modes:
         lines.append(f"        {{{_c_string(m.name)}, {{{', '.join(_hex(r) for r in m.ratio)}}}, "

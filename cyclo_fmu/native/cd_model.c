@@ -71,14 +71,19 @@ static int interp(const CDMap *map, const double *table, double t, double w, dou
     return clamped;
 }
 
-/* ModeMap._interp_speed: linear in ln|w|, clamped at the edges */
+/* ModeMap._interp_speed: linear in ln|w|, clamped at the top; below the lowest speed
+ * proportional to w (w_low = exp(lw[0]), stored as map->w_low) */
 static void interp_speed(const CDMap *map, const double *idle, double w, double *row)
 {
     const double *gw = map->lw;
     int nw = map->n_speed, j, c;
-    double lw = w > 0 ? fmin(fmax(log(w), gw[0]), gw[nw - 1]) : gw[0];
-    double fw;
+    double lw, fw;
     const double *r0, *r1;
+    if (w < map->w_low) {
+        for (c = 0; c < CD_N_IDLE; c++) row[c] = idle[c] * (w / map->w_low);
+        return;
+    }
+    lw = fmin(log(w), gw[nw - 1]);
     j = bisect_right(gw, nw, lw) - 1;
     if (j > nw - 2) j = nw - 2;
     fw = (lw - gw[j]) / (gw[j + 1] - gw[j]);

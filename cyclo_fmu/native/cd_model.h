@@ -37,6 +37,7 @@ typedef struct {
     const double *lt;          /* ln |tau| grid (the gear's torque at the driven shaft), N*m */
     const double *lw;          /* ln |w_in| grid, rad/s */
     double i0;                 /* basic ratio (z1 - 1)/z1 */
+    double w_low;              /* rad/s, the lowest speed of the grid (ModeMap._w_low) */
     CDMode modes[CD_N_MODES];
 } CDMap;
 
