@@ -155,7 +155,7 @@ def cmd_efficiency(args) -> int:
     # a driving torque below it cannot keep the drive turning unless the load drives it
     w_a = rpm_to_rad_s(args.speed)
     no_load = float(operating_point(design, a + b, w_a, T_out=0.0).torques[a])
-    below_no_load = args.torque * w_a > 0 and abs(args.torque) < abs(no_load)
+    below_no_load = bool(args.torque * w_a > 0 and abs(args.torque) < abs(no_load))
     stalled = stalled or below_no_load
     p_in = float(op.input_power)
     w_out = float(op.speeds[b])
