@@ -274,3 +274,42 @@ def test_experiment_gap_of_the_paper():
     assert g["load_proportional_W"] > g["load_dependent_W"]
     assert max(abs(v) for v in g["residual_points"]["S1"].values()) < 0.2
     assert max(abs(v) for v in g["residual_points"]["S2"].values()) < 1.0
+
+
+def test_no_load_running_torque_is_the_drag_at_the_shafts():
+    """At zero load the motor supplies the drive's no-load running torque: everything it puts
+    in is dissipated, mostly by the load-independent drag (which acts on the shafts, outside
+    Kreines' rule), and the FMU's map gives the same torque."""
+    from model_core.lossmap import ModeMap
+    w = 2 * np.pi * 1500 / 60
+    for mode in ("S1", "S2"):
+        op = operating_point(PHYS, mode, w, T_out=0.0)
+        T_in = float(op.torques["S"])
+        assert T_in > 0
+        assert T_in * w == pytest.approx(float(op.losses.total), rel=1e-9)   # nothing comes out
+        assert float(op.losses.idle) > 0.8 * float(op.losses.total)
+        drag_power = sum(float(op.drag_torques[k] * op.speeds[k]) for k in "12S")
+        assert drag_power == pytest.approx(float(op.losses.idle), rel=1e-12)
+        m = ModeMap(PHYS, mode, 30.0, 350.0)
+        speeds, torques, losses, eta, eta0, locked, fwd = m.solve(w, 0.0)
+        assert torques[2] == pytest.approx(T_in, rel=5e-3)
+        assert sum(t * s for t, s in zip(torques, speeds)) == pytest.approx(sum(losses), rel=1e-12)
+        assert eta == 0.0
+    # without load-independent losses the gear alone runs free at zero load
+    gear = operating_point(PHYS.replace(losses="load_dependent"), "S1", w, T_out=0.0)
+    assert float(gear.torques["S"]) == 0.0
+
+
+def test_drag_sign_is_continuous_through_a_standstill():
+    """The drag's torque is M sign(w) away from a standstill and linear within
+    DRAG_SIGN_SPEED of it (a regularisation for time-stepping hosts): odd and continuous."""
+    from model_core import thermal
+    nu = thermal.lubricant_viscosity(PHYS)
+    v = drag.DRAG_SIGN_SPEED
+    speeds = np.array([-10 * v, -v, -0.5 * v, 0.0, 0.5 * v, v, 10 * v])
+    t = drag.idle_torques(PHYS, {"1": speeds, "2": 0.0 * speeds, "S": speeds}, nu)
+    seal = t["PL_seal"]["S"]
+    assert seal[3] == 0.0
+    np.testing.assert_allclose(seal, -seal[::-1], rtol=1e-15)
+    assert seal[4] == pytest.approx(0.5 * seal[5], rel=1e-12)
+    assert seal[6] == pytest.approx(seal[5], rel=1e-12)    # constant beyond the band
