@@ -281,6 +281,9 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
     params["motor.frequency_schedule"] = f_sched
     params["brake.torque_schedule"] = T_sched
     params["motor.ramp_rate"] = settings.ramp_rate / 60.0       # r/min per s -> Hz per s
+    # the reducer's inertia secants over the acceleration the regulator's ramp gives the
+    # two-pole motor's shaft (r/min per s -> rad/s^2; CycloidDrive.alpha_ref)
+    params["drive.alpha_ref"] = settings.ramp_rate * 2 * math.pi / 60.0
     with tempfile.TemporaryDirectory() as tmp:
         d = fmu_dir or tmp
         if fmu_dir is None:
