@@ -32,7 +32,8 @@ GCC = shutil.which("gcc") or shutil.which("cc")
 pytestmark = pytest.mark.skipif(GCC is None, reason="no C compiler")
 
 OUT = ("w_out", "tau_in", "tau_housing", "P_loss", "PL1", "PL2", "PL3", "PL5", "PL6", "eta",
-       "eta0", "P_extra", "P_stored", "PL_support", "PL_seal", "PL_churn")
+       "eta0", "P_extra", "P_stored", "PL_support", "PL_seal", "PL_churn", "torque_out",
+       "tau_in_static", "J_load", "J_load_dec")
 #: agreement required with the Python FMU (issue 7)
 RTOL = 1e-9
 #: absolute floor for values that are zero in one FMU and a rounding residue in the other [W,
@@ -167,22 +168,23 @@ def test_model_description_metadata(native, fmu):
     assert var["z1"].start == "15"
     # same ports, units and parameters as the Python FMU (minus what a build fixes)
     py = {v.name: v for v in read_model_description(fmu).modelVariables}
-    # no full solver in C; the bench's output-inertia reflection (J_out, alpha_in -> J_load,
-    # tau_in_static, torque_out) is the Python FMU's only (issue 9, bench); _failed: the Python
-    # FMU's flag for its C status front
-    assert set(py) - set(var) == {"exact", "J_out", "alpha_in", "J_load", "tau_in_static",
-                                  "torque_out", "_failed", "J_load_dec", "alpha_ref"}
+    # no full solver in C; _failed: the Python FMU's flag for its C status front
+    assert set(py) - set(var) == {"exact", "_failed"}
     for name, v in py.items():
         if name in var:
             assert (var[name].type, var[name].unit) == (v.type, v.unit), name
     out = {md.modelVariables.index(u.variable): u for u in md.outputs}
     deps = {u.variable.name: {d.name for d in u.dependencies} for u in md.outputs}
-    assert deps["w_out"] == {"w_in"} and deps["tau_in"] == {"w_in", "tau_out"}
+    assert deps["w_out"] == {"w_in"} and deps["tau_in"] == {"w_in", "tau_out", "alpha_in"}
+    py_md = read_model_description(fmu)
+    py_deps = {u.variable.name: {d.name for d in u.dependencies} for u in py_md.outputs}
+    assert all(deps[n] == py_deps[n] for n in deps if n in py_deps)
     init = {u.variable.name: {d.name for d in u.dependencies} for u in md.initialUnknowns}
     assert init["w_out"] == {"w_in", "mode", "mode_number"}
     assert {"drag_torque", "ripple_1x", "tau_out"} <= init["tau_in"]
     assert "drag_torque" not in init["tau_housing"]
-    assert len(out) == len(init) == 17       # 16 Real outputs and locked
+    assert {"J_out", "alpha_ref"} <= init["J_load"]
+    assert len(out) == len(init) == 21       # 20 Real outputs and locked
 
 
 # -- the C host ------------------------------------------------------------------------------
@@ -276,6 +278,34 @@ def test_agrees_with_python_fmu_in_all_quadrants(native, fmu, mode):
         assert_same(a, b, (mode, w, t))
         quadrants.add((w > 0, t > 0))
     assert len(quadrants) == 4
+    n.close()
+    p.close()
+
+
+@pytest.mark.parametrize("mode", ["S1", "S2"])
+def test_output_inertia_agrees_with_the_python_fmu(native, fmu, mode):
+    """J_out reflected to the driving side as the bench's motor integrator needs it: the load
+    includes J_out's inertial torque, J_load/J_load_dec are the secants over +-alpha_ref of
+    the driving torque, reused while the operating point stays within 1e-3; both FMUs alike,
+    along a run-up, a steady stretch (reuse), a reversal of the load and a deceleration."""
+    params = dict(mode=mode, J_out=0.2, alpha_ref=120.0)
+    n, p = Inst(native, **params), Inst(fmu, **params)
+    w, seen_reuse = 0.0, 0
+    for k in range(400):
+        alpha = 150.0 if k < 100 else (0.0 if k < 200 else -90.0)
+        w += alpha * 1e-3
+        tau = -2.0 if k < 300 else 1.5
+        n.set(alpha_in=alpha)
+        p.set(alpha_in=alpha)
+        a, b = n.step(w, tau), p.step(w, tau)
+        assert_same(a, b, (mode, k))
+        if k > 0 and alpha == 0.0 and a["J_load"] == last:
+            seen_reuse += 1
+        last = a["J_load"]
+        ratio = float(kinematics.shaft_speeds(mode, 1.0, 15)[mode[1]])
+        assert a["J_load"] > 0 and a["J_load_dec"] > 0
+        assert a["torque_out"] == pytest.approx(-(tau - 0.2 * ratio * alpha), rel=1e-12)
+    assert seen_reuse > 50
     n.close()
     p.close()
 

@@ -22,11 +22,11 @@ import subprocess
 import tempfile
 import uuid
 import zipfile
-from dataclasses import asdict, dataclass
-
-import numpy as np
+from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
+
+import numpy as np
 
 from model_core import DriveDesign, kinematics
 from model_core.errors import CycloidInputError
@@ -74,7 +74,7 @@ EXTRA = (
      "(|w|/300 rad/s)^p (0 to 2)"),
 )
 
-#: Outputs, in the order of the C state's out[] (value references 10..25), then ``locked``.
+#: Outputs, in the order of the C state's out[] (value references 10..29), then ``locked``.
 OUTPUTS = (
     ("w_out", "rad/s", "AngularVelocity", "speed of the driven shaft"),
     ("tau_in", "N.m", "Torque", "torque the driver applies on the driving shaft"),
@@ -95,11 +95,20 @@ OUTPUTS = (
      "(load-independent)"),
     ("PL_seal", "W", "Power", "partial loss PL_seal: shaft lip seals"),
     ("PL_churn", "W", "Power", "partial loss PL_churn: grease sheared at the orbiting gears' faces"),
+    ("torque_out", "N.m", "Torque", "torque the driven shaft delivers to the load side, J_out's "
+     "inertial torque included (what a transducer there reads)"),
+    ("tau_in_static", "N.m", "Torque", "tau_in without the torque that accelerates J_out (for "
+     "the driving side's integrator)"),
+    ("J_load", "kg.m2", "MomentOfInertia", "J_out as the driving shaft feels it through the "
+     "reducer while it speeds up (|w_in| rising)"),
+    ("J_load_dec", "kg.m2", "MomentOfInertia", "J_out as the driving shaft feels it through the "
+     "reducer while it slows down (|w_in| falling)"),
 )
 
 #: SI base-unit exponents and display units (name, factor: display = factor * SI value)
 UNITS = {
     "rad/s": (dict(rad=1, s=-1), (("r/min", 30.0 / math.pi),)),
+    "rad/s2": (dict(rad=1, s=-2), ()),
     "N.m": (dict(kg=1, m=2, s=-2), ()),
     "W": (dict(kg=1, m=2, s=-3), ()),
     "1": ({}, (("%", 100.0),)),
@@ -295,6 +304,9 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
        f'<Real {_real_attrs("rad/s", "AngularVelocity", 0.0)}/>')
     sv("tau_out", 1, "input", "continuous", "torque the load applies on the driven shaft",
        f'<Real {_real_attrs("N.m", "Torque", 0.0)}/>')
+    sv("alpha_in", 2, "input", "continuous", "acceleration of the driving shaft (from its "
+       "integrator's equation of motion); used with J_out",
+       f'<Real {_real_attrs("rad/s2", "AngularAcceleration", 0.0)}/>')
     for k, (name, unit, quantity, desc) in enumerate(OUTPUTS):
         sv(name, 10 + k, "output", "continuous", desc,
            f'<Real {_real_attrs(unit, quantity, display="%" if unit == "1" else None)}/>',
@@ -311,6 +323,14 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
         sv(name, 30 + k, "parameter", "fixed", desc + " (design [extra])",
            f'<Real {_real_attrs(unit, quantity, getattr(design.extra, name), min_=lo)}/>',
            "exact")
+    from ..slaves.cycloid_drive import ALPHA_REF
+    sv("J_out", 50, "parameter", "fixed", "inertia on the driven shaft, reflected to the driving "
+       "side's integrator (see J_load)",
+       f'<Real {_real_attrs("kg.m2", "MomentOfInertia", 0.0, min_=0.0)}/>', "exact")
+    sv("alpha_ref", 51, "parameter", "fixed", "acceleration of the driving shaft over which "
+       "J_load and J_load_dec are secants (the order of the accelerations the train sees). "
+       "Assumption", f'<Real {_real_attrs("rad/s2", "AngularAcceleration", ALPHA_REF, min_=0.0)}/>',
+       "exact")
     for c, vr in zip(constants, _vr_tables(constants)):
         name, kind, value, unit, desc = c
         desc = desc + " (constant: fixed by the design this FMU was built for)"
@@ -338,13 +358,19 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
     mode_p = ["mode", "mode_number"]
     steady = ["drag_torque", "stribeck_torque", "stribeck_speed", "ripple_1x",
               "ripple_1x_phase", "ripple_roller", "ripple_roller_phase"]
-    both = ["w_in", "tau_out"]
+    # alpha_in acts through J_out (0 by default); declared, so that the dependencies hold for
+    # every parameter value
+    both = ["w_in", "tau_out", "alpha_in"]
+    inertia = ["J_out"]
     deps = {"w_out": (["w_in"], ["w_in"] + mode_p)}
-    for name in ("tau_in", "P_loss", "eta", "P_extra", "P_stored"):
-        deps[name] = (both, both + mode_p + steady)
+    for name in ("tau_in", "P_loss", "eta", "P_extra", "P_stored", "tau_in_static"):
+        deps[name] = (both, both + mode_p + steady + inertia
+                      + (["alpha_ref"] if name == "tau_in_static" else []))
     for name in ("tau_housing", "PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal",
-                 "PL_churn", "eta0", "locked"):
-        deps[name] = (both, both + mode_p)
+                 "PL_churn", "eta0", "locked", "torque_out"):
+        deps[name] = (both, both + mode_p + inertia)
+    for name in ("J_load", "J_load_dec"):
+        deps[name] = (both, both + mode_p + inertia + ["alpha_ref"])
 
     def unknown(name, which):
         d = sorted(index[x] for x in deps[name][which])

@@ -7,9 +7,10 @@
  *
  * Value references (modelDescription.xml is generated with the same numbers by
  * cyclo_fmu/native/build.py):
- *   Real     0 w_in, 1 tau_out (inputs)
- *            10..21 outputs, in the order of OUT_NAMES
- *            30..39 extra physics parameters, in the order of CDExtra
+ *   Real     0 w_in, 1 tau_out, 2 alpha_in (inputs)
+ *            10..29 outputs, in the order of OUT_NAMES
+ *            30..40 extra physics parameters, in the order of CDExtra
+ *            50 J_out, 51 alpha_ref (parameters of the output inertia)
  *            100.. constants of the design (generated table)
  *   Integer  0 mode_number; 100.. constants
  *   Boolean  10 locked
@@ -26,15 +27,25 @@
 
 #define VR_W_IN 0
 #define VR_TAU_OUT 1
+#define VR_ALPHA_IN 2
 #define VR_OUT0 10
-#define N_OUT 16
+#define N_OUT 20
 #define VR_EXTRA0 30
+#define VR_J_OUT 50
+#define VR_ALPHA_REF 51
+/* rad/s^2, default of alpha_ref (CycloidDrive.ALPHA_REF: 2 pi 25, the regulator's ramp on the
+ * two-pole motor) */
+#define ALPHA_REF_DEFAULT (2 * 3.14159265358979311600 * 25.0)
+/* relative change of w_in and tau_out within which a step reuses the last J_load
+ * (CycloidDrive._SLOPE_REUSE) */
+#define SLOPE_REUSE 1e-3
 #define VR_MODE_NUMBER 0
 #define VR_LOCKED 10
 #define VR_MODE 0
 
 enum { O_W_OUT, O_TAU_IN, O_TAU_HOUSING, O_P_LOSS, O_PL1, O_PL2, O_PL3, O_PL5, O_PL6, O_ETA,
-       O_ETA0, O_P_EXTRA, O_P_STORED, O_PL_SUPPORT, O_PL_SEAL, O_PL_CHURN };
+       O_ETA0, O_P_EXTRA, O_P_STORED, O_PL_SUPPORT, O_PL_SEAL, O_PL_CHURN, O_TORQUE_OUT,
+       O_TAU_IN_STATIC, O_J_LOAD, O_J_LOAD_DEC };
 
 static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "drag_torque", "stribeck_torque", "stribeck_speed", "input_inertia", "ripple_1x",
@@ -44,14 +55,15 @@ static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
 enum { PH_INSTANTIATED = 1, PH_INIT, PH_STEP, PH_TERMINATED };
 
 #define STATE_MAGIC 0x43444e53u   /* "CDNS" */
-#define STATE_VERSION 1u
+#define STATE_VERSION 2u
 
 /* Everything that defines the instance's behaviour from here on: inputs, parameters,
  * outputs and the dynamic state. Plain data: copied and serialised as it is. */
 typedef struct {
     unsigned int magic, version;
     int phase;
-    double w_in, tau_out;
+    double w_in, tau_out, alpha_in;
+    double J_out, alpha_ref;   /* output inertia (kg m^2) and the secants' acceleration */
     int mode;              /* index of the String parameter "mode" (0..5) */
     int mode_number;       /* 0 = use mode, 1..6 */
     CDExtra extra;
@@ -63,6 +75,8 @@ typedef struct {
     int has_w_last;
     double t_start;
     int warned_range;
+    int has_key;           /* the last J_load secants and where they were taken */
+    double key_w, key_tau, key_J_acc, key_J_dec;
 } CDState;
 
 typedef struct {
@@ -128,6 +142,7 @@ static void set_defaults(CDState *s)
     s->mode = 3;   /* "S1", the bench's mode (the Python FMU's default) */
     s->mode_number = 0;
     s->extra = CD_DEFAULT_EXTRA;
+    s->alpha_ref = ALPHA_REF_DEFAULT;
     s->out[O_ETA0] = 1.0;
 }
 
@@ -162,6 +177,52 @@ static const char *extra_problem(int i, double v)
     }
 }
 
+/* CycloidDrive._gear_torque (map): the driving-shaft torque of the gear at a load torque */
+static double gear_torque(int mode, double w_in, double tau_out)
+{
+    CDSolution r;
+    cd_solve(&CD_MAP, mode, w_in, tau_out, &r);
+    return r.torques[CD_MAP.modes[mode].a];
+}
+
+/* CycloidDrive._solve's output inertia: J_load and J_load_dec, secants of the driving torque
+ * over +-alpha_ref (reused while w_in and the load stay within SLOPE_REUSE), and
+ * tau_in_static. commit = 0 (Initialization Mode's reads) neither uses nor keeps the secants. */
+static void output_inertia(CDState *s, int mode, double tau_ext, double J_r, double tau_in_gear,
+                           int commit)
+{
+    double w_in = s->w_in, static_, J_acc, J_dec;
+    if (J_r == 0.0) {
+        s->out[O_TAU_IN_STATIC] = s->out[O_TAU_IN];
+        s->out[O_J_LOAD] = s->out[O_J_LOAD_DEC] = 0.0;
+        return;
+    }
+    static_ = gear_torque(mode, w_in, tau_ext);
+    if (commit && s->has_key && fabs(w_in - s->key_w) <= SLOPE_REUSE * fabs(s->key_w)
+        && fabs(tau_ext - s->key_tau) <= SLOPE_REUSE * fabs(s->key_tau)) {
+        J_acc = s->key_J_acc;
+        J_dec = s->key_J_dec;
+    } else {
+        double A = w_in >= 0 ? s->alpha_ref : -s->alpha_ref;   /* speeding up */
+        double lossless = J_r * CD_MAP.modes[mode].ratio_out;
+        J_acc = (gear_torque(mode, w_in, tau_ext - J_r * A) - static_) / A;
+        J_dec = (static_ - gear_torque(mode, w_in, tau_ext + J_r * A)) / A;
+        /* locked: the lossless reflection */
+        if (!(isfinite(J_acc) && J_acc > 0)) J_acc = lossless;
+        if (!(isfinite(J_dec) && J_dec > 0)) J_dec = lossless;
+        if (commit) {
+            s->has_key = 1;
+            s->key_w = w_in;
+            s->key_tau = tau_ext;
+            s->key_J_acc = J_acc;
+            s->key_J_dec = J_dec;
+        }
+    }
+    s->out[O_J_LOAD] = J_acc;
+    s->out[O_J_LOAD_DEC] = J_dec;
+    s->out[O_TAU_IN_STATIC] = s->out[O_TAU_IN] - (tau_in_gear - static_);
+}
+
 /* CycloidDrive._update: outputs at time t after a step dt. commit = 0 evaluates without
  * touching the dynamic state (Initialization Mode's outputs). */
 static void evaluate(Instance *c, double t, double dt, int commit)
@@ -169,9 +230,11 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     CDState *s = &c->s;
     const CDMode *m;
     CDSolution r;
-    double tau_in, tau_in_gear, p_in, p_out, p_stored = 0.0, w_in = s->w_in,
-           tau_out = s->tau_out;
     int mode = commit || s->phase == PH_STEP ? s->mode_eff : resolve_mode(s);
+    double J_r = s->J_out * CD_MAP.modes[mode].ratio_out;
+    /* the load including the output inertia's torque */
+    double tau_ext = s->tau_out, tau_out = tau_ext - J_r * s->alpha_in;
+    double tau_in, tau_in_gear, p_in, p_out, p_stored = 0.0, w_in = s->w_in;
     int steady = s->extra.drag_torque != 0 || s->extra.stribeck_torque != 0;
     int dynamic = s->extra.input_inertia != 0 || s->extra.ripple_1x != 0
                   || s->extra.ripple_roller != 0 || s->extra.thermal_loss_change != 0;
@@ -226,6 +289,8 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     s->out[O_ETA] = r.eta;
     s->out[O_ETA0] = r.eta0;
     s->locked = r.locked;
+    s->out[O_TORQUE_OUT] = -tau_out;
+    output_inertia(s, mode, tau_ext, J_r, tau_in_gear, commit);
 }
 
 #define CHECK_INSTANCE(fn) \
@@ -338,6 +403,7 @@ FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
     if (c->s.phase != PH_INIT) return not_in_phase(c, "fmi2ExitInitializationMode");
     c->s.mode_eff = resolve_mode(&c->s);
     c->s.phase = PH_STEP;
+    c->s.has_key = 0;
     evaluate(c, c->s.t_start, 0.0, 1);
     return fmi2OK;
 }
@@ -390,6 +456,9 @@ FMI2_Export fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference 
         int k;
         if (r == VR_W_IN) value[i] = c->s.w_in;
         else if (r == VR_TAU_OUT) value[i] = c->s.tau_out;
+        else if (r == VR_ALPHA_IN) value[i] = c->s.alpha_in;
+        else if (r == VR_J_OUT) value[i] = c->s.J_out;
+        else if (r == VR_ALPHA_REF) value[i] = c->s.alpha_ref;
         else if (r >= VR_OUT0 && r < VR_OUT0 + N_OUT) {
             if (!refreshed) { refresh(c); refreshed = 1; }
             value[i] = c->s.out[r - VR_OUT0];
@@ -467,15 +536,33 @@ FMI2_Export fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference 
     for (i = 0; i < nvr; i++) {
         unsigned int r = vr[i];
         double v = value[i];
-        if (r == VR_W_IN || r == VR_TAU_OUT) {
-            const char *name = r == VR_W_IN ? "w_in" : "tau_out";
+        if (r == VR_W_IN || r == VR_TAU_OUT || r == VR_ALPHA_IN) {
+            const char *name = r == VR_W_IN ? "w_in" : r == VR_TAU_OUT ? "tau_out" : "alpha_in";
+            double *dst = r == VR_W_IN ? &c->s.w_in : r == VR_TAU_OUT ? &c->s.tau_out
+                        : &c->s.alpha_in;
             if (!isfinite(v)) {
                 logmsg(c, fmi2Error, "%s = %g: input must be a finite number (kept %g)", name,
-                       v, r == VR_W_IN ? c->s.w_in : c->s.tau_out);
+                       v, *dst);
                 status = fmi2Error;
                 continue;
             }
-            if (r == VR_W_IN) c->s.w_in = v; else c->s.tau_out = v;
+            *dst = v;
+        } else if (r == VR_J_OUT || r == VR_ALPHA_REF) {
+            const char *name = r == VR_J_OUT ? "J_out" : "alpha_ref";
+            double *dst = r == VR_J_OUT ? &c->s.J_out : &c->s.alpha_ref;
+            /* CycloidDrive._setup: J_out >= 0, alpha_ref > 0 */
+            int ok = isfinite(v) && (r == VR_J_OUT ? v >= 0 : v > 0);
+            if (!parameters_settable(c)) {
+                logmsg(c, fmi2Error, "%s is a fixed parameter: set it before "
+                       "fmi2ExitInitializationMode", name);
+                status = fmi2Error;
+            } else if (!ok) {
+                logmsg(c, fmi2Error, "invalid parameter: %s = %g %s (kept %g)", name, v,
+                       r == VR_J_OUT ? "must not be negative" : "must be positive", *dst);
+                status = fmi2Error;
+            } else {
+                *dst = v;
+            }
         } else if (r >= VR_EXTRA0 && r < VR_EXTRA0 + CD_N_EXTRA) {
             int k = (int)(r - VR_EXTRA0);
             const char *why = extra_problem(k, v);
