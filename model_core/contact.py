@@ -236,7 +236,8 @@ class _Geometry:
                 q = np.cbrt(np.cbrt(d))
                 t = np.add.reduce(l * q * d, axis=0)
                 dt = np.add.reduce(l2 * q, axis=0)     # l2 carries the 10/9 here
-            step = np.divide(t - T_k, dt, out=np.zeros_like(t), where=dt > 0)
+            # no step where nothing is in contact (dt = 0: then t = 0 as well)
+            step = (t - T_k) / np.where(dt > 0, dt, np.inf)
             rot = rot - step
             if (np.abs(step) <= _NEWTON_RTOL * np.abs(rot)).all():
                 break

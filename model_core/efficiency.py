@@ -46,9 +46,9 @@ _FIXED_POINT_MAX = 30
 #: the secant interpolates between it and the frictionless 1. One operating point then takes
 #: 4.3 (paper) or 4.7 (physical) loss evaluations instead of 5.1 or 5.4 (bench's speed range)
 _PAIR_START_MAX = 16
-_START_NODES = (0.985, 0.96, 0.92, 0.85)
+_START_NODES = (0.85, 0.92, 0.985, 0.96)
 #: where a node lies below lo: the nodes at these fractions of the way from 1 to lo
-_START_FRACTIONS = np.array((0.1, 0.35, 0.65, 0.9))
+_START_FRACTIONS = np.array((0.9, 0.65, 0.1, 0.35))
 #: the first estimate from the start nodes and its companions at these offsets in eta0 [1]
 #: (see _secant): the first estimate is off by up to ~3e-5 (physical profile: the loss
 #: ratio is not smooth enough for a closer one from nodes ~0.02 apart), and inverse quadratic
