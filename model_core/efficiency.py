@@ -49,6 +49,7 @@ _PAIR_START_MAX = 16
 _START_NODES = (0.85, 0.92, 0.985, 0.96)
 #: where a node lies below lo: the nodes at these fractions of the way from 1 to lo
 _START_FRACTIONS = np.array((0.9, 0.65, 0.1, 0.35))
+_START_NODES_COL = np.array(_START_NODES)[:, None]
 #: the first estimate from the start nodes and its companions at these offsets in eta0 [1]
 #: (see _secant): the first estimate is off by up to ~3e-5 (physical profile: the loss
 #: ratio is not smooth enough for a closer one from nodes ~0.02 apart), and inverse quadratic
@@ -210,12 +211,14 @@ def _inverse_interpolation(U, G):
 
 #: rows of the secant's history (see _secant): eta0, f, u, G, T1, then the partial losses
 _X, _F, _U, _G, _T1, _L = range(6)
+_ROWS = _L + len(LOSS_NAMES)
 
 
-def _secant(eta0_from, H, lo, inv, companion=False):
-    """Secant iteration (inverse interpolation through ``order`` points) on the fixed point
-    eta0 = f(eta0) per point, from the evaluated points in H (rows eta0, f, u, G, T1 and the
-    partial losses LOSS_NAMES (W), see _history; points K x n; updated in place).
+def _secant(evaluate, H, lo, inv, companion=False):
+    """Secant iteration (inverse interpolation through the points kept) on the fixed point
+    eta0 = f(eta0) per point, from the evaluated points in H: rows eta0, f, u, G, T1 and the
+    partial losses LOSS_NAMES (W), points K x n. ``evaluate(eta0, sel)`` gives those rows at
+    the points ``sel`` (index array).
 
     Each point stops when |f - eta0| <= _FIXED_POINT_TOL (the others go on alone); iterates
     stay in the physical range [lo, 1] (f <= 1 always: the losses are not negative), and a
@@ -225,18 +228,18 @@ def _secant(eta0_from, H, lo, inv, companion=False):
     affine in u (Coulomb losses keep x constant, speed-only losses make it grow as 1/|T1|, and
     |T1| goes as 1/u or as 1/(i0 u - 1) through Kreines' rule), so the secant on
     G(u) = u(f) - u is nearly exact even where the losses rival the power (on g = f - eta0
-    it crawled there). Each step interpolates u(G) at G = 0 through the K points kept (order 2:
+    it crawled there). Each step interpolates u(G) at G = 0 through the K points kept (K = 2:
     the secant; more: inverse polynomial interpolation, whose order of convergence is nearer
     2), falling back to the secant of the two best where that leaves the range; the new
     point replaces the one of largest |G|. ``companion``: the first step also evaluates
     points _COMPANION_OFFSETS [1] from its estimate (in the same call: a few points cost what
     one does), which then make the history: the next interpolation has three points near
     the root (from start nodes ~0.02 apart the first estimate is off by up to ~3e-5, and the
-    next one, through it and the nodes, by ~1e-10, short of _FIXED_POINT_TOL). Returns (H at
-    each point's evaluation of smallest |f - eta0|, stuck)."""
+    next one, through it and the nodes, by ~1e-10, short of _FIXED_POINT_TOL). Returns (the
+    rows at each point's evaluation of smallest |f - eta0|, stuck)."""
     n = H.shape[2]
     stuck = np.zeros(n, bool)
-    active = np.flatnonzero(np.abs(H[_F] - H[_X]).min(0) > _FIXED_POINT_TOL)
+    active = np.flatnonzero((np.abs(H[_F] - H[_X]) > _FIXED_POINT_TOL).all(0))
     for _ in range(_FIXED_POINT_MAX):
         if active.size == 0:
             break
@@ -246,62 +249,45 @@ def _secant(eta0_from, H, lo, inv, companion=False):
         with np.errstate(divide="ignore", invalid="ignore"):
             u2 = _inverse_interpolation(Ua, Ga)
             x2 = np.where(inv_a, 1.0 / u2, u2)
-            bad = ~((x2 >= lo_a) & (x2 <= 1.0))
-            if bad.any():
-                # the secant of the two best points
-                o = np.argsort(np.abs(Ga), axis=0)[:2]
-                (ub, ua), (gb, ga) = (np.take_along_axis(Ua, o, 0),
-                                      np.take_along_axis(Ga, o, 0))
-                denom = gb - ga
-                safe = np.abs(denom) > 1e-300
-                us = np.where(safe, ub - gb * (ub - ua) / np.where(safe, denom, 1.0), ub + gb)
-                u2 = np.where(bad, us, u2)
-                x2 = np.where(inv_a, 1.0 / np.where(u2 > 0, u2, np.inf), u2)
-                out = ~((x2 >= lo_a) & (x2 <= 1.0))
-                if out.any():
-                    stuck[active[out]] = True
-                    ok = ~out
-                    active, x2, u2, inv_a, lo_a, Ga = (active[ok], x2[ok], u2[ok], inv_a[ok],
-                                                       lo_a[ok], Ga[:, ok])
-                    if active.size == 0:
-                        break
-                    at = slice(None) if active.size == n else active
-        cols = np.arange(n)[at]
+        bad = ~((x2 >= lo_a) & (x2 <= 1.0))
+        if bad.any():
+            # the secant of the two best points
+            o = np.argsort(np.abs(Ga), axis=0)[:2]
+            (ub, ua), (gb, ga) = np.take_along_axis(Ua, o, 0), np.take_along_axis(Ga, o, 0)
+            denom = gb - ga
+            safe = np.abs(denom) > 1e-300
+            us = np.where(safe, ub - gb * (ub - ua) / np.where(safe, denom, 1.0), ub + gb)
+            u2 = np.where(bad, us, u2)
+            x2 = np.where(inv_a, 1.0 / np.where(u2 > 0, u2, np.inf), u2)
+            out = ~((x2 >= lo_a) & (x2 <= 1.0))
+            if out.any():
+                stuck[active[out]] = True
+                ok = ~out
+                active, x2, lo_a, Ga = active[ok], x2[ok], lo_a[ok], Ga[:, ok]
+                if active.size == 0:
+                    break
+                at = slice(None) if active.size == n else active
         if companion:
-            # the estimate and its companions, which then make the history (with the points
-            # that have converged already, the best ones kept)
+            # the estimate and its companions, which then make the history (the points that
+            # have converged already keep their best one)
             companion = False
+            k = _COMPANION_OFFSETS.size
             xs = x2 + _COMPANION_OFFSETS[:, None]
             xs[1] = np.where(xs[1] >= lo_a, xs[1], x2 + 2 * _COMPANION_OFFSETS[2])
             xs[2] = np.where(xs[2] <= 1.0, xs[2], x2 + 2 * _COMPANION_OFFSETS[1])
-            k = xs.shape[0]
-            keep = np.argsort(np.abs(H[_G]), axis=0, kind="stable")[:k]
-            H = np.take_along_axis(H, keep[None], 1)
-            inv_k = np.broadcast_to(inv_a, xs.shape)
-            f2, L2, T12 = eta0_from(xs.reshape(-1), np.tile(active, k))
-            f2 = f2.reshape(k, -1)
-            u2 = np.where(inv_k, 1.0 / xs, xs)
-            H[:, :, cols] = np.stack(
-                (xs, f2, u2, np.where(inv_k, 1.0 / f2, f2) - u2, T12.reshape(k, -1))
-                + tuple(np.reshape(getattr(L2, n_), (k, -1)) for n_ in LOSS_NAMES))
-            active = active[(np.abs(f2 - xs) > _FIXED_POINT_TOL).all(0)]
+            E = evaluate(xs.reshape(-1), np.concatenate((active,) * k))
+            best = np.argmin(np.abs(H[_F] - H[_X]), axis=0)
+            H = np.repeat(H[:, best, np.arange(n)][:, None], k, 1)
+            H[:, :, at] = E.reshape(_ROWS, k, -1)
+            active = active[(np.abs(E[_F] - E[_X]) > _FIXED_POINT_TOL).reshape(k, -1).all(0)]
             continue
         # the new point replaces the one of largest |G|
         worst = np.argmax(np.abs(Ga), axis=0)
-        f2, L2, T12 = eta0_from(x2, active)
-        G2 = np.where(inv_a, 1.0 / f2, f2) - u2
-        H[:, worst, cols] = (x2, f2, u2, G2, T12) + tuple(getattr(L2, k) for k in LOSS_NAMES)
-        active = active[np.abs(f2 - x2) > _FIXED_POINT_TOL]
+        E = evaluate(x2, active)
+        H[:, worst, active] = E
+        active = active[np.abs(E[_F] - E[_X]) > _FIXED_POINT_TOL]
     best = np.argmin(np.abs(H[_F] - H[_X]), axis=0)
     return H[:, best, np.arange(n)], stuck
-
-
-def _history(X, f, L, T1, inv):
-    """The secant's history (see _secant) from the points X evaluated to f, losses L and ring
-    torques T1 (all shaped K x n)."""
-    U = np.where(inv, 1.0 / X, X)
-    return np.stack((X, f, U, np.where(inv, 1.0 / f, f) - U, T1)
-                    + tuple(getattr(L, k) for k in LOSS_NAMES)).astype(float)
 
 
 def _regula_falsi(eta0_from, sel, a, ga, gb, x_last, g_last, T1, Ls, converged):
@@ -469,27 +455,33 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
     # point; u = 1/eta0 where the ring is driven relatively
     inv = wdir < 0
     n = T_flat.size
+
+    def evaluate(eta0, sel=None):
+        """The rows of _secant's history at the points eta0 (at the points ``sel``)."""
+        f, L, T1 = eta0_from(eta0, sel)
+        iv = inv if sel is None else inv[sel]
+        E = np.empty((_ROWS, eta0.size))
+        E[_X], E[_F], E[_T1] = eta0, f, T1
+        E[_U] = np.where(iv, 1.0 / eta0, eta0)
+        E[_G] = np.where(iv, 1.0 / f, f) - E[_U]
+        E[_L:] = [getattr(L, k) for k in LOSS_NAMES]
+        return E
+
     if n <= _PAIR_START_MAX:
         # a few points cost what one does (numpy's per-call overhead): evaluate the secant's
         # first points together, the frictionless one and _START_NODES below it (within
         # (lo, 1]), and interpolate through them
-        X = np.array((1.0,) + _START_NODES)[:, None] * np.ones(n)
-        X[1:] = np.where(X[1:] > lo, X[1:], 1.0 - (1.0 - lo) * _START_FRACTIONS[:, None])
-        K = X.shape[0]
-        fK, LK, TK = eta0_from(X.reshape(-1), np.tile(np.arange(n), K))
-        H = _history(X, fK.reshape(K, n),
-                     PartialLosses(*(np.reshape(getattr(LK, k), (K, n)) for k in LOSS_NAMES)),
-                     TK.reshape(K, n), inv)
+        K = 1 + len(_START_NODES)
+        X = np.empty((K, n))
+        X[0] = 1.0
+        X[1:] = np.where(_START_NODES_COL > lo, _START_NODES_COL,
+                         1.0 - (1.0 - lo) * _START_FRACTIONS[:, None])
+        H = evaluate(X.reshape(-1), np.concatenate((np.arange(n),) * K)).reshape(_ROWS, K, n)
     else:
-        x0 = np.ones_like(T_flat)
-        f0, L0, T10 = eta0_from(x0)
-        x1 = np.clip(f0, lo, 1.0)
-        f1, L1, T11 = eta0_from(x1)
-        H = _history(np.stack([x0, x1]), np.stack([f0, f1]),
-                     PartialLosses(*(np.stack([getattr(L0, k), getattr(L1, k)])
-                                     for k in LOSS_NAMES)), np.stack([T10, T11]), inv)
+        E0 = evaluate(np.ones_like(T_flat))
+        H = np.stack([E0, evaluate(np.clip(E0[_F], lo, 1.0))], axis=1)
     g_one = H[_F, 0] - 1.0                       # g(1) <= 0: the upper end of every bracket
-    h, stuck = _secant(eta0_from, H, lo, inv, companion=n <= _PAIR_START_MAX)
+    h, stuck = _secant(evaluate, H, lo, inv, companion=n <= _PAIR_START_MAX)
     x1, f1, T1 = h[_X], h[_F], h[_T1]
     g1 = f1 - x1
     L = list(h[_L:])
