@@ -41,13 +41,17 @@ from .losses import LOSS_NAMES, PartialLosses, partial_losses
 #: 2e-8); 1e-12 costs one more secant step on part of the points
 _FIXED_POINT_TOL = 1e-12
 _FIXED_POINT_MAX = 30
-#: up to this many points, the secant's first two points are evaluated in one call (a few
-#: points cost what one does); the second is _PAIR_START [1], a typical basic efficiency, so
-#: the secant interpolates between it and the frictionless 1. One operating point then takes
-#: 4.3 (paper) or 4.7 (physical) loss evaluations instead of 5.1 or 5.4 (bench's speed range)
+#: up to this many points (a few points cost what one does: numpy's per-call overhead), the
+#: secant starts from the frictionless eta0 = 1 and _START_NODES [1] (typical basic
+#: efficiencies), all evaluated in one call, and interpolates through them; its first
+#: estimate is evaluated with two companions (_COMPANION_OFFSETS), and the next one converges.
+#: One operating point then takes 3 loss evaluations (the known torque on shaft 1 or 2: 2 or
+#: 3) instead of 4 (paper) or 5 (physical). The nodes' order sets the contact solver's warm
+#: start for the next call (a point listed twice keeps its last entry): a typical root last
 _PAIR_START_MAX = 16
 _START_NODES = (0.85, 0.92, 0.985, 0.96)
-#: where a node lies below lo: the nodes at these fractions of the way from 1 to lo
+#: where a node lies below lo (near the locking limit): the nodes at these fractions of the
+#: way from 1 to lo instead
 _START_FRACTIONS = np.array((0.9, 0.65, 0.1, 0.35))
 _START_NODES_COL = np.array(_START_NODES)[:, None]
 #: the first estimate from the start nodes and its companions at these offsets in eta0 [1]
@@ -360,9 +364,12 @@ def shaft_drag(design, speeds, shape=()):
     if design.profile == "physical" and design.losses == "all":
         from . import drag, thermal
         idle_t = drag.idle_torques(design, speeds, thermal.lubricant_viscosity(design))
-        idle = {name: np.broadcast_to(sum(t[x] * speeds[x] for x in "12S"), shape)
+
+        def shaped(v):   # (np.broadcast_to costs more than the sums where it changes nothing)
+            return v if np.shape(v) == shape else np.broadcast_to(v, shape)
+        idle = {name: shaped(t["1"] * speeds["1"] + t["2"] * speeds["2"] + t["S"] * speeds["S"])
                 for name, t in idle_t.items()}
-        T_drag = {x: np.broadcast_to(sum(t[x] for t in idle_t.values()), shape) for x in "12S"}
+        T_drag = {x: shaped(sum(t[x] for t in idle_t.values())) for x in "12S"}
         return T_drag, idle
     return {x: np.zeros(shape) for x in "12S"}, {}
 
