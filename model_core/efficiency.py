@@ -137,12 +137,13 @@ def torque_coefficients(eta0, w, i0):
     driven = np.asarray(w) <= 0
     if eta0.shape != driven.shape:
         eta0, driven = np.broadcast_arrays(eta0, driven)
-    bad = driven & ~(eta0 > 0)
-    if bad.any():
+    at_driven = np.where(driven, eta0, 1.0)
+    if not (at_driven > 0).all():
+        bad = driven & ~(eta0 > 0)
         raise ValueError(f"basic efficiency eta0 = {eta0[bad].flat[0]!r} with the ring driven: "
                          "Kreines' rule needs eta0 > 0 there")
-    c2 = -i0 * np.divide(1.0, eta0, out=eta0.copy(), where=driven)
-    return np.ones_like(c2), c2, -(1.0 + c2)
+    c2 = -i0 * np.where(driven, 1.0 / at_driven, eta0)
+    return np.ones(c2.shape), c2, -(1.0 + c2)
 
 
 @dataclass(frozen=True)
@@ -390,11 +391,11 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
     known = a if T_out is None else b
     w_in, T_known = np.broadcast_arrays(np.asarray(w_in, float),
                                      np.asarray(T_in if T_out is None else T_out, float))
-    if not np.all(np.isfinite(w_in)):
+    if not np.isfinite(w_in).all():
         raise CycloidInputError("speed", w_in[~np.isfinite(w_in)].flat[0], "must be finite")
-    if not np.all(np.isfinite(T_known)):
+    if not np.isfinite(T_known).all():
         raise CycloidInputError("torque", T_known[~np.isfinite(T_known)].flat[0], "must be finite")
-    if np.any(w_in == 0):
+    if (w_in == 0).any():
         raise CycloidInputError("speed", 0.0, "zero input speed gives no direction of motion "
                                 "(the efficiency is undefined at standstill)")
     i0 = design.i0
