@@ -262,8 +262,8 @@ class _Geometry:
                 q = np.cbrt(np.cbrt(d))
                 t = np.add.reduce(l * q * d, axis=0)
                 dt = np.add.reduce(l2 * q, axis=0)     # l2 carries the 10/9 here
-            # no step where nothing is in contact (dt = 0: then t = 0 as well)
-            step = (t - T_k) / np.where(dt > 0, dt, np.inf)
+            # (np.zeros: np.zeros_like's Python wrapper costs more than the division)
+            step = np.divide(t - T_k, dt, out=np.zeros(t.shape), where=dt > 0)
             rot = rot - step
             if (np.abs(step) <= _NEWTON_RTOL * np.abs(rot)).all():
                 break

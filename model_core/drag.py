@@ -67,8 +67,7 @@ DRAG_SIGN_SPEED = 1.0
 def drag_sign(w):
     """sign(w), linear within +-DRAG_SIGN_SPEED [rad/s] (see there): continuous through a
     standstill."""
-    # np.minimum/np.maximum: np.clip's Python wrapper costs more than the two ufuncs
-    return np.minimum(np.maximum(np.asarray(w, float) / DRAG_SIGN_SPEED, -1.0), 1.0)
+    return np.clip(np.asarray(w, float) / DRAG_SIGN_SPEED, -1.0, 1.0)
 
 
 def palmgren_idle_moment(n_rpm, nu_mm2_s, dm_mm, f0):

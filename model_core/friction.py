@@ -35,7 +35,7 @@ def benedict_kelley_mu(load_per_width, eta, v_slide, v_sum, roughness, mu_bounda
         c_r = 50.0 / (50.0 - s_uin)
         mu = 0.0127 * c_r * np.log10(arg)
     mu = np.where(np.isnan(mu) | (vs * vr == 0) | (c_r <= 0), mu_boundary, mu)
-    return np.minimum(np.maximum(mu, mu_full_film), mu_boundary)   # np.clip, without its wrapper
+    return np.clip(mu, mu_full_film, mu_boundary)
 
 
 def rolling_resistance_loss(coefficient, normal_force, rolling_speed):
