@@ -108,9 +108,10 @@ def idle_torques(design, speeds, nu):
     for shaft, (d, D) in SUPPORT_BEARINGS.items():
         w = np.asarray(speeds[shaft], float)
         M0 = palmgren_idle_moment(rad_s_to_rpm(w), nu_mm, 0.5 * (d + D) * 1e3, F0_BALL_GREASE)
-        sup[shaft] = zero + 2 * M0 * 1e-3 * drag_sign(w)
+        sign = drag_sign(w)
+        sup[shaft] = zero + 2 * M0 * 1e-3 * sign
         seal[shaft] = zero + (SEAL_POWER_COEFF * (SEAL_DIAMETERS[shaft] * 1e3) ** 2
-                              * rad_s_to_rpm(1.0) * drag_sign(w))
+                              * rad_s_to_rpm(1.0) * sign)
     w_rel = np.asarray(speeds["S"], float) - np.asarray(speeds["2"], float)
     # face area of a gear: an annulus from the eccentric bearing's seat to the tooth root
     r_out = design.r_p - design.e - design.d_v1 / 2

@@ -41,12 +41,24 @@ from .losses import LOSS_NAMES, PartialLosses, partial_losses
 #: 2e-8); 1e-12 costs one more secant step on part of the points
 _FIXED_POINT_TOL = 1e-12
 _FIXED_POINT_MAX = 30
-#: up to this many points, the secant's first two points are evaluated in one call (a few
-#: points cost what one does); the second is _PAIR_START [1], a typical basic efficiency, so
-#: the secant interpolates between it and the frictionless 1. One operating point then takes
-#: 4.3 (paper) or 4.7 (physical) loss evaluations instead of 5.1 or 5.4 (bench's speed range)
+#: up to this many points (a few points cost what one does: numpy's per-call overhead), the
+#: secant starts from the frictionless eta0 = 1 and _START_NODES [1] (typical basic
+#: efficiencies), all evaluated in one call, and interpolates through them; its first
+#: estimate is evaluated with two companions (_COMPANION_OFFSETS), and the next one converges.
+#: One operating point then takes 3 loss evaluations (the known torque on shaft 1 or 2: 2 or
+#: 3) instead of 4 (paper) or 5 (physical). The nodes' order sets the contact solver's warm
+#: start for the next call (a point listed twice keeps its last entry): a typical root last
 _PAIR_START_MAX = 16
-_PAIR_START = 0.96
+_START_NODES = (0.85, 0.92, 0.985, 0.96)
+#: where a node lies below lo (near the locking limit): the nodes at these fractions of the
+#: way from 1 to lo instead
+_START_FRACTIONS = np.array((0.9, 0.65, 0.1, 0.35))
+_START_NODES_COL = np.array(_START_NODES)[:, None]
+#: the first estimate from the start nodes and its companions at these offsets in eta0 [1]
+#: (see _secant): the first estimate is off by up to ~3e-5 (physical profile: the loss
+#: ratio is not smooth enough for a closer one from nodes ~0.02 apart), and inverse quadratic
+#: interpolation through three points within ~1e-5 of each other gets within ~1e-14
+_COMPANION_OFFSETS = np.array((0.0, -1e-5, 1e-5))
 #: lower end of the searched basic efficiency [1]: below 0.1 % no drive runs
 _ETA0_FLOOR = 1e-3
 #: regula falsi on the bracket (points where the secant fails): the bracket's relative width
@@ -125,12 +137,13 @@ def torque_coefficients(eta0, w, i0):
     driven = np.asarray(w) <= 0
     if eta0.shape != driven.shape:
         eta0, driven = np.broadcast_arrays(eta0, driven)
-    bad = driven & ~(eta0 > 0)
-    if bad.any():
+    at_driven = np.where(driven, eta0, 1.0)
+    if not (at_driven > 0).all():
+        bad = driven & ~(eta0 > 0)
         raise ValueError(f"basic efficiency eta0 = {eta0[bad].flat[0]!r} with the ring driven: "
                          "Kreines' rule needs eta0 > 0 there")
-    c2 = -i0 * np.divide(1.0, eta0, out=eta0.copy(), where=driven)
-    return np.ones_like(c2), c2, -(1.0 + c2)
+    c2 = -i0 * np.where(driven, 1.0 / at_driven, eta0)
+    return np.ones(c2.shape), c2, -(1.0 + c2)
 
 
 @dataclass(frozen=True)
@@ -192,9 +205,25 @@ class OperatingPoint:
         return np.where(self.flow_forward, fwd, rev)
 
 
-def _secant(eta0_from, x0, f0, x1, f1, T1, L, lo, inv):
-    """Secant iteration on the fixed point eta0 = f(eta0) per point, from the evaluated pair
-    (x0, f0), (x1, f1) (with the ring torques T1 and losses L at x1, updated in place).
+def _inverse_interpolation(U, G):
+    """u at G = 0 of the polynomial through the points (G_j, U_j) (Neville's scheme on the
+    inverse function), arrays (m, ...) over the points (the G_j of a point distinct)."""
+    P = U
+    for k in range(1, U.shape[0]):
+        P = (G[:-k] * P[1:] - G[k:] * P[:-1]) / (G[:-k] - G[k:])
+    return P[0]
+
+
+#: rows of the secant's history (see _secant): eta0, f, u, G, T1, then the partial losses
+_X, _F, _U, _G, _T1, _L = range(6)
+_ROWS = _L + len(LOSS_NAMES)
+
+
+def _secant(evaluate, H, lo, inv, companion=False):
+    """Secant iteration (inverse interpolation through the points kept) on the fixed point
+    eta0 = f(eta0) per point, from the evaluated points in H: rows eta0, f, u, G, T1 and the
+    partial losses LOSS_NAMES (W), points K x n. ``evaluate(eta0, sel)`` gives those rows at
+    the points ``sel`` (index array).
 
     Each point stops when |f - eta0| <= _FIXED_POINT_TOL (the others go on alone); iterates
     stay in the physical range [lo, 1] (f <= 1 always: the losses are not negative), and a
@@ -204,40 +233,66 @@ def _secant(eta0_from, x0, f0, x1, f1, T1, L, lo, inv):
     affine in u (Coulomb losses keep x constant, speed-only losses make it grow as 1/|T1|, and
     |T1| goes as 1/u or as 1/(i0 u - 1) through Kreines' rule), so the secant on
     G(u) = u(f) - u is nearly exact even where the losses rival the power (on g = f - eta0
-    it crawled there). Returns (x1, f1, g1, T1, stuck)."""
-    def to_u(e, m):
-        return np.where(m, 1.0 / e, e)
-
-    u0, u1 = x0.copy(), to_u(x1, inv)
-    G0, G1 = to_u(f0, inv) - u0, to_u(f1, inv) - u1
-    g1 = f1 - x1
-    stuck = np.zeros(x1.shape, bool)
-    active = np.flatnonzero(np.abs(g1) > _FIXED_POINT_TOL)
+    it crawled there). Each step interpolates u(G) at G = 0 through the K points kept (K = 2:
+    the secant; more: inverse polynomial interpolation, whose order of convergence is nearer
+    2), falling back to the secant of the two best where that leaves the range; the new
+    point replaces the one of largest |G|. ``companion``: the first step also evaluates
+    points _COMPANION_OFFSETS [1] from its estimate (in the same call: a few points cost what
+    one does), which then make the history: the next interpolation has three points near
+    the root (from start nodes ~0.02 apart the first estimate is off by up to ~3e-5, and the
+    next one, through it and the nodes, by ~1e-10, short of _FIXED_POINT_TOL). Returns (the
+    rows at each point's evaluation of smallest |f - eta0|, stuck)."""
+    n = H.shape[2]
+    stuck = np.zeros(n, bool)
+    active = np.flatnonzero((np.abs(H[_F] - H[_X]) > _FIXED_POINT_TOL).all(0))
     for _ in range(_FIXED_POINT_MAX):
         if active.size == 0:
             break
-        ua, ub, Ga, Gb = u0[active], u1[active], G0[active], G1[active]
-        denom = Gb - Ga
-        safe = np.abs(denom) > 1e-300
-        u2 = np.where(safe, ub - Gb * (ub - ua) / np.where(safe, denom, 1.0), ub + Gb)
-        inv_a = inv[active]
-        x2 = np.where(inv_a, 1.0 / np.where(u2 > 0, u2, np.inf), u2)
-        out = ~((x2 >= lo[active]) & (x2 <= 1.0))
-        stuck[active[out]] = True
-        keep = ~out
-        active, x2, u2, ub, Gb, inv_a = (active[keep], x2[keep], u2[keep], ub[keep], Gb[keep],
-                                         inv_a[keep])
-        if active.size == 0:
-            break
-        f2, L2, T12 = eta0_from(x2, active)
-        at = slice(None) if active.size == x1.size else active   # all: no index copies
-        u0[at], G0[at] = ub, Gb
-        u1[at], G1[at] = u2, to_u(f2, inv_a) - u2
-        x1[at], f1[at], g1[at], T1[at] = x2, f2, f2 - x2, T12
-        for arr, name in zip(L, LOSS_NAMES):
-            arr[at] = getattr(L2, name)
-        active = active[np.abs(f2 - x2) > _FIXED_POINT_TOL]
-    return x1, f1, g1, T1, stuck
+        at = slice(None) if active.size == n else active   # all: no index copies
+        Ua, Ga = H[_U][:, at], H[_G][:, at]
+        inv_a, lo_a = inv[at], lo[at]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u2 = _inverse_interpolation(Ua, Ga)
+            x2 = np.where(inv_a, 1.0 / u2, u2)
+        bad = ~((x2 >= lo_a) & (x2 <= 1.0))
+        if bad.any():
+            # the secant of the two best points
+            o = np.argsort(np.abs(Ga), axis=0)[:2]
+            (ub, ua), (gb, ga) = np.take_along_axis(Ua, o, 0), np.take_along_axis(Ga, o, 0)
+            denom = gb - ga
+            safe = np.abs(denom) > 1e-300
+            us = np.where(safe, ub - gb * (ub - ua) / np.where(safe, denom, 1.0), ub + gb)
+            u2 = np.where(bad, us, u2)
+            x2 = np.where(inv_a, 1.0 / np.where(u2 > 0, u2, np.inf), u2)
+            out = ~((x2 >= lo_a) & (x2 <= 1.0))
+            if out.any():
+                stuck[active[out]] = True
+                ok = ~out
+                active, x2, lo_a, Ga = active[ok], x2[ok], lo_a[ok], Ga[:, ok]
+                if active.size == 0:
+                    break
+                at = slice(None) if active.size == n else active
+        if companion:
+            # the estimate and its companions, which then make the history (the points that
+            # have converged already keep their best one)
+            companion = False
+            k = _COMPANION_OFFSETS.size
+            xs = x2 + _COMPANION_OFFSETS[:, None]
+            xs[1] = np.where(xs[1] >= lo_a, xs[1], x2 + 2 * _COMPANION_OFFSETS[2])
+            xs[2] = np.where(xs[2] <= 1.0, xs[2], x2 + 2 * _COMPANION_OFFSETS[1])
+            E = evaluate(xs.reshape(-1), np.concatenate((active,) * k))
+            best = np.argmin(np.abs(H[_F] - H[_X]), axis=0)
+            H = np.repeat(H[:, best, np.arange(n)][:, None], k, 1)
+            H[:, :, at] = E.reshape(_ROWS, k, -1)
+            active = active[(np.abs(E[_F] - E[_X]) > _FIXED_POINT_TOL).reshape(k, -1).all(0)]
+            continue
+        # the new point replaces the one of largest |G|
+        worst = np.argmax(np.abs(Ga), axis=0)
+        E = evaluate(x2, active)
+        H[:, worst, active] = E
+        active = active[np.abs(E[_F] - E[_X]) > _FIXED_POINT_TOL]
+    best = np.argmin(np.abs(H[_F] - H[_X]), axis=0)
+    return H[:, best, np.arange(n)], stuck
 
 
 def _regula_falsi(eta0_from, sel, a, ga, gb, x_last, g_last, T1, Ls, converged):
@@ -310,9 +365,12 @@ def shaft_drag(design, speeds, shape=()):
     if design.profile == "physical" and design.losses == "all":
         from . import drag, thermal
         idle_t = drag.idle_torques(design, speeds, thermal.lubricant_viscosity(design))
-        idle = {name: np.broadcast_to(sum(t[x] * speeds[x] for x in "12S"), shape)
+
+        def shaped(v):   # (np.broadcast_to costs more than the sums where it changes nothing)
+            return v if np.shape(v) == shape else np.broadcast_to(v, shape)
+        idle = {name: shaped(t["1"] * speeds["1"] + t["2"] * speeds["2"] + t["S"] * speeds["S"])
                 for name, t in idle_t.items()}
-        T_drag = {x: np.broadcast_to(sum(t[x] for t in idle_t.values()), shape) for x in "12S"}
+        T_drag = {x: shaped(sum(t[x] for t in idle_t.values())) for x in "12S"}
         return T_drag, idle
     return {x: np.zeros(shape) for x in "12S"}, {}
 
@@ -333,11 +391,11 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
     known = a if T_out is None else b
     w_in, T_known = np.broadcast_arrays(np.asarray(w_in, float),
                                      np.asarray(T_in if T_out is None else T_out, float))
-    if not np.all(np.isfinite(w_in)):
+    if not np.isfinite(w_in).all():
         raise CycloidInputError("speed", w_in[~np.isfinite(w_in)].flat[0], "must be finite")
-    if not np.all(np.isfinite(T_known)):
+    if not np.isfinite(T_known).all():
         raise CycloidInputError("torque", T_known[~np.isfinite(T_known)].flat[0], "must be finite")
-    if np.any(w_in == 0):
+    if (w_in == 0).any():
         raise CycloidInputError("speed", 0.0, "zero input speed gives no direction of motion "
                                 "(the efficiency is undefined at standstill)")
     i0 = design.i0
@@ -404,23 +462,37 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
     # the secant on the fixed point eta0 = f(eta0) (_secant), started from the frictionless
     # point; u = 1/eta0 where the ring is driven relatively
     inv = wdir < 0
-    x0 = np.ones_like(T_flat)
     n = T_flat.size
+
+    def evaluate(eta0, sel=None):
+        """The rows of _secant's history at the points eta0 (at the points ``sel``)."""
+        f, L, T1 = eta0_from(eta0, sel)
+        iv = inv if sel is None else inv[sel]
+        E = np.empty((_ROWS, eta0.size))
+        E[_X], E[_F], E[_T1] = eta0, f, T1
+        E[_U] = np.where(iv, 1.0 / eta0, eta0)
+        E[_G] = np.where(iv, 1.0 / f, f) - E[_U]
+        E[_L:] = [getattr(L, k) for k in LOSS_NAMES]
+        return E
+
     if n <= _PAIR_START_MAX:
         # a few points cost what one does (numpy's per-call overhead): evaluate the secant's
-        # first two points together, the frictionless one and _PAIR_START below it
-        x1 = np.maximum(np.full(n, _PAIR_START), lo)
-        both = np.concatenate([np.arange(n), np.arange(n)])
-        f01, L01, T101 = eta0_from(np.concatenate([x0, x1]), both)
-        f0, f1, T1 = f01[:n], f01[n:], T101[n:]
-        L = [np.array(getattr(L01, k)[n:], float) for k in LOSS_NAMES]
+        # first points together, the frictionless one and _START_NODES below it (within
+        # (lo, 1]), and interpolate through them
+        K = 1 + len(_START_NODES)
+        X = np.empty((K, n))
+        X[0] = 1.0
+        X[1:] = np.where(_START_NODES_COL > lo, _START_NODES_COL,
+                         1.0 - (1.0 - lo) * _START_FRACTIONS[:, None])
+        H = evaluate(X.reshape(-1), np.concatenate((np.arange(n),) * K)).reshape(_ROWS, K, n)
     else:
-        f0, _, _ = eta0_from(x0)
-        x1 = np.clip(f0, lo, 1.0)
-        f1, L, T1 = eta0_from(x1)
-        L = [np.array(getattr(L, k), float) for k in LOSS_NAMES]
-    g_one = f0 - 1.0                       # g(1) <= 0: the upper end of every bracket
-    x1, f1, g1, T1, stuck = _secant(eta0_from, x0, f0, x1, f1, T1, L, lo, inv)
+        E0 = evaluate(np.ones_like(T_flat))
+        H = np.stack([E0, evaluate(np.clip(E0[_F], lo, 1.0))], axis=1)
+    g_one = H[_F, 0] - 1.0                       # g(1) <= 0: the upper end of every bracket
+    h, stuck = _secant(evaluate, H, lo, inv, companion=n <= _PAIR_START_MAX)
+    x1, f1, T1 = h[_X], h[_F], h[_T1]
+    g1 = f1 - x1
+    L = list(h[_L:])
 
     def reproduced(eta0, T1, sel):
         wd = wdir[sel]

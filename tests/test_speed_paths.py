@@ -98,3 +98,34 @@ def test_kreines_coefficients_need_a_positive_eta0_when_the_ring_is_driven():
     np.testing.assert_allclose(c[1], [-0.0, -1.8])
     with pytest.raises(ValueError, match="eta0"):
         torque_coefficients(np.array([0.0]), np.array([-1.0]), 0.9)
+
+
+def test_inverse_interpolation_is_exact_for_a_polynomial_inverse():
+    from model_core.efficiency import _inverse_interpolation
+    G = np.array([-0.3, -0.1, 0.2, 0.5])[:, None]
+    u = 0.97 + 0.4 * G - 0.2 * G ** 2 + 0.05 * G ** 3       # a cubic u(G): four points
+    assert _inverse_interpolation(u, G)[0] == pytest.approx(0.97, abs=1e-15)
+    # two points: the secant's root
+    assert _inverse_interpolation(u[:2], G[:2])[0] == pytest.approx(
+        u[1, 0] - G[1, 0] * (u[1, 0] - u[0, 0]) / (G[1, 0] - G[0, 0]), rel=1e-15)
+
+
+@pytest.mark.parametrize("name", ["paper", "physical"])
+@pytest.mark.parametrize("mode, T", [("S1", 0.6), ("S2", 0.6), ("S1", 0.1), ("S1", -0.6),
+                                     ("21", 9.0)])
+def test_one_point_takes_three_loss_evaluations(monkeypatch, name, mode, T):
+    """A single operating point (efficiency._PAIR_START_MAX): the start nodes in one call,
+    the first estimate with its companions in a second, the converged point in a third (the
+    secant from two start points took 4-5); the known torque reproduced as in a map."""
+    from model_core import efficiency
+    calls = []
+    real = efficiency.partial_losses
+
+    def counting(*args, **kwargs):
+        calls.append(np.size(args[1]))
+        return real(*args, **kwargs)
+    monkeypatch.setattr(efficiency, "partial_losses", counting)
+    w = 290.0 if mode[0] == "S" else 290.0 / 15
+    op = operating_point(DESIGNS[name], mode, w, T)
+    assert len(calls) <= 3
+    assert np.isfinite(op.eta) and abs(float(op.torques[mode[0]]) - T) <= 1e-7 * abs(T)
