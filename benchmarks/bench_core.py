@@ -2,14 +2,15 @@
 
 Targets (issue 8): a 50 x 50 efficiency map (500-2800 r/min x 0.1-0.85 N*m), every point
 mesh-cycle averaged with its contacts solved iteratively, in at most 0.08 s; one operating point
-in at most 0.5 ms; the FMU's map (ModeMap(d, mode, 30, 350): 48 x 28 points x 2 flow directions)
+in at most 0.5 ms; the FMU's map (ModeMap(d, mode, 30, 350): 36 x 28 points x 2 flow directions)
 in at most 50 ms; modes S1 and S2. The reference measured in the same run is the
 straightforward path (``dedup=False``: every mesh position and contact problem solved on its
 own, all rollers of the loaded half), which gives the same numbers (tests/test_speed_paths.py).
 Timings are the best of several runs (the machine may be shared; the median is printed too).
-The FMU map is also timed as an FMU builds it at initialisation, the first build in a new
-process, where glibc's allocator still maps fresh pages for every large temporary array (a
-process that has served large arrays before keeps them on its heap; the difference is 30-40 %).
+The FMU map is also timed as an FMU builds it at initialisation: the first build in a new
+process, inside ``cyclo_fmu.slaves.heap.map_solving_heap`` as the FMU does (glibc recycles the
+large temporaries on its heap), and as reference without it (glibc then maps fresh pages for
+every large temporary array: 30-40 % more).
 Run: python benchmarks/bench_core.py [--quick]
 """
 import statistics
@@ -38,27 +39,29 @@ def verdict(ms, target):
 
 
 _FRESH = """
-import time
+import contextlib, time
 from model_core import DriveDesign
 from model_core.lossmap import ModeMap
+from cyclo_fmu.slaves.heap import map_solving_heap
 d = DriveDesign(profile={profile!r})
 t = time.perf_counter()
-ModeMap(d, {mode!r}, 30.0, 350.0)
+with (map_solving_heap() if {heap!r} else contextlib.nullcontext()):
+    ModeMap(d, {mode!r}, 30.0, 350.0)
 print(time.perf_counter() - t)
 """
 
 
-def fresh_process_modemap(profile, mode, repeat):
-    """ModeMap built as an FMU does at initialisation: the first build in a new process (the
-    allocator's state differs from a process that has already served large arrays: glibc
-    then keeps them on its heap instead of mapping fresh pages). Best of ``repeat``."""
+def fresh_process_modemap(profile, mode, repeat, heap=True):
+    """ModeMap built as an FMU does at initialisation: the first build in a new process, inside
+    ``map_solving_heap`` (``heap=False``: without, glibc then maps fresh pages for the large
+    temporaries). Best of ``repeat``."""
     import os
     import subprocess
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(
         [os.path.dirname(os.path.dirname(os.path.abspath(__file__)))]
         + os.environ.get("PYTHONPATH", "").split(os.pathsep)))
     times = [float(subprocess.run([sys.executable, "-c", _FRESH.format(profile=profile,
-                                                                        mode=mode)],
+                                                                        mode=mode, heap=heap)],
                                   capture_output=True, text=True, check=True,
                                   env=env).stdout)
              for _ in range(repeat)]
@@ -91,8 +94,10 @@ def main():
             best, med = best_of(lambda: ModeMap(d, mode, 30.0, 350.0), rep)
             ref, _ = best_of(lambda: ModeMap(d, mode, 30.0, 350.0, dedup=False), 1)
             fresh = fresh_process_modemap(profile, mode, 2 if quick else 3)
-            print(f"  FMU map (ModeMap 48 x 28 x 2), {mode}: best {best * 1e3:6.1f} ms, median "
+            plain = fresh_process_modemap(profile, mode, 2 if quick else 3, heap=False)
+            print(f"  FMU map (ModeMap 36 x 28 x 2), {mode}: best {best * 1e3:6.1f} ms, median "
                   f"{med * 1e3:6.1f} ms, first build in a new process {fresh * 1e3:5.1f} ms "
+                  f"(without map_solving_heap {plain * 1e3:5.1f} ms) "
                   f"(straightforward path {ref * 1e3:5.0f} ms; target <= "
                   f"{TARGET_MODEMAP_MS:.0f} ms: {verdict(best * 1e3, TARGET_MODEMAP_MS)} / "
                   f"{verdict(fresh * 1e3, TARGET_MODEMAP_MS)} new process)")

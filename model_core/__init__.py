@@ -16,7 +16,7 @@ from .errors import CycloidInputError
 from .kinematics import MODES, rad_s_to_rpm, rpm_to_rad_s, shaft_speeds, speed_ratio
 from .losses import LOSS_NAMES, PartialLosses, partial_losses, partial_losses_by_position
 from .maps import efficiency_map
-from . import lossmap, rig
+from . import effects, lossmap, rig
 
 __all__ = [
     "DriveDesign", "Friction", "Lubricant", "design_from_toml", "design_to_toml",

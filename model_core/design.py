@@ -193,10 +193,10 @@ class ExtraPhysics:
         """Drag and Stribeck torque at driving speed w (rad/s), N*m, signed with the motion:
         the same terms the diagnosis fits (model_core.effects)."""
         import numpy as _np
-        from .effects import EFFECTS   # here, not later: an FMU's bundled core imports it now
         w = _np.asarray(w, float)
         if not (self.drag_torque or self.stribeck_torque):
             return _np.zeros(w.shape)
+        from .effects import EFFECTS   # (model_core imports it with the package)
         s = {"w_in": _np.atleast_1d(w).ravel()}
         t = self.drag_torque * EFFECTS["load_independent_loss"].basis(
             s, self.drag_exponent)[:, 0]

@@ -47,10 +47,14 @@ class ModeMap:
     reference; same tables to ~1e-12).
     """
 
-    #: torque nodes: 48 (was 36) because the physical profile's load-independent losses made
-    #: eta0 curve as 1/|tau| at light load while they were folded into it; 36 left 1.1e-3 of
-    #: interpolation error in eta at 1000 r/min, 0.3 N*m (S2), 48 leaves 0.6e-3
-    def __init__(self, design, mode, torque_max, speed_max, n_torque=48, n_speed=28, span=1e-3,
+    #: torque nodes: 36. They were 48 while the load-independent losses were folded into eta0
+    #: and made it curve as 1/|tau| at light load; with them as drag at the shafts (kept over
+    #: the speed alone) 36 leave the map's error where 48 did: against the core at 300 random
+    #: points of the bench's envelope (500-2800 r/min, 0.1-0.85 N*m, both signs), worst
+    #: 0.052/0.067 points of eta for the paper profile S1/S2 (48: 0.059/0.060) and
+    #: 0.101/0.119 for the physical one (48: 0.096/0.113), set by the speed axis and the
+    #: kinks of roll or skid; the build takes a quarter less
+    def __init__(self, design, mode, torque_max, speed_max, n_torque=36, n_speed=28, span=1e-3,
                  dedup=True):
         if not (torque_max > 0 and speed_max > 0):
             raise ValueError("the map needs positive torque and speed ranges")
@@ -253,7 +257,7 @@ def replay_input_torque(design, mode, w_in, tau_out, grid=None):
         Torque the load applies on the driven shaft [N*m] (minus the delivered output torque).
 
     grid : (int, int), optional
-        Points of the map over torque and speed (default: ModeMap's 48 x 28).
+        Points of the map over torque and speed (default: ModeMap's 36 x 28).
 
     Returns
     -------

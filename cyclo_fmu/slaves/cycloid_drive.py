@@ -35,6 +35,7 @@ import pickle
 from pathlib import Path
 
 from . import core
+from .heap import map_solving_heap
 from .base import Boolean, Fmi2Status, Integer, Real, String, UnitSlave
 
 # FMU parameter -> (design section or None, design field, unit, description)
@@ -294,8 +295,11 @@ class CycloidDrive(UnitSlave):
             if self.exact:
                 self._map = None
             elif self._map is None or self._map_key != map_key:
-                self._map = _shipped_map(map_key, self._map_folder()) or core.lossmap.ModeMap(
-                    self._design, self._mode, self.map_torque_max, self.map_speed_max)
+                self._map = _shipped_map(map_key, self._map_folder())
+                if self._map is None:
+                    with map_solving_heap():
+                        self._map = core.lossmap.ModeMap(self._design, self._mode,
+                                                         self.map_torque_max, self.map_speed_max)
                 self._map_key = map_key
             ex = self._design.extra
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
