@@ -12,7 +12,6 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
 
 from model_core import (CycloidInputError, DriveDesign, LOSS_NAMES, design_from_toml,
                         operating_point, rad_s_to_rpm, rpm_to_rad_s)
@@ -375,7 +374,6 @@ def cmd_synth(args) -> int:
     mode = "".join(parse_mode(args.mode)[:2])
     if mode not in ("S1", "S2"):
         raise CycloidInputError("mode", mode, "the bench drives the eccentric shaft: S1 or S2")
-    from .synth import PLANS
     if args.plan not in PLANS:
         raise CycloidInputError("plan", args.plan, f"must be one of {', '.join(PLANS)}")
     from .synth import ENGINES
@@ -671,6 +669,8 @@ def main(argv=None) -> int:
     except CycloidInputError as exc:
         print(f"cyclo-fmu: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:         # the reader of stdout left (`| head`): run() stops quietly
+        raise
     except OSError as exc:          # a path the command could not read or write
         where = exc.filename if exc.filename is not None else ""
         print(f"cyclo-fmu: error: {args.command}: {where!r}: {exc.strerror or exc}",

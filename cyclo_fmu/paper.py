@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from model_core import LOSS_NAMES, efficiency_map, operating_point, rad_s_to_rpm, rpm_to_rad_s
+from model_core import LOSS_NAMES, efficiency_map, operating_point, rpm_to_rad_s
 from model_core.losses import LOSS_DESCRIPTIONS
 from model_core.drag import IDLE_DESCRIPTIONS, IDLE_NAMES
 from model_core.paper import (PAPER_EXPERIMENT, PAPER_THEORY, BenchEnvelope, envelope_statistics,
@@ -24,7 +24,6 @@ def _figures(design, envelope, out: Path, breakdown_of=None) -> list[Path]:
     import matplotlib.pyplot as plt
 
     out.mkdir(parents=True, exist_ok=True)
-    speeds = envelope.speeds()
     torques = np.linspace(envelope.torque_min, envelope.torque_max, 30)
     fig, axes = plt.subplots(2, 2, figsize=(10, 7.5))
     for row, mode in enumerate(("S1", "S2")):

@@ -23,5 +23,5 @@ __all__ = [
     "OperatingPoint", "kreines_efficiency", "operating_point", "CycloidInputError",
     "MODES", "rad_s_to_rpm", "rpm_to_rad_s", "shaft_speeds", "speed_ratio",
     "LOSS_NAMES", "PartialLosses", "partial_losses", "partial_losses_by_position",
-    "efficiency_map",
+    "efficiency_map", "effects", "lossmap", "rig",
 ]

@@ -254,3 +254,18 @@ def test_fmu_error_surfaces_its_logged_message(tmp_path, fmu):
                        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
     _assert_one_line(r, "FMU failed", "tau_out = inf")
     assert not (tmp_path / "o").exists()
+
+
+def test_closed_stdout_stops_quietly():
+    """`cyclo-fmu paper | head -1`: the reader leaves, the command stops without an error line
+    (a broken pipe is an OSError, which the CLI otherwise reports as a path it could not
+    write)."""
+    r, w = os.pipe()
+    os.close(r)                      # the reader has gone before the first write
+    try:
+        proc = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "paper"], stdout=w,
+                              stderr=subprocess.PIPE, text=True, timeout=120)
+    finally:
+        os.close(w)
+    assert proc.returncode == 0, proc.stderr
+    assert "error" not in proc.stderr.lower(), proc.stderr

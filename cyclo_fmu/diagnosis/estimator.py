@@ -302,7 +302,7 @@ class Diagnoser:
     def _analyse(self, rec, design, forced=(), sensitivities=None):
         P = self._problem(rec, design, sensitivities)
         self._stage("selection")
-        y, X, options, generic = P["y"], P["X"], P["options"], P["generic"]
+        y, X, options = P["y"], P["X"], P["options"]
         w, n_spikes, sigma = R.robust_weights(X, y)
         prob = GramProblem(X, y, w, self.n_folds)
         # the transducer's own noise at block level, from sample-to-sample differences (slow

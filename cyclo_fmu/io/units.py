@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import re
 
-from ..recordings import OPTIONAL, REQUIRED, SCHEMA, RecordingError
+from ..recordings import REQUIRED, SCHEMA, RecordingError
 
 #: quantity of each schema column and its edge unit
 QUANTITY = {"time_s": "time", "speed_in_rpm": "speed", "speed_out_rpm": "speed",
@@ -167,7 +167,7 @@ def map_columns(header, columns: dict | None, units: dict | None):
         if key not in SCHEMA:
             raise RecordingError(f"columns: {key!r} is not a recording column ({', '.join(SCHEMA)})")
     names = [h.strip() for h in header]
-    mapping, notes, used = {}, [], {}
+    mapping, notes = {}, []
     # 1. explicit mapping, then the schema's own names
     for key in SCHEMA:
         name = columns.get(key)

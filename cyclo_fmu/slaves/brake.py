@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 
 from . import core
-from .base import Integer, Real, String, UnitSlave
+from .base import Integer, String, UnitSlave
 
 
 class FeltBrake(UnitSlave):

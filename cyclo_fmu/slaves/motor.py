@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 
 from . import core
-from .base import Integer, Real, String, UnitSlave
+from .base import Integer, String, UnitSlave
 
 _SUBSTEP = 2.5e-4   # s; a twentieth of the rotor's mechanical time constant on the Kloss slope (~5 ms)
 

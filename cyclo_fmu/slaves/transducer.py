@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from . import core
-from .base import Boolean, Integer, Real, UnitSlave
+from .base import Boolean, Integer, UnitSlave
 
 
 #: noise samples drawn at a time (one numpy call instead of one Python call a step)
