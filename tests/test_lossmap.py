@@ -47,3 +47,17 @@ def test_map_zero_speed_and_torque(design):
     m = ModeMap(design, "S2", 30.0, 350.0)
     assert sum(m.solve(0.0, 5.0)[2]) == 0.0
     assert sum(m.solve(100.0, 0.0)[2]) == 0.0
+
+
+def test_map_solving_heap_changes_no_number(design, monkeypatch):
+    """The FMU solves its map inside slaves.heap.map_solving_heap (glibc keeps the temporaries
+    on its heap): the same tables to the bit, and the allocator is left alone on request."""
+    from cyclo_fmu.slaves import heap
+    plain = ModeMap(design, "S2", 30.0, 350.0, n_torque=12, n_speed=6)
+    with heap.map_solving_heap():
+        tuned = ModeMap(design, "S2", 30.0, 350.0, n_torque=12, n_speed=6)
+    for forward in (True, False):
+        assert tuned._tables[forward] == plain._tables[forward]
+    assert tuned._idle == plain._idle
+    monkeypatch.setenv("CYCLO_FMU_KEEP_MALLOC", "1")
+    assert heap._glibc() is None

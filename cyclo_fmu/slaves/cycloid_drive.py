@@ -25,7 +25,7 @@ reducer), each a secant of the map over alpha_ref. The motor integrates
 Parameters: ``mode`` (12, 21, 1S, S1, 2S, S2) and the design values a system engineer varies
 (defaults: the paper's test drive). At initialization the full physics core is solved on a grid
 (model_core.lossmap.ModeMap); a step interpolates it (``exact = false``) or solves the full core
-(``exact = true``, about 4 ms a step).
+(``exact = true``, about 2 ms a step).
 """
 from __future__ import annotations
 
@@ -124,8 +124,8 @@ _SLOPE_REUSE = 1e-3
 #: default ranges of the loss map (parameters map_torque_max, map_speed_max)
 MAP_TORQUE_MAX, MAP_SPEED_MAX = 30.0, 350.0
 #: modes whose map for the default design is solved when the FMU is built and shipped in it
-#: (the paper's two measured modes, the bench's): building the physical profile's map takes
-#: about 1.2 s, longer than the bench's 48 s paper scenario may take in all at 20x real time
+#: (the paper's two measured modes, the bench's); any other design, mode or range solves its
+#: own at initialization (40-50 ms in a new process, benchmarks/bench_core.py)
 SHIPPED_MAP_MODES = ("S1", "S2")
 _MAP_DIR = Path(__file__).resolve().parent / "_maps"
 
