@@ -40,10 +40,31 @@ def _spec(tmp_path, method="grid", lam="[1.6, 2.0, 2]", mu="[0.08, 0.1, 2]"):
 
 @pytest.fixture(scope="module")
 def cluster():
+    """A 2-worker LocalCluster with the settings cyclo_fmu.sweep.cluster.client gives it."""
+    import dask
     import distributed
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None, silence_logs=40) as c:
+
+    from cyclo_fmu.sweep.cluster import local_cluster_config
+    with dask.config.set(local_cluster_config()), \
+            distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                     dashboard_address=None, silence_logs=40) as c:
         yield c.scheduler_address
+
+
+def _worker_mmap_threshold():
+    import os
+    return os.environ.get("MALLOC_MMAP_THRESHOLD_")
+
+
+def test_local_cluster_workers_keep_large_arrays_on_the_heap(cluster):
+    """dask's workers run with MALLOC_TRIM_THRESHOLD_ set, which freezes glibc's mmap threshold
+    at 128 kB; the sweep's workers get the FMU's 4 MiB (cluster.worker_environ)."""
+    import distributed
+
+    from cyclo_fmu.slaves.heap import MMAP_THRESHOLD
+    with distributed.Client(cluster) as c:
+        seen = c.run(_worker_mmap_threshold)
+    assert len(seen) == 2 and set(seen.values()) == {str(MMAP_THRESHOLD)}
 
 
 def test_sweep_on_dask_equals_serial(tmp_path, cluster):

@@ -9,11 +9,10 @@ from model_core import CycloidInputError
 def require_dask():
     """Import dask.distributed or raise a one-line error naming the missing extra."""
     try:
-        import distributed  # noqa: F401
+        import distributed
     except ImportError:
         raise CycloidInputError("scheduler", "dask.distributed", "is not installed: "
                                 "pip install 'cyclo-fmu[sweep]'") from None
-    import distributed
     return distributed
 
 
@@ -36,11 +35,47 @@ def client(scheduler: str = None, workers: int = None):
             c.close()
         return
     import os
+
+    import dask
     n = workers or max(1, min(os.cpu_count() or 1, 8))
-    with distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                  dashboard_address=None, silence_logs=40) as cluster, \
+    with dask.config.set(local_cluster_config()), \
+            distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                     dashboard_address=None, silence_logs=40) as cluster, \
             distributed.Client(cluster) as c:
         yield c
+
+
+def local_cluster_config() -> dict:
+    """dask settings of the LocalCluster ``client`` starts: the workers' environment
+    (``worker_environ``) and no statistical profiler in the workers (it samples every worker
+    thread's stack each 10 ms for the dashboard, which this cluster does not open; measured
+    3-5 % of a task)."""
+    return {"distributed.nanny.pre-spawn-environ": worker_environ(),
+            "distributed.worker.profile.enabled": False}
+
+
+def worker_environ() -> dict:
+    """The environment of a LocalCluster's worker processes: dask's own
+    (``distributed.nanny.pre-spawn-environ``) plus ``MALLOC_MMAP_THRESHOLD_``.
+
+    dask sets ``MALLOC_TRIM_THRESHOLD_`` = 64 KiB in its workers so that they hand freed memory
+    back to the kernel. Setting any of glibc's malloc thresholds also switches off its dynamic
+    mmap threshold, which in a plain process rises to the size of the large arrays freed; in the
+    workers it stays at 128 kB, so every temporary array of the loss model above it (a map's are
+    0.1-1.4 MB) is mapped fresh from the kernel and page-faulted in again. A worker then took
+    0.42-0.45 s for a task of 25 designs that takes 0.35 s in a plain process, which held a
+    2-worker LocalCluster on 2 idle cores at 1.2-1.6x the serial speed. The threshold of
+    ``cyclo_fmu.slaves.heap`` (4 MiB, the FMU's setting while it solves its map) keeps those
+    arrays on the heap: the task takes 0.35 s in a worker too (benchmarks/bench_sweep.py).
+    Workers of an existing scheduler (``--scheduler``) are started by their owner: the same
+    variable belongs in their environment.
+    """
+    import dask
+
+    from ..slaves.heap import MMAP_THRESHOLD
+    env = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}) or {})
+    env.setdefault("MALLOC_MMAP_THRESHOLD_", MMAP_THRESHOLD)
+    return env
 
 
 def run_tasks(fn, items, *, scheduler=None, workers=None, progress=True, desc="tasks",
