@@ -24,9 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
-import ctypes.util
 import os
-import platform
 
 #: glibc's mallopt parameters (malloc.h)
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
@@ -43,10 +41,15 @@ def _glibc():
     """glibc's handle, or None (another C library, or the settings switched off)."""
     if os.environ.get("CYCLO_FMU_KEEP_MALLOC"):
         return None
-    if platform.system() != "Linux" or platform.libc_ver()[0] != "glibc":
+    try:
+        version = os.confstr("CS_GNU_LIBC_VERSION")   # "glibc 2.36"; not on musl, macOS
+    except (AttributeError, ValueError, OSError):
+        return None
+    if not version or not version.startswith("glibc"):
         return None
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        # (by its soname: ctypes.util.find_library runs ldconfig, 6 ms)
+        libc = ctypes.CDLL("libc.so.6")
     except OSError:
         return None
     if not (hasattr(libc, "mallopt") and hasattr(libc, "malloc_trim")):
