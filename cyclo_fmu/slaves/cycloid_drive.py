@@ -150,8 +150,10 @@ def write_shipped_maps(folder, modes=SHIPPED_MAP_MODES):
             warnings.simplefilter("ignore", RuntimeWarning)
             m = core.lossmap.ModeMap(design, mode, MAP_TORQUE_MAX, MAP_SPEED_MAX)
         with open(folder / f"{mode}.pkl", "wb") as f:
-            pickle.dump({"key": _map_key(design, mode, MAP_TORQUE_MAX, MAP_SPEED_MAX),
-                         "state": m.__dict__}, f, protocol=pickle.HIGHEST_PROTOCOL)
+            # the key first, on its own: a design it does not fit reads no table (1 ms)
+            pickle.dump(_map_key(design, mode, MAP_TORQUE_MAX, MAP_SPEED_MAX), f,
+                        protocol=pickle.HIGHEST_PROTOCOL)
+            pickle.dump(m.__dict__, f, protocol=pickle.HIGHEST_PROTOCOL)
 
 
 def _shipped_map(key, folder=_MAP_DIR):
@@ -160,11 +162,11 @@ def _shipped_map(key, folder=_MAP_DIR):
     if not path.is_file():
         return None
     with open(path, "rb") as f:
-        data = pickle.load(f)
-    if data.get("key") != key:
-        return None
+        if pickle.load(f) != key:
+            return None
+        state = pickle.load(f)
     m = core.lossmap.ModeMap.__new__(core.lossmap.ModeMap)
-    m.__dict__.update(data["state"])
+    m.__dict__.update(state)
     return m
 
 
