@@ -11,7 +11,11 @@ The FMU map is also timed as an FMU builds it at initialisation: the first build
 process, inside ``cyclo_fmu.slaves.heap.map_solving_heap`` as the FMU does (glibc recycles the
 large temporaries on its heap), and as reference without it (glibc then maps fresh pages for
 every large temporary array: 30-40 % more).
-Run: python benchmarks/bench_core.py [--quick]
+In-process timings run with glibc's thresholds as the ``cyclo-fmu`` command sets them for its
+own process (``cyclo_fmu.slaves.heap.keep_temporaries_on_heap``: large temporaries recycled on
+the heap); ``--plain`` leaves the allocator as a new Python process has it (the maps then take
+up to twice as long until the process has freed large arrays once).
+Run: python benchmarks/bench_core.py [--quick] [--plain]
 """
 import statistics
 import sys
@@ -70,6 +74,12 @@ def fresh_process_modemap(profile, mode, repeat, heap=True):
 
 def main():
     quick = "--quick" in sys.argv
+    if "--plain" not in sys.argv:
+        from cyclo_fmu.slaves.heap import keep_temporaries_on_heap
+        print("allocator: large temporaries kept on the heap, as cyclo-fmu runs "
+              f"({'set' if keep_temporaries_on_heap() else 'not glibc: unchanged'})")
+    else:
+        print("allocator: as a new Python process has it (--plain)")
     rep = 2 if quick else 7
     speeds = rpm_to_rad_s(np.linspace(500, 2800, 50))
     torques = np.linspace(0.1, 0.85, 50)

@@ -41,8 +41,11 @@ def main(n=1000, workers=None):
     import dask
     import distributed
 
+    from cyclo_fmu.slaves.heap import keep_temporaries_on_heap
     from cyclo_fmu.sweep.cluster import local_cluster_config
     workers = workers or os.cpu_count() or 1
+    # the allocator as the cyclo-fmu command sets it for its own process (cyclo_fmu.slaves.heap)
+    keep_temporaries_on_heap()
     with tempfile.TemporaryDirectory() as d:
         p = Path(d) / "spec.toml"
         p.write_text(SPEC.format(n=n))

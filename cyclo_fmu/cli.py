@@ -694,6 +694,11 @@ def run() -> None:
     flushing: pythonfmu's native library has been seen, rarely, to abort in its static
     destructors at interpreter exit after many loads and unloads."""
     import os
+
+    from .slaves.heap import keep_temporaries_on_heap
+    # our own process: glibc keeps the loss model's large temporaries on its heap (half of a
+    # paper-profile map's time was page faults of freshly mapped arrays; cyclo_fmu.slaves.heap)
+    keep_temporaries_on_heap()
     try:
         code = main()
         sys.stdout.flush()

@@ -1,24 +1,33 @@
-"""The C allocator's settings while an FMU solves its loss map at initialization.
+"""The C allocator's settings for the loss model's large temporary arrays.
 
-Solving a ``ModeMap`` creates some 70 MB of short-lived numpy temporaries of 0.1-1.4 MB each.
+Solving a map creates tens of MB of short-lived numpy temporaries of 0.1-1.4 MB each.
 glibc's malloc serves a block above its mmap threshold (128 kB in a new process) with fresh
 pages from the kernel and returns them when the block is freed, and it gives the top of its heap
 back once more than its trim threshold is free there; every reuse then costs the page faults of
-fresh memory again. In a new process, as a host has when it instantiates the FMU, that was about
-17 500 minor page faults and 30 ms of a 90 ms map (measured: ``benchmarks/bench_core.py``).
-glibc raises both thresholds itself once a process has freed a large mapped block (the dynamic
-threshold, up to 32 MB on 64-bit systems): a process that has served large arrays before builds
-the same map without those faults.
+fresh memory again. glibc raises both thresholds itself once a process has freed a large mapped
+block (the dynamic threshold, up to 32 MB on 64-bit systems), so the cost depends on what the
+process did before: measured (``benchmarks/bench_core.py``) a 50 x 50 efficiency map of the
+paper profile took 80 ms early in a process and 40 ms with the settings below; the FMU's map
+in a new process had 17 500 minor page faults and 30 ms of 90.
 
-``map_solving_heap`` sets what that dynamic rule would reach, for the duration of the solve:
-the mmap threshold to :data:`MMAP_THRESHOLD` (4 MiB, above the map's largest temporary) and the
-trim threshold to :data:`TRIM_THRESHOLD_SOLVING` (64 MiB), so the temporaries are recycled on
-the heap. Afterwards the trim threshold is set to twice the mmap threshold (glibc's own rule) and
-``malloc_trim(0)`` gives the freed heap back, so the host keeps no memory it did not have.
-A side effect on the host: glibc stops adapting its thresholds once they are set explicitly, so
-the mmap threshold stays at 4 MiB for the rest of the process (blocks below it come from the
-heap). Elsewhere than on glibc (macOS, Windows, musl) nothing is changed. The environment
-variable ``CYCLO_FMU_KEEP_MALLOC`` (any non-empty value) leaves the allocator alone.
+The settings are what that dynamic rule would reach: the mmap threshold :data:`MMAP_THRESHOLD`
+(4 MiB, above the largest temporary of the maps) and the trim threshold :data:`TRIM_THRESHOLD`
+(64 MiB), so the temporaries are recycled on the heap.
+
+- ``keep_temporaries_on_heap`` sets them for the whole process: for processes of our own (the
+  ``cyclo-fmu`` command; the sweep's dask workers get them as environment variables,
+  ``cyclo_fmu.sweep.cluster.worker_environ``).
+- ``map_solving_heap`` sets them while an FMU solves its map inside a host's process;
+  afterwards the trim threshold is twice the mmap threshold (glibc's own rule) and
+  ``malloc_trim(0)`` gives the freed heap back, so the host keeps no memory it did not have.
+  A side effect on the host: glibc stops adapting its thresholds once they are set explicitly,
+  so the mmap threshold stays at 4 MiB for the rest of the process.
+
+A program using ``model_core`` directly gets the same with the environment variables
+``MALLOC_MMAP_THRESHOLD_=4194304 MALLOC_TRIM_THRESHOLD_=67108864`` or by calling
+``keep_temporaries_on_heap()``. Elsewhere than on glibc (macOS, Windows, musl) nothing is
+changed; the environment variable ``CYCLO_FMU_KEEP_MALLOC`` (any non-empty value) leaves the
+allocator alone.
 """
 from __future__ import annotations
 
@@ -31,8 +40,8 @@ _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
 #: bytes, blocks at least this large are mapped from the kernel (above the map's largest
 #: temporary, 1.4 MB for the default grid; glibc's dynamic rule would raise it that far itself)
 MMAP_THRESHOLD = 4 << 20
-#: bytes of free heap top kept during the solve (the temporaries alive at once stay below it)
-TRIM_THRESHOLD_SOLVING = 64 << 20
+#: bytes of free heap top kept (the temporaries alive at once stay below it)
+TRIM_THRESHOLD = 64 << 20
 #: bytes, afterwards: twice the mmap threshold, glibc's dynamic rule
 TRIM_THRESHOLD_AFTER = 2 * MMAP_THRESHOLD
 
@@ -57,6 +66,21 @@ def _glibc():
     return libc
 
 
+def keep_temporaries_on_heap() -> bool:
+    """Set :data:`MMAP_THRESHOLD` and :data:`TRIM_THRESHOLD` for the whole process (see the
+    module); False where nothing was changed (not glibc, or ``CYCLO_FMU_KEEP_MALLOC``)."""
+    libc = _glibc()
+    if libc is None:
+        return False
+    _keep(libc)
+    return True
+
+
+def _keep(libc):
+    libc.mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)
+    libc.mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD)
+
+
 @contextlib.contextmanager
 def map_solving_heap():
     """Context in which glibc recycles large temporaries on its heap (see the module)."""
@@ -64,8 +88,7 @@ def map_solving_heap():
     if libc is None:
         yield
         return
-    libc.mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)
-    libc.mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD_SOLVING)
+    _keep(libc)
     try:
         yield
     finally:

@@ -72,9 +72,9 @@ def worker_environ() -> dict:
     """
     import dask
 
-    from ..slaves.heap import MMAP_THRESHOLD
+    from ..slaves.heap import MMAP_THRESHOLD, TRIM_THRESHOLD
     env = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}) or {})
-    env.setdefault("MALLOC_MMAP_THRESHOLD_", MMAP_THRESHOLD)
+    env.update(MALLOC_MMAP_THRESHOLD_=MMAP_THRESHOLD, MALLOC_TRIM_THRESHOLD_=TRIM_THRESHOLD)
     return env
 
 
