@@ -32,6 +32,10 @@ MAP_LAYOUT = 2
 _SHAFT_INDEX = {"1": 0, "2": 1, "S": 2}
 _N_GEAR = len(LOSS_NAMES)
 _N_IDLE = len(IDLE_NAMES)
+# ModeMap.solve writes its rows out: eta0 and five shares, three losses and three drags
+if (_N_GEAR, _N_IDLE) != (5, 3):
+    raise ImportError("lossmap.ModeMap.solve is written for 5 load-dependent and 3 "
+                      "load-independent partial losses")
 
 
 class ModeMap:
@@ -119,36 +123,58 @@ class ModeMap:
         self.names = MAP_LOSS_NAMES
         self.out_of_range = 0
 
-    def _interp_speed(self, w):
-        """The drag row at |w_in| = w: linear in ln w, clamped at the top of the grid; below
-        its lowest speed proportional to w (the drag's torque is linear in the speed near a
-        standstill, drag.DRAG_SIGN_SPEED, and so are the losses over w)."""
-        gw, tab = self._lw, self._idle
-        if w < self._w_low:
-            return [x * (w / self._w_low) for x in tab[0]]
-        lw = min(math.log(w), gw[-1])
-        j = min(bisect_right(gw, lw) - 1, len(gw) - 2)
-        fw = (lw - gw[j]) / (gw[j + 1] - gw[j])
-        return [(1 - fw) * p + fw * q for p, q in zip(tab[j], tab[j + 1])]
+    def _locate_speed(self, w):
+        """Index j and weight fw of |w_in| = w on the speed grid (linear in ln w, clamped at
+        both ends of the grid), shared by the drag row and the table."""
+        gw = self._lw
+        lw = math.log(w) if w > 0 else gw[0]
+        if lw > gw[-1]:
+            lw = gw[-1]
+        elif lw < gw[0]:
+            lw = gw[0]
+        j = bisect_right(gw, lw) - 1
+        if j > len(gw) - 2:
+            j = len(gw) - 2
+        return j, (lw - gw[j]) / (gw[j + 1] - gw[j])
 
-    def _interp(self, table, t, w):
+    def _interp_speed(self, w, j, fw):
+        """The drag row at |w_in| = w (j, fw from ``_locate_speed``): linear in ln w, clamped
+        at the top of the grid; below its lowest speed proportional to w (the drag's torque is
+        linear in the speed near a standstill, drag.DRAG_SIGN_SPEED, and so are the losses over
+        w). Written out for the row's six entries (a comprehension costs more than the sums)."""
+        if w < self._w_low:
+            s = w / self._w_low
+            a = self._idle[0]
+            return (a[0] * s, a[1] * s, a[2] * s, a[3] * s, a[4] * s, a[5] * s)
+        a, b = self._idle[j], self._idle[j + 1]
+        g = 1 - fw
+        return (g * a[0] + fw * b[0], g * a[1] + fw * b[1], g * a[2] + fw * b[2],
+                g * a[3] + fw * b[3], g * a[4] + fw * b[4], g * a[5] + fw * b[5])
+
+    def _interp(self, table, t, w, j, fw):
+        """Bilinear in (ln t, ln w) of the table's six columns (eta0 and the five shares), at
+        the speed located by ``_locate_speed``; clamped at the grid's edges, counted in
+        ``out_of_range`` where t or w lies beyond them."""
         gt, gw = self._lt, self._lw
         lt = math.log(t) if t > 0 else gt[0]
-        lw = math.log(w) if w > 0 else gw[0]
-        if lt < gt[0] or lt > gt[-1] or lw < gw[0] or lw > gw[-1]:
+        if lt < gt[0] or lt > gt[-1] or (w > 0 and not gw[0] <= math.log(w) <= gw[-1]):
             if t > 0 and w > 0:
                 self.out_of_range += 1
             lt = min(max(lt, gt[0]), gt[-1])
-            lw = min(max(lw, gw[0]), gw[-1])
-        i = min(bisect_right(gt, lt) - 1, len(gt) - 2)
-        j = min(bisect_right(gw, lw) - 1, len(gw) - 2)
+        i = bisect_right(gt, lt) - 1
+        if i > len(gt) - 2:
+            i = len(gt) - 2
         ft = (lt - gt[i]) / (gt[i + 1] - gt[i])
-        fw = (lw - gw[j]) / (gw[j + 1] - gw[j])
         row0, row1 = table[j], table[j + 1]
+        p, q, r, z = row0[i], row0[i + 1], row1[i], row1[i + 1]
         u, v = (1 - fw) * (1 - ft), (1 - fw) * ft
         x, y = fw * (1 - ft), fw * ft
-        return [u * p + v * q + x * r + y * s_
-                for p, q, r, s_ in zip(row0[i], row0[i + 1], row1[i], row1[i + 1])]
+        return (u * p[0] + v * q[0] + x * r[0] + y * z[0],
+                u * p[1] + v * q[1] + x * r[1] + y * z[1],
+                u * p[2] + v * q[2] + x * r[2] + y * z[2],
+                u * p[3] + v * q[3] + x * r[3] + y * z[3],
+                u * p[4] + v * q[4] + x * r[4] + y * z[4],
+                u * p[5] + v * q[5] + x * r[5] + y * z[5])
 
     def solve(self, w_in: float, tau_out: float):
         """Steady state at driving speed w_in (rad/s) and load torque tau_out (N*m, applied by
@@ -160,12 +186,13 @@ class ModeMap:
         speeds = (r1 * w_in, r2 * w_in, rS * w_in)
         k = self._k
         w_abs = abs(w_in)
-        q = self._interp_speed(w_abs)
+        j, fw = self._locate_speed(w_abs)
+        q = self._interp_speed(w_abs, j, fw)
         sgn = 1.0 if w_in > 0 else (-1.0 if w_in < 0 else 0.0)
         drag = (sgn * q[3], sgn * q[4], sgn * q[5])
         tau = tau_out - drag[k]                 # the gear's own torque at the driven shaft
         forward = tau * speeds[k] <= 0
-        row = self._interp(self._tables[forward], abs(tau), w_abs)
+        row = self._interp(self._tables[forward], abs(tau), w_abs, j, fw)
         eta0 = row[0]
         wdir = self._wdir[forward]
         if wdir > 0:
@@ -179,7 +206,8 @@ class ModeMap:
         T1 = tau / c[k]
         gear = (T1, T1 * c2, T1 * c[2])
         p_gear = gear[0] * speeds[0] + gear[1] * speeds[1] + gear[2] * speeds[2]
-        losses = [s * p_gear for s in row[1:]] + [x * w_abs for x in q[:3]]
+        losses = [row[1] * p_gear, row[2] * p_gear, row[3] * p_gear, row[4] * p_gear,
+                  row[5] * p_gear, q[0] * w_abs, q[1] * w_abs, q[2] * w_abs]
         torques = (gear[0] + drag[0], gear[1] + drag[1], gear[2] + drag[2])
         a = _SHAFT_INDEX[self.a]
         p_a, p_b = torques[a] * speeds[a], torques[k] * speeds[k]
