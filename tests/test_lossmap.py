@@ -61,3 +61,42 @@ def test_map_solving_heap_changes_no_number(design, monkeypatch):
     assert tuned._idle == plain._idle
     monkeypatch.setenv("CYCLO_FMU_KEEP_MALLOC", "1")
     assert heap._glibc() is None
+
+
+def test_map_solving_heap_gives_a_host_its_own_thresholds_back(monkeypatch):
+    """An FMU runs in its host's process: thresholds the host gave glibc in its environment are
+    restored after the map's solve; without any, glibc's 2x rule for the trim threshold."""
+    from cyclo_fmu.slaves import heap
+
+    class Recorder:
+        def __init__(self):
+            self.calls = []
+
+        def mallopt(self, param, value):
+            self.calls.append((param, value))
+            return 1
+
+        def malloc_trim(self, pad):
+            self.calls.append(("trim", pad))
+            return 1
+
+    for var in ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_", "GLIBC_TUNABLES"):
+        monkeypatch.delenv(var, raising=False)
+    libc = Recorder()
+    monkeypatch.setattr(heap, "_glibc", lambda: libc)
+    with heap.map_solving_heap():
+        assert libc.calls == [(heap._M_MMAP_THRESHOLD, heap.MMAP_THRESHOLD),
+                              (heap._M_TRIM_THRESHOLD, heap.TRIM_THRESHOLD)]
+    assert libc.calls[2:] == [(heap._M_TRIM_THRESHOLD, 2 * heap.MMAP_THRESHOLD), ("trim", 0)]
+    monkeypatch.setenv("MALLOC_MMAP_THRESHOLD_", "262144")
+    monkeypatch.setenv("GLIBC_TUNABLES", "glibc.malloc.arena_max=2:glibc.malloc.trim_threshold=0x100000")
+    assert heap.host_thresholds() == (262144, 1 << 20)
+    libc.calls.clear()
+    with heap.map_solving_heap():
+        pass
+    assert libc.calls[2:] == [(heap._M_MMAP_THRESHOLD, 262144),
+                              (heap._M_TRIM_THRESHOLD, 1 << 20), ("trim", 0)]
+    # tunables win over the older variables, and what glibc would not parse is not given
+    assert heap.host_thresholds({"MALLOC_TRIM_THRESHOLD_": "5",
+                                 "GLIBC_TUNABLES": "glibc.malloc.trim_threshold=7"}) == (None, 7)
+    assert heap.host_thresholds({"MALLOC_MMAP_THRESHOLD_": "4k"}) == (None, None)
