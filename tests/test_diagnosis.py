@@ -409,3 +409,27 @@ def test_names_the_effect_hidden_in_the_fmu_dir(fmu_dir, effect, mode):
     assert d.effect == effect
     if effect != "none":
         assert d.rmse_after_Nm <= 0.5 * d.rmse_before_Nm
+
+
+def test_fixed_frequency_told_from_a_shaft_order_that_shares_it():
+    """A fixed frequency persists while the speed moves; a shaft order moves with it. 50 Hz
+    pick-up at 200 Hz sampling, in a test plan that holds 600 r/min (whose fifth order is
+    50 Hz) in every quarter, is found from the stretches at the other speeds; the fifth order
+    itself (phase-locked to the shaft) is never taken for a fixed frequency."""
+    from cyclo_fmu.diagnosis import residual as R
+    fs, hold = 200.0, 6.0
+    rpm = np.tile([600.0, 1600.0, 2000.0, 2800.0, 1200.0], 4)      # 20 holds of 6 s
+    t = np.arange(int(rpm.size * hold * fs)) / fs
+    w = np.repeat(rpm, int(hold * fs)) * np.pi / 30
+    theta = np.cumsum(w) / fs
+    noise = np.random.default_rng(5).normal(0.0, 0.003, t.size)
+    order5 = 0.003 * np.sin(5 * theta)
+    mains = 0.003 * np.sin(2 * np.pi * 50.0 * t)
+    peaks = R.spectral_peaks(noise + mains + order5, 1 / fs, speed=w, orders=[1, 2, 3, 5, 10])
+    assert [round(f) for f, _ in peaks] == [50]
+    assert peaks[0][1] == pytest.approx(0.003, rel=0.15)
+    assert R.spectral_peaks(noise + order5, 1 / fs, speed=w, orders=[1, 2, 3, 5, 10]) == []
+    # without the speed, the order at speeds held in every quarter stands as fixed peaks
+    # (50 Hz at 600 r/min; 33.3 Hz at 2000 and 2800 r/min, 66.7 Hz at 1600, folded at 200 Hz)
+    found = sorted(f for f, _ in R.spectral_peaks(noise + order5, 1 / fs))
+    assert np.allclose(found, [100 / 3, 50.0, 200 / 3], atol=0.5)   # (0.5 Hz bins)

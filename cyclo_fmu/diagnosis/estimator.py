@@ -44,6 +44,14 @@ MIN_EXPLAINED_NM = 0.5e-3
 #: [1] the same threshold relative to the recording's own block-mean noise (robust sigma):
 #: a noisier bench needs a larger effect before it is named
 MIN_EXPLAINED_NOISE = 0.5
+#: [N*m] the smallest amplitude of a narrow spectral peak reported as unexplained: 1 mN*m (RMS
+#: 0.7 mN*m, above MIN_EXPLAINED_NM). Not scaled with the block-level noise as the terms are:
+#: a peak's significance is the spectral test's own (its height over the local level of the
+#: residual's spectrum, in the whole recording and in its quarters,
+#: ``residual.spectral_peaks``), which does not depend on how many samples a 10 ms block holds;
+#: scaled, the same 50 Hz pick-up went unreported at 200 Hz (2 samples a block) and was reported
+#: at 1 kHz (10)
+PEAK_MIN_AMPLITUDE_NM = 1e-3
 #: [1] re-linearise the friction level (replay again at the corrected mu) beyond this error
 FRICTION_RELINEARISE = 0.02
 #: [1] an effect must be selected in at least this share of the leave-one-fold-out runs
@@ -618,9 +626,10 @@ class Diagnoser:
         inside = {n: a for n, (a, se) in amps.items()
                   if n in ("1x", f"order {k:g} (roller pass)")
                   and a > ORDER_SE * se and a >= min_expl}
-        held = R.held_speeds(sig["w_in"])
-        peaks = R.spectral_peaks(r_raw, dt, min_amplitude=2 * min_expl,
-                                 exclude=R.order_frequencies(orders.values(), held, dt))
+        # fixed-frequency peaks, judged at each frequency in the stretches where no shaft
+        # order of the input speed reaches it
+        peaks = R.spectral_peaks(r_raw, dt, min_amplitude=PEAK_MIN_AMPLITUDE_NM,
+                                 speed=sig["w_in"], orders=list(orders.values()))
         ex = self.design.extra
         if "mesh_ripple" in S.ids or ex.ripple_1x or ex.ripple_roller:
             inside = {}       # the library's orders, fitted: what is left is phase tracking

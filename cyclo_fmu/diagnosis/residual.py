@@ -145,41 +145,103 @@ def order_frequencies(orders, speeds, dt) -> np.ndarray:
 #: [1] a fixed-frequency peak stands in at least this share of the recording's quarters (a shaft
 #: order held at one speed appears in one quarter only)
 PEAK_PERSISTENCE = 0.75
+#: [Hz] a spectral peak this close to a shaft order at a held speed is left to the order
+#: analysis (the Welch bins are 0.5 Hz wide; a held speed wanders by a few r/min)
+ORDER_EXCLUSION_HZ = 1.0
 
 
-def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=1.0, exclude=()) -> list:
-    """Narrow peaks of the residual's spectrum at fixed frequencies (Welch, 2 s segments):
-    bins standing ``factor`` times above the local median level (+-5 Hz) over the whole
-    recording, with an amplitude of at least ``min_amplitude`` N*m, that also stand at least
-    half as high in ``PEAK_PERSISTENCE`` of the recording's quarters (a fixed frequency
-    persists; a shaft order moves with the speed); peaks within 1 Hz of a frequency in
-    ``exclude`` (shaft orders at held speeds) are left to the order analysis. Returns
-    [(frequency Hz, amplitude N*m)], largest first."""
-    from scipy.signal import welch
+def _order_coverage(speed, orders, fs, freqs, n_seg, nper):
+    """Which frequency bins ``freqs`` (Hz) a shaft order reaches within each of ``n_seg``
+    half-overlapping segments of ``nper`` samples of the sample-level input speed (rad/s):
+    boolean (n_freq, n_seg), widened by ``ORDER_EXCLUSION_HZ`` (the orders folded about the
+    Nyquist frequency). A segment is two half-segments; each half is represented by its speeds
+    at 33 quantiles (a 0.5 Hz bin is wide against the speed's change between them)."""
+    df = freqs[1] - freqs[0]
+    nf = freqs.size
+    h = nper - nper // 2
+    n_half = n_seg + 1
+    w = np.abs(np.asarray(speed, float))[:n_half * h]
+    if w.size < n_half * h:
+        w = np.concatenate([w, np.full(n_half * h - w.size, w[-1] if w.size else 0.0)])
+    ws = np.quantile(w.reshape(n_half, h), np.linspace(0.0, 1.0, 33), axis=1).T   # (n_half, 33)
+    k = np.asarray(list(orders), float)
+    f = np.abs((ws[:, None, :] * k[None, :, None] / (2 * math.pi) + fs / 2) % fs - fs / 2)
+    pad = int(math.ceil(ORDER_EXCLUSION_HZ / df))
+    bins = np.rint(f.reshape(n_half, -1) / df).astype(int)
+    bins = (bins[:, :, None] + np.arange(-pad, pad + 1)).reshape(n_half, -1)
+    half = np.zeros((n_half, nf + 2 * pad + 1), bool)
+    half[np.arange(n_half)[:, None], np.clip(bins, -1, nf) % (nf + 2 * pad + 1)] = True
+    half = half[:, :nf]
+    return (half[:-1] | half[1:]).T
+
+
+def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=1.0, exclude=(),
+                   speed=None, orders=()) -> list:
+    """Narrow peaks of the residual's spectrum at fixed frequencies (Welch: 2 s Hann segments,
+    half overlapping): bins standing ``factor`` times above the local median level (+-5 Hz)
+    over the recording, with an amplitude of at least ``min_amplitude`` N*m, that also stand
+    at least half as high in ``PEAK_PERSISTENCE`` of the recording's quarters (a fixed
+    frequency persists; a shaft order moves with the speed). Shaft orders are left to the order
+    analysis:
+
+    - ``speed`` (sample-level input speed, rad/s) and ``orders`` (orders of it): at each
+      frequency only the segments in which none of these orders comes within
+      ``ORDER_EXCLUSION_HZ`` of it are averaged, in the whole recording and in each quarter
+      (a quarter without such a segment does not see the peak). So a fixed frequency is found
+      where an order at one held speed shares it (50 Hz mains and the fifth order at
+      600 r/min), from the segments at the other speeds, and an order is never taken for one;
+    - ``exclude``: frequencies (Hz); a peak within ``ORDER_EXCLUSION_HZ`` of one is not
+      reported.
+
+    Returns [(frequency Hz, amplitude N*m)], largest first."""
     from scipy.ndimage import median_filter
+    from scipy.signal import spectrogram
+    r = np.asarray(r, float)
     n = len(r)
     fs = 1.0 / dt
     nper = int(round(2.0 * fs))
     if n < 8 * nper or nper < 64:
         return []
+    if speed is not None and len(speed) < n:
+        raise ValueError(f"speed: {len(speed)} samples for a residual of {n}")
+    f, t_seg, S = spectrogram(r - np.mean(r), fs=fs, window="hann", nperseg=nper,
+                              noverlap=nper // 2, detrend="constant", scaling="density")
+    df = f[1] - f[0]
+    starts = np.arange(S.shape[1]) * (nper - nper // 2)
+    if speed is not None and len(orders):
+        use = ~_order_coverage(speed, orders, fs, f, S.shape[1], nper)
+    else:
+        use = np.ones(S.shape, bool)
+    width = max(3, int(round(10.0 / df)) | 1)
 
-    def psd(x):
-        f, P = welch(x - np.mean(x), fs=fs, nperseg=nper, window="hann")
-        df = f[1] - f[0]
-        width = max(3, int(round(10.0 / df)) | 1)
-        return f, P, median_filter(P, size=width, mode="nearest"), df
-    f, P, base, df = psd(r)
-    quarters = [psd(q)[1:3] for q in np.array_split(r, 4)]
+    def level(cols):
+        """Mean periodogram over the usable segments among ``cols`` per bin (NaN where none)
+        and its local median level."""
+        u = use[:, cols]
+        k = u.sum(1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            P = np.where(k > 0, (S[:, cols] * u).sum(1) / np.maximum(k, 1), np.nan)
+        # the median level from the bins with data (a bin without keeps its neighbours')
+        filled = np.where(np.isnan(P), np.nanmedian(P) if np.any(k) else 0.0, P)
+        return P, median_filter(filled, size=width, mode="nearest")
+    P, base = level(slice(None))
+    quarter_of = np.minimum((starts + nper / 2) * 4 // n, 3).astype(int)
+    quarters = [level(np.flatnonzero(quarter_of == q)) for q in range(4)]
     peaks = []
     for i in range(1, len(f) - 1):
-        if f[i] < f_min or not (P[i] >= P[i - 1] and P[i] >= P[i + 1]):
+        Pi = P[i - 1:i + 2]
+        if f[i] < f_min or np.isnan(Pi).any() or not (Pi[1] >= Pi[0] and Pi[1] >= Pi[2]):
             continue
         if P[i] > factor * base[i]:
-            # amplitude of a sinusoid from the power in the peak's bins (Hann: 1.5 bins wide)
-            power = (P[i - 1] + P[i] + P[i + 1] - 3 * base[i]) * df / 1.5
+            # amplitude of a sinusoid from the power in the peak's bins: with a Hann window a
+            # sinusoid at a bin's centre puts 2/3 of its power A^2/2 in that bin and 1/6 in each
+            # neighbour (the density's peak is A^2/2 over the window's noise bandwidth, 1.5 bins)
+            power = (Pi.sum() - 3 * base[i]) * df
             amp = math.sqrt(max(2 * power, 0.0))
-            seen = np.mean([max(Pq[i - 1:i + 2]) > 0.5 * factor * bq[i] for Pq, bq in quarters])
-            near = len(exclude) and np.min(np.abs(np.asarray(exclude) - f[i])) < 1.0
+            seen = np.mean([bool(np.nanmax(Pq[i - 1:i + 2]) > 0.5 * factor * bq[i])
+                            if not np.isnan(Pq[i - 1:i + 2]).all() else False
+                            for Pq, bq in quarters])
+            near = len(exclude) and np.min(np.abs(np.asarray(exclude) - f[i])) < ORDER_EXCLUSION_HZ
             if amp >= min_amplitude and seen >= PEAK_PERSISTENCE and not near:
                 peaks.append((float(f[i]), amp))
     return sorted(peaks, key=lambda p: -p[1])[:5]
