@@ -154,8 +154,10 @@ def _order_coverage(speed, orders, fs, freqs, n_seg, nper):
     """Which frequency bins ``freqs`` (Hz) a shaft order reaches within each of ``n_seg``
     half-overlapping segments of ``nper`` samples of the sample-level input speed (rad/s):
     boolean (n_freq, n_seg), widened by ``ORDER_EXCLUSION_HZ`` (the orders folded about the
-    Nyquist frequency). A segment is two half-segments; each half is represented by its speeds
-    at 33 quantiles (a 0.5 Hz bin is wide against the speed's change between them)."""
+    Nyquist frequency). A segment is two half-segments; each half is represented by its sorted
+    speeds taken so densely that the fastest order moves less than a bin between two of them
+    (a sweep leaves no gap); a half-segment with a speed that is not finite is taken to reach
+    every bin."""
     df = freqs[1] - freqs[0]
     nf = freqs.size
     h = nper - nper // 2
@@ -163,8 +165,13 @@ def _order_coverage(speed, orders, fs, freqs, n_seg, nper):
     w = np.abs(np.asarray(speed, float))[:n_half * h]
     if w.size < n_half * h:
         w = np.concatenate([w, np.full(n_half * h - w.size, w[-1] if w.size else 0.0)])
-    ws = np.quantile(w.reshape(n_half, h), np.linspace(0.0, 1.0, 33), axis=1).T   # (n_half, 33)
-    k = np.asarray(list(orders), float)
+    w = w.reshape(n_half, h)
+    bad = ~np.isfinite(w).all(1)
+    w = np.sort(np.where(np.isfinite(w), w, 0.0), axis=1)
+    k = np.abs(np.asarray(orders, float))
+    spread = float(np.max(w[:, -1] - w[:, 0])) * float(k.max()) / (2 * math.pi)   # Hz
+    n_pts = int(min(h, max(33, math.ceil(spread / df) + 2)))
+    ws = w[:, np.rint(np.linspace(0, h - 1, n_pts)).astype(int)]               # (n_half, n_pts)
     f = np.abs((ws[:, None, :] * k[None, :, None] / (2 * math.pi) + fs / 2) % fs - fs / 2)
     pad = int(math.ceil(ORDER_EXCLUSION_HZ / df))
     bins = np.rint(f.reshape(n_half, -1) / df).astype(int)
@@ -172,6 +179,7 @@ def _order_coverage(speed, orders, fs, freqs, n_seg, nper):
     half = np.zeros((n_half, nf + 2 * pad + 1), bool)
     half[np.arange(n_half)[:, None], np.clip(bins, -1, nf) % (nf + 2 * pad + 1)] = True
     half = half[:, :nf]
+    half[bad] = True
     return (half[:-1] | half[1:]).T
 
 
@@ -184,12 +192,13 @@ def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=1.0, exclude=(),
     frequency persists; a shaft order moves with the speed). Shaft orders are left to the order
     analysis:
 
-    - ``speed`` (sample-level input speed, rad/s) and ``orders`` (orders of it): at each
-      frequency only the segments in which none of these orders comes within
-      ``ORDER_EXCLUSION_HZ`` of it are averaged, in the whole recording and in each quarter
-      (a quarter without such a segment does not see the peak). So a fixed frequency is found
-      where an order at one held speed shares it (50 Hz mains and the fifth order at
-      600 r/min), from the segments at the other speeds, and an order is never taken for one;
+    - ``speed`` (sample-level input speed, rad/s) and ``orders`` (orders of it): a peak of the
+      whole recording's spectrum is judged again on the segments in which none of these orders
+      comes within ``ORDER_EXCLUSION_HZ`` of it (its height over the local level of their mean
+      spectrum, its persistence over the quarters and its amplitude, all from that one set of
+      segments). So a fixed frequency is found where an order at one held speed shares it
+      (50 Hz mains and the fifth order at 600 r/min), from the segments at the other speeds,
+      and a peak of the orders checked is not taken for one;
     - ``exclude``: frequencies (Hz); a peak within ``ORDER_EXCLUSION_HZ`` of one is not
       reported.
 
@@ -197,6 +206,7 @@ def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=1.0, exclude=(),
     from scipy.ndimage import median_filter
     from scipy.signal import spectrogram
     r = np.asarray(r, float)
+    orders = list(orders)
     n = len(r)
     fs = 1.0 / dt
     nper = int(round(2.0 * fs))
@@ -204,46 +214,52 @@ def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=1.0, exclude=(),
         return []
     if speed is not None and len(speed) < n:
         raise ValueError(f"speed: {len(speed)} samples for a residual of {n}")
-    f, t_seg, S = spectrogram(r - np.mean(r), fs=fs, window="hann", nperseg=nper,
-                              noverlap=nper // 2, detrend="constant", scaling="density")
+    f, _, S = spectrogram(r - np.mean(r), fs=fs, window="hann", nperseg=nper,
+                          noverlap=nper // 2, detrend="constant", scaling="density")
     df = f[1] - f[0]
-    starts = np.arange(S.shape[1]) * (nper - nper // 2)
-    if speed is not None and len(orders):
-        use = ~_order_coverage(speed, orders, fs, f, S.shape[1], nper)
-    else:
-        use = np.ones(S.shape, bool)
+    n_seg = S.shape[1]
     width = max(3, int(round(10.0 / df)) | 1)
+    # the quarter of each segment, by its centre
+    centres = np.arange(n_seg) * (nper - nper // 2) + nper / 2
+    quarter_of = np.minimum(centres * 4 // n, 3).astype(int)
+    judged = speed is not None and len(orders) > 0
+    usable = _order_coverage(speed, orders, fs, f, n_seg, nper) if judged else None
 
     def level(cols):
-        """Mean periodogram over the usable segments among ``cols`` per bin (NaN where none)
-        and its local median level."""
-        u = use[:, cols]
-        k = u.sum(1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            P = np.where(k > 0, (S[:, cols] * u).sum(1) / np.maximum(k, 1), np.nan)
-        # the median level from the bins with data (a bin without keeps its neighbours')
-        filled = np.where(np.isnan(P), np.nanmedian(P) if np.any(k) else 0.0, P)
-        return P, median_filter(filled, size=width, mode="nearest")
-    P, base = level(slice(None))
-    quarter_of = np.minimum((starts + nper / 2) * 4 // n, 3).astype(int)
-    quarters = [level(np.flatnonzero(quarter_of == q)) for q in range(4)]
+        """Mean spectrum over the segments ``cols`` and its local median level."""
+        P = S[:, cols].mean(1)
+        return P, median_filter(P, size=width, mode="nearest")
+
+    def stands(P, base, i, share):
+        return bool(np.max(P[i - 1:i + 2]) > share * factor * base[i])
+    P_all, base_all = level(slice(None))
+    spectra = {}   # the spectra of one set of segments (peaks often share it)
     peaks = []
     for i in range(1, len(f) - 1):
-        Pi = P[i - 1:i + 2]
-        if f[i] < f_min or np.isnan(Pi).any() or not (Pi[1] >= Pi[0] and Pi[1] >= Pi[2]):
+        if f[i] < f_min or not (P_all[i] >= P_all[i - 1] and P_all[i] >= P_all[i + 1]):
             continue
-        if P[i] > factor * base[i]:
-            # amplitude of a sinusoid from the power in the peak's bins: with a Hann window a
-            # sinusoid at a bin's centre puts 2/3 of its power A^2/2 in that bin and 1/6 in each
-            # neighbour (the density's peak is A^2/2 over the window's noise bandwidth, 1.5 bins)
-            power = (Pi.sum() - 3 * base[i]) * df
-            amp = math.sqrt(max(2 * power, 0.0))
-            seen = np.mean([bool(np.nanmax(Pq[i - 1:i + 2]) > 0.5 * factor * bq[i])
-                            if not np.isnan(Pq[i - 1:i + 2]).all() else False
-                            for Pq, bq in quarters])
-            near = len(exclude) and np.min(np.abs(np.asarray(exclude) - f[i])) < ORDER_EXCLUSION_HZ
-            if amp >= min_amplitude and seen >= PEAK_PERSISTENCE and not near:
-                peaks.append((float(f[i]), amp))
+        if not P_all[i] > factor * base_all[i]:
+            continue
+        if len(exclude) and np.min(np.abs(np.asarray(exclude) - f[i])) < ORDER_EXCLUSION_HZ:
+            continue
+        cols = np.flatnonzero(~usable[i - 1:i + 2].any(0)) if judged else np.arange(n_seg)
+        if cols.size == 0:
+            continue
+        key = cols.tobytes()
+        if key not in spectra:
+            by_quarter = [cols[quarter_of[cols] == q] for q in range(4)]
+            spectra[key] = (level(cols), [level(c) if c.size else None for c in by_quarter])
+        (P, base), quarters = spectra[key]
+        if not stands(P, base, i, 1.0):
+            continue
+        seen = np.mean([q is not None and stands(q[0], q[1], i, 0.5) for q in quarters])
+        # amplitude of a sinusoid from the power in the peak's bins: with a Hann window a
+        # sinusoid at a bin's centre puts 2/3 of its power A^2/2 in that bin and 1/6 in each
+        # neighbour (the density's peak is A^2/2 over the window's noise bandwidth, 1.5 bins)
+        power = (P[i - 1:i + 2].sum() - 3 * base[i]) * df
+        amp = math.sqrt(max(2 * power, 0.0))
+        if amp >= min_amplitude and seen >= PEAK_PERSISTENCE:
+            peaks.append((float(f[i]), amp))
     return sorted(peaks, key=lambda p: -p[1])[:5]
 
 
