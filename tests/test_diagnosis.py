@@ -456,3 +456,21 @@ def test_orders_swept_fast_are_no_fixed_frequency():
                              orders=orders)
     assert [round(f) for f, _ in peaks] == [50]
     assert peaks[0][1] == pytest.approx(0.003, rel=0.15)
+
+
+def test_friction_error_next_to_a_drift_is_kept_in_the_fit():
+    """A 15 % friction error next to a strong viscosity drift (S2, 200 Hz): the friction level
+    can be stood in for by the smooth generic basis, but withdrawing it left its error to the
+    drift term (named at a ninth of its size, the fit worse than the plain model's). Kept, the
+    fit improves on the plain model, the drift is named at a size of the right order and
+    nothing is left unexplained."""
+    settings = SynthSettings(sample_rate=200.0, torque_noise=0.0057, bandwidth=80.0)
+    r = synthesize({"viscosity_drift": ({"ln_viscosity_change": -1.36}, 300.0)}, 838449, "S2",
+                   "small", settings=settings, friction_error=0.146)
+    d = diagnose(r, "S2")
+    assert d.rmse_after_Nm < 0.7 * d.rmse_before_Nm
+    assert named(d) == {"viscosity_drift"}
+    drift = next(e for e in d.effects if e["id"] == "viscosity_drift")
+    assert -2.0 < drift["parameters"]["ln_viscosity_change"]["value"] < -0.6
+    assert d.calibration["mu_boundary_rel_error"]["value"] == pytest.approx(0.146, abs=0.05)
+    assert not d.unexplained["present"]

@@ -272,6 +272,8 @@ class Diagnoser:
             sig = first["P"]["sig"]
             state = self._analyse(rec, d2, forced=("friction_miscalibrated",),
                                   sensitivities=(sig["sens_mu"], sig["sens_nu"]))
+            # (forced there, the friction level is judged in the first analysis only)
+            state["friction_doubted"] = first["friction_doubted"]
         self._stage("result")
         self.diagnosis_ = self._result(rec, first, state, rel1)
         self._bar.close()
@@ -368,6 +370,7 @@ class Diagnoser:
         self._stage("structure")
         # the honest unknown: what the generic basis still explains next to the selection
         withdrawn = []
+        friction_doubted = False
         with_g = self._best_next_to(prob, S.terms, P["structure"])
         present = (S.bic - with_g.bic >= DELTA_BIC and explained(S, with_g) >= min_expl)
         # the selected effects are doubted (must keep their place next to the generic basis)
@@ -390,12 +393,21 @@ class Diagnoser:
         if present or doubt:
             if not present:   # judged next to the basis that holds the doubted structure
                 with_g = prob.fit(S.terms + (ref_g.terms[-1],))
+            # the friction level, the model's own uncertain coefficient and a nuisance of every
+            # recording, stays in the fit when doubted (a smooth generic basis can always stand
+            # in for it; withdrawn, its error went unmodelled, the relinearisation at the
+            # fitted level did not happen and a drift term took the error up at a wrong size,
+            # the fit worse than the plain model's), but it is not named: it may hold part of
+            # the unknown (``friction_doubted``)
             for t in S.terms:
                 if t.effect in forced:
                     continue
                 rest = prob.fit(tuple(x for x in with_g.terms if x != t))
                 if rest.bic - with_g.bic < DELTA_BIC or explained(rest, with_g) < min_expl:
-                    withdrawn.append(t.effect)
+                    if t.effect == "friction_miscalibrated":
+                        friction_doubted = True
+                    else:
+                        withdrawn.append(t.effect)
             if withdrawn:
                 S = prob.fit(tuple(t for t in S.terms if t.effect not in withdrawn))
                 # a term pushed outside its bounds by the withdrawal is not that effect either
@@ -425,7 +437,8 @@ class Diagnoser:
                 fr = (float(v[0]), float(s[0]))
         return {"P": P, "prob": prob, "S": S, "with_g": with_g, "present": present,
                 "confounded": confounded, "gain_alone": gain_alone,
-                "withdrawn": withdrawn, "unstable": unstable, "stability": stability,
+                "withdrawn": withdrawn, "friction_doubted": friction_doubted,
+                "unstable": unstable, "stability": stability,
                 "n_spikes": n_spikes, "sigma": sigma, "noise": noise, "min_expl": min_expl, "base": base,
                 "friction": fr, "opts": opts, "path": sel.path, "weights": w}
 
@@ -510,10 +523,12 @@ class Diagnoser:
             else:
                 effects.append(entry)
         effects.sort(key=lambda e: -e["explained_rms_Nm"])
-        if not effects and calibration:
-            effects = [calibration_entry]
         # the unknown: generic basis next to the selection, orders and peaks
         unexplained = self._unexplained(st, r_raw, sig, dt)
+        # the friction level alone is named unless it may hold part of an unknown
+        if not effects and calibration and not (st["friction_doubted"]
+                                                and unexplained["present"]):
+            effects = [calibration_entry]
         best = effects[0] if effects else None
         eid = best["id"] if best else "none"
         params = dict(best["parameters"]) if best else {}
@@ -523,7 +538,8 @@ class Diagnoser:
         close = self._lookalikes(st)
         for e in effects:
             e["indistinguishable_from"] = close.get(e["id"], [])
-        close_first = close.get(eid, [])
+        # (nothing named but a friction level calibrated: the calibration's look-alikes)
+        close_first = close.get(eid if effects else "friction_miscalibrated", [])
         located = R.locate(P["blocks"]["t"], y_before if st is first else P["y"],
                            P["blocks"]["w_in"], P["blocks"]["T_out"], P["blocks"]["T_in"],
                            P["blocks"]["alpha"], P["blocks"]["temperature"])
@@ -656,12 +672,18 @@ class Diagnoser:
         if st["withdrawn"]:
             parts.append("withdrawn because the unexplained mismatch could hold them: "
                          + ", ".join(st["withdrawn"]))
+        doubted = st["friction_doubted"] and present
+        if doubted:
+            parts.append("the friction level stays in the fit as the model's own coefficient "
+                         "but is not named: the unexplained mismatch could hold part of it")
         statement = ("; ".join(parts) + ".") if present else \
             "nothing the model and the selected effects leave is structured beyond the noise."
         return {"present": present, "rms_Nm": rms if present else 0.0, "statement": statement,
                 "follows": follows, "orders": {n: a for n, a in outside.items()},
                 "library_orders_left": inside, "peaks_Hz_Nm": peaks,
-                "could_include": list(st["withdrawn"]), "bursts": b, "_orders_all": amps}
+                "could_include": list(st["withdrawn"]) + (
+                    ["friction_miscalibrated"] if doubted else []),
+                "bursts": b, "_orders_all": amps}
 
     def _lookalikes(self, st) -> dict:
         prob, S, opts = st["prob"], st["S"], st["opts"]
