@@ -432,7 +432,8 @@ def cmd_diagnose(args) -> int:
         print(f"excluded: {e['count']} {e.get('unit', 'samples')} ({e['reason']})")
     print(f"located: {d.located['statement']}")
     if not d.effects:
-        print("effects: none - " + EFFECTS_NONE)
+        print("effects: none - " + (EFFECTS_NONE_LEFT if d.unexplained["present"]
+                                    else EFFECTS_NONE))
     for e in d.effects:
         form = f"; fitted {e['form']}" if e.get("form", "").startswith("per") else ""
         print(f"effect: {e['id']} - {e['description']} (explains {1e3 * e['explained_rms_Nm']:.2f}"
@@ -456,6 +457,7 @@ def cmd_diagnose(args) -> int:
 
 
 EFFECTS_NONE = "the model explains the data within its noise"
+EFFECTS_NONE_LEFT = "no effect of the library explains the mismatch (see unexplained)"
 
 
 

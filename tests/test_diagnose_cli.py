@@ -54,3 +54,25 @@ def test_bad_synth_options_are_one_line(tmp_path, args, words):
     r = run("synth", *args, "--size", "tiny", "--out", str(out))
     assert r.returncode == 2 and words in r.stderr and len(r.stderr.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_a_mismatch_outside_the_library_is_not_called_explained(tmp_path):
+    """A load-squared loss outside the library (the friction level exact): the command says
+    that no effect of the library explains it, never that the model explains the data."""
+    import numpy as np
+    from cyclo_fmu.synth import synthesize
+
+    def load_squared(s):
+        return np.sign(s["w_in"]) * 0.010 * (s["T_in_model"] / 0.8) ** 2
+    r = synthesize("none", 31, "S1", "small", added_torque=load_squared)
+    cols = ["time_s", "speed_in_rpm", "torque_in_Nm", "speed_out_rpm", "torque_out_Nm"]
+    rec = tmp_path / "rec.csv"
+    np.savetxt(rec, np.column_stack([r[c] for c in cols]), delimiter=",",
+               header=",".join(cols), comments="")
+    out = run("diagnose", str(rec), "--mode", "S1")
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    assert "effects: none - no effect of the library explains the mismatch (see unexplained)" \
+        in lines, out.stdout
+    assert any(s.startswith("unexplained: a mismatch of") for s in lines), out.stdout
+    assert "within its noise" not in out.stdout
