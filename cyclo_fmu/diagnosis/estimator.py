@@ -672,6 +672,15 @@ class Diagnoser:
         if st["withdrawn"]:
             parts.append("withdrawn because the unexplained mismatch could hold them: "
                          + ", ".join(st["withdrawn"]))
+        # drifts set aside because a steady function of the operating point explains the same
+        # change over time (the plan does not return to its operating points late enough):
+        # the mismatch left could be one of them
+        set_aside = [c for c in dict.fromkeys(st.get("confounded", ()))
+                     if c not in st["withdrawn"]] if present else []
+        if set_aside:
+            parts.append("it could be a drift set aside because a steady function of the "
+                         "operating point explains the same change over time: "
+                         + ", ".join(set_aside))
         doubted = st["friction_doubted"] and present
         if doubted:
             parts.append("the friction level stays in the fit as the model's own coefficient "
@@ -681,7 +690,7 @@ class Diagnoser:
         return {"present": present, "rms_Nm": rms if present else 0.0, "statement": statement,
                 "follows": follows, "orders": {n: a for n, a in outside.items()},
                 "library_orders_left": inside, "peaks_Hz_Nm": peaks,
-                "could_include": list(st["withdrawn"]) + (
+                "could_include": list(st["withdrawn"]) + set_aside + (
                     ["friction_miscalibrated"] if doubted else []),
                 "bursts": b, "_orders_all": amps}
 
