@@ -121,31 +121,16 @@ def order_amplitudes(r, sig, orders, dt) -> dict:
     return out
 
 
-def held_speeds(w, share=0.02, bin_rpm=10.0) -> np.ndarray:
-    """Input speeds [rad/s] the recording dwells at: 10 r/min bins holding at least ``share`` of
-    the samples."""
-    n = np.abs(w) * 30 / math.pi
-    if not len(n):
-        return np.zeros(0)
-    edges = np.arange(0, n.max() + 2 * bin_rpm, bin_rpm)
-    h, e = np.histogram(n, edges)
-    idx = np.digitize(n, e) - 1
-    return np.array([np.median(n[idx == i]) for i in np.flatnonzero(h >= share * len(n))]) \
-        * math.pi / 30
-
-
-def order_frequencies(orders, speeds, dt) -> np.ndarray:
-    """Frequencies [Hz] at which the given orders appear at the given speeds after sampling
-    (folded about the Nyquist frequency)."""
-    fs = 1.0 / dt
-    f = np.array([k * w / (2 * math.pi) for k in orders for w in speeds])
-    return np.abs((f + fs / 2) % fs - fs / 2)
+def folded(f, fs):
+    """Frequencies ``f`` [Hz] as they appear after sampling at ``fs`` [Hz] (folded about the
+    Nyquist frequency)."""
+    return np.abs((np.asarray(f, float) + fs / 2) % fs - fs / 2)
 
 
 #: [1] a fixed-frequency peak stands in at least this share of the recording's quarters (a shaft
 #: order held at one speed appears in one quarter only)
 PEAK_PERSISTENCE = 0.75
-#: [Hz] a spectral peak this close to a shaft order at a held speed is left to the order
+#: [Hz] a spectral peak this close to a shaft order of the input speed is left to the order
 #: analysis (the Welch bins are 0.5 Hz wide; a held speed wanders by a few r/min)
 ORDER_EXCLUSION_HZ = 1.0
 
@@ -172,7 +157,7 @@ def _order_coverage(speed, orders, fs, freqs, n_seg, nper):
     spread = float(np.max(w[:, -1] - w[:, 0])) * float(k.max()) / (2 * math.pi)   # Hz
     n_pts = int(min(h, max(33, math.ceil(spread / df) + 2)))
     ws = w[:, np.rint(np.linspace(0, h - 1, n_pts)).astype(int)]               # (n_half, n_pts)
-    f = np.abs((ws[:, None, :] * k[None, :, None] / (2 * math.pi) + fs / 2) % fs - fs / 2)
+    f = folded(ws[:, None, :] * k[None, :, None] / (2 * math.pi), fs)
     pad = int(math.ceil(ORDER_EXCLUSION_HZ / df))
     bins = np.rint(f.reshape(n_half, -1) / df).astype(int)
     bins = (bins[:, :, None] + np.arange(-pad, pad + 1)).reshape(n_half, -1)
@@ -183,24 +168,20 @@ def _order_coverage(speed, orders, fs, freqs, n_seg, nper):
     return (half[:-1] | half[1:]).T
 
 
-def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=1.0, exclude=(),
-                   speed=None, orders=()) -> list:
+def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=1.0, speed=None,
+                   orders=()) -> list:
     """Narrow peaks of the residual's spectrum at fixed frequencies (Welch: 2 s Hann segments,
     half overlapping): bins standing ``factor`` times above the local median level (+-5 Hz)
     over the recording, with an amplitude of at least ``min_amplitude`` N*m, that also stand
     at least half as high in ``PEAK_PERSISTENCE`` of the recording's quarters (a fixed
     frequency persists; a shaft order moves with the speed). Shaft orders are left to the order
-    analysis:
-
-    - ``speed`` (sample-level input speed, rad/s) and ``orders`` (orders of it): a peak of the
-      whole recording's spectrum is judged again on the segments in which none of these orders
-      comes within ``ORDER_EXCLUSION_HZ`` of it (its height over the local level of their mean
-      spectrum, its persistence over the quarters and its amplitude, all from that one set of
-      segments). So a fixed frequency is found where an order at one held speed shares it
-      (50 Hz mains and the fifth order at 600 r/min), from the segments at the other speeds,
-      and a peak of the orders checked is not taken for one;
-    - ``exclude``: frequencies (Hz); a peak within ``ORDER_EXCLUSION_HZ`` of one is not
-      reported.
+    analysis: with ``speed`` (sample-level input speed, rad/s) and ``orders`` (orders of it), a
+    peak of the whole recording's spectrum is judged again on the segments in which none of
+    these orders comes within ``ORDER_EXCLUSION_HZ`` of it (its height over the local level of
+    their mean spectrum, its persistence over the quarters and its amplitude, all from that one
+    set of segments). So a fixed frequency is found where an order at one held speed shares it
+    (50 Hz mains and the fifth order at 600 r/min), from the segments at the other speeds, and
+    a peak of the orders checked is not taken for one.
 
     Returns [(frequency Hz, amplitude N*m)], largest first."""
     from scipy.ndimage import median_filter
@@ -239,8 +220,6 @@ def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=1.0, exclude=(),
         if f[i] < f_min or not (P_all[i] >= P_all[i - 1] and P_all[i] >= P_all[i + 1]):
             continue
         if not P_all[i] > factor * base_all[i]:
-            continue
-        if len(exclude) and np.min(np.abs(np.asarray(exclude) - f[i])) < ORDER_EXCLUSION_HZ:
             continue
         cols = np.flatnonzero(~usable[i - 1:i + 2].any(0)) if judged else np.arange(n_seg)
         if cols.size == 0:

@@ -88,10 +88,13 @@ def host_thresholds(environ=None):
     trim = number(env.get("MALLOC_TRIM_THRESHOLD_"))
     for item in env.get("GLIBC_TUNABLES", "").split(":"):
         name, _, value = item.partition("=")
-        if name == "glibc.malloc.mmap_threshold" and number(value) is not None:
-            mmap = number(value)
-        elif name == "glibc.malloc.trim_threshold" and number(value) is not None:
-            trim = number(value)
+        v = number(value)
+        if v is None:
+            continue
+        if name == "glibc.malloc.mmap_threshold":
+            mmap = v
+        elif name == "glibc.malloc.trim_threshold":
+            trim = v
     return mmap, trim
 
 
