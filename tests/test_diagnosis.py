@@ -458,6 +458,24 @@ def test_orders_swept_fast_are_no_fixed_frequency():
     assert peaks[0][1] == pytest.approx(0.003, rel=0.15)
 
 
+def test_coloured_noise_is_no_fixed_frequency():
+    """Red noise (AR(1), 0.1 s correlation time at 200 Hz: flat below about 1.6 Hz, then
+    falling) has no narrow peak, though the edge of its low-frequency plateau stands more than
+    four times over the median of the +-5 Hz around it; a 7 Hz line of 3 mN*m on the same
+    noise is found, with its amplitude."""
+    from scipy.signal import lfilter
+    from cyclo_fmu.diagnosis import residual as R
+    fs = 200.0
+    t = np.arange(int(300 * fs)) / fs
+    a = 0.95
+    red = 0.004 * lfilter([np.sqrt(1 - a * a)], [1, -a],
+                          np.random.default_rng(7).normal(size=t.size))
+    assert R.spectral_peaks(red, 1 / fs) == []
+    peaks = R.spectral_peaks(red + 0.003 * np.sin(2 * np.pi * 7.0 * t), 1 / fs)
+    assert [round(f) for f, _ in peaks] == [7]
+    assert peaks[0][1] == pytest.approx(0.003, rel=0.2)
+
+
 def test_friction_error_next_to_a_drift_is_kept_in_the_fit():
     """A 15 % friction error next to a strong viscosity drift (S2, 200 Hz): the friction level
     can be stood in for by the smooth generic basis, but withdrawing it left its error to the
