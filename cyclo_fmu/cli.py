@@ -437,7 +437,8 @@ def cmd_diagnose(args) -> int:
     for e in d.effects:
         form = f"; fitted {e['form']}" if e.get("form", "").startswith("per") else ""
         print(f"effect: {e['id']} - {e['description']} (explains {1e3 * e['explained_rms_Nm']:.2f}"
-              f" mN*m{form})")
+              f" mN*m of the 10 ms means; its torque {1e3 * e['torque_rms_Nm']:.2f} mN*m RMS"
+              f"{form})")
         for k, v in e["parameters"].items():
             ci = f" [{v['ci95'][0]:.4g}, {v['ci95'][1]:.4g}]" if v["ci95"] else ""
             print(f"  {k} = {v['value']:.5g} {v['unit']}{ci}")

@@ -306,7 +306,9 @@ def bursts(t, spikes, w, T_out) -> dict:
     """Where the excluded spike blocks sit: at speed reversals, at torque reversals, at steps of
     load or speed, or elsewhere; ``tied``: the events whose bursts are too many for chance
     (binomial tail below ``BURST_P``) and, for reversals, that sit at ``REVERSAL_SHARE`` of
-    them at least; ``events_with_burst``: {kind: (events with a burst, events)}."""
+    them at least; ``events_with_burst``: {kind: (events with a burst, events)};
+    ``burst_blocks``: {kind: mean length of its bursts, in blocks (runs of consecutive spike
+    blocks)}."""
     n = int(spikes.sum())
     out = {"count": n, "at": {}, "tied": []}
     if n == 0:
@@ -320,6 +322,10 @@ def bursts(t, spikes, w, T_out) -> dict:
         near = _near(t, events, EVENT_WINDOW)
         k = int((left & near).sum())
         out["at"][name] = k
+        # mean length of the runs of consecutive spike blocks (a burst's duration, in blocks)
+        idx = np.flatnonzero(left & near)
+        runs = 1 + int(np.count_nonzero(np.diff(idx) > 1)) if idx.size else 0
+        out.setdefault("burst_blocks", {})[name] = k / runs if runs else 0.0
         # how many of the events carry a burst
         hit = np.zeros(len(events), bool)
         for tb in t[left & near]:
