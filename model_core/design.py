@@ -184,10 +184,18 @@ class ExtraPhysics:
                                  "diagnosis found (the replay corrects the reading; not physics)")
     torque_in_gain_error: float = _f(0.0, "1", "gain error of the input torque transducer a "
                                      "diagnosis found (the replay corrects the reading)")
+    torque_in_zero_drift: float = _f(0.0, "N*m", "drift of the input torque transducer's zero "
+                                     "when warm, first order in time, a diagnosis found (the "
+                                     "replay corrects the reading)")
+    torque_in_zero_tau: float = _f(300.0, "s", "time constant of the zero's drift (replay only)")
+    torque_in_zero_per_10K: float = _f(0.0, "N*m", "drift of the input torque transducer's zero "
+                                       "per 10 K of the recording's temperature column (replay "
+                                       "only)")
 
     #: fields the FMUs do not carry (a diagnosis's replay uses them)
     REPLAY_ONLY = ("thermal_loss_per_10K", "viscosity_ln_change", "viscosity_ln_per_10K",
-                   "torque_in_offset", "torque_in_gain_error")
+                   "torque_in_offset", "torque_in_gain_error", "torque_in_zero_drift",
+                   "torque_in_zero_tau", "torque_in_zero_per_10K")
 
     def steady_torque(self, w):
         """Drag and Stribeck torque at driving speed w (rad/s), N*m, signed with the motion:
@@ -369,7 +377,7 @@ def validate_design(d: DriveDesign) -> None:
     _check_finite(d.lubricant, "lubricant.")
     _check_finite(d.friction, "friction.")
     _check_finite(d.extra, "extra.")
-    for name in ("stribeck_speed", "thermal_tau", "viscosity_tau"):
+    for name in ("stribeck_speed", "thermal_tau", "viscosity_tau", "torque_in_zero_tau"):
         if not getattr(d.extra, name) > 0:
             raise CycloidInputError("extra." + name, getattr(d.extra, name), "must be positive")
     if not 0.0 <= d.extra.drag_exponent <= 2.0:

@@ -134,6 +134,10 @@ def _offset(s, shape):
     return np.ones((len(s["t"]), 1))
 
 
+def _zero_drift(s, shape):
+    return _warm(s, shape)[:, None]
+
+
 def _gain(s, shape):
     return s["T_in_model"][:, None]
 
@@ -149,7 +153,8 @@ def _none(s, shape):
 _BASIS = {"load_independent_loss": _drag, "thermal_drift": _thermal,
           "viscosity_drift": _viscosity, "inertia": _inertia, "mesh_ripple": _ripple,
           "low_speed_friction": _stribeck, "torque_sensor_offset": _offset,
-          "torque_sensor_gain": _gain, "friction_miscalibrated": _friction, "none": _none}
+          "torque_sensor_gain": _gain, "torque_sensor_drift": _zero_drift,
+          "friction_miscalibrated": _friction, "none": _none}
 
 TAU_GRID = (60.0, 150.0, 300.0, 600.0, 1200.0)    # s, warm-up time constants scanned
 
@@ -217,6 +222,19 @@ EFFECTS = {
         (Parameter("offset", "N*m", -0.5, 0.5, "zero offset of the input torque reading"),),
         separating_run="a zero reading at standstill and runs in both directions",
         synth_default=({"offset": 0.006}, None)),
+    "torque_sensor_drift": Effect(
+        "torque_sensor_drift", "the input torque transducer's zero drifts as it warms (first "
+        "order in time, or with the temperature column): the same in both directions of "
+        "motion and at every load, unlike a loss",
+        # bounds: those of the zero offset; a strain-gauge transducer's zero drifts by about
+        # 0.1 % of its nominal torque per 10 K (HBM T22: +-0.1 %/10 K, i.e. 5 mN*m at 5 N*m)
+        (Parameter("offset_change", "N*m", -0.5, 0.5, "change of the zero reading when warm "
+                   "(or per 10 K with a temperature column)"),),
+        shape=TAU_GRID, shape_name="tau", shape_unit="s",
+        separating_run="zero readings at standstill before and after the run (a zero drift "
+                       "stays at standstill, a loss does not), or runs in both directions",
+        synth_default=({"offset_change": 0.010}, 150.0), temperature_form=True,
+        time_drift=True),
     "torque_sensor_gain": Effect(
         "torque_sensor_gain", "a gain (span) error of the input torque transducer: the "
         "reading is (1 + g) times the torque",
@@ -231,7 +249,7 @@ EFFECTS = {
 }
 
 #: effects that are faults of the measurement, not physics of the drive
-SENSOR_EFFECTS = ("torque_sensor_offset", "torque_sensor_gain")
+SENSOR_EFFECTS = ("torque_sensor_offset", "torque_sensor_gain", "torque_sensor_drift")
 
 
 # -- signals ----------------------------------------------------------------------------------
@@ -286,10 +304,19 @@ def extra_torque(extra, s: dict) -> np.ndarray:
     return total
 
 
-def reading_model(extra, torque_in):
+def reading_model(extra, torque_in, s=None):
     """What the input torque transducer reads for a true input torque (N*m), with the
-    transducer corrections a diagnosis wrote to ``extra``: (1 + gain_error) T + offset."""
-    return (1.0 + extra.torque_in_gain_error) * torque_in + extra.torque_in_offset
+    transducer corrections a diagnosis wrote to ``extra``: (1 + gain_error) T + offset, plus
+    the zero's drift where the signals ``s`` (time, temperature) are given."""
+    reading = (1.0 + extra.torque_in_gain_error) * torque_in + extra.torque_in_offset
+    if s is not None:
+        drift = EFFECTS["torque_sensor_drift"]
+        if extra.torque_in_zero_drift:
+            reading = reading + drift.torque(s, [extra.torque_in_zero_drift],
+                                             extra.torque_in_zero_tau)
+        if extra.torque_in_zero_per_10K and s.get("temperature") is not None:
+            reading = reading + drift.torque(s, [extra.torque_in_zero_per_10K], None)
+    return reading
 
 
 # -- what each effect maps to in a design ------------------------------------------------------
@@ -352,6 +379,19 @@ def _apply_offset(design, v, shape, temperature):
         "not physics of the drive: re-zero the transducer; the replay corrects the reading)"]
 
 
+def _apply_zero_drift(design, v, shape, temperature):
+    ex = design.extra
+    note = (f"diagnosed: input torque transducer zero drift {1e3 * v['offset_change']:.3g} mN*m"
+            + (" per 10 K" if temperature else f" (time constant {shape:g} s)")
+            + " (a sensor fault: warm the transducer up and re-zero it; the replay corrects the "
+            "reading)")
+    if temperature:
+        return _with_extra(design, torque_in_zero_per_10K=ex.torque_in_zero_per_10K
+                           + v["offset_change"]), [note]
+    return _with_extra(design, torque_in_zero_drift=v["offset_change"],
+                       torque_in_zero_tau=shape), [note]
+
+
 def _apply_gain(design, v, shape, temperature):
     g = (1 + design.extra.torque_in_gain_error) * (1 + v["gain_error"]) - 1
     return _with_extra(design, torque_in_gain_error=g), [
@@ -371,6 +411,7 @@ _APPLY = {
     "viscosity_drift": _apply_viscosity,
     "torque_sensor_offset": _apply_offset,
     "torque_sensor_gain": _apply_gain,
+    "torque_sensor_drift": _apply_zero_drift,
 }
 
 

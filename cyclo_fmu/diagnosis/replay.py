@@ -101,4 +101,4 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
         sig["theta_in"] = sig["theta_in"] + w_s / (2 * math.pi * bandwidth)
     T_true = T_in + extra_torque(design.extra, sig)
     sig["T_in_model"] = T_true
-    return Replay(reading_model(design.extra, T_true), sig)
+    return Replay(reading_model(design.extra, T_true, sig), sig)
