@@ -387,6 +387,10 @@ def cmd_synth(args) -> int:
     if args.engine == "bench" and (len(effects) > 1 or rise is not None):
         raise CycloidInputError("engine", args.engine, "hides exactly one effect and writes no "
                                 "temperature column; use --engine fast")
+    from .synth import BENCH_CANNOT_HIDE
+    if args.engine == "bench" and effects[0] in BENCH_CANNOT_HIDE:
+        raise CycloidInputError("effect", effects[0], "the bench's FMUs do not carry it (it acts "
+                                "through the replay only); use --engine fast")
     design = _load_design(None, args.profile) if args.profile else None
     from tqdm import tqdm
     bar = tqdm(total=2, desc="synth", unit="stage", disable=not _progress_on(args), leave=False)

@@ -20,6 +20,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from model_core import DriveDesign
+from model_core.errors import CycloidInputError
 from model_core.effects import EFFECTS, effect_signals, switch_on
 from model_core.kinematics import parse_mode, shaft_speeds
 from model_core.lossmap import replay_input_torque
@@ -28,6 +29,9 @@ from .bench import RECORDING_COLUMNS, write_recording
 
 SIZES = {"tiny": 42.0, "small": 120.0, "medium": 300.0, "large": 600.0}
 ENGINES = ("fast", "bench")
+#: effects the bench's FMUs cannot hide: they act through the replay only (the reducer FMU's
+#: map is built at the catalogue viscosity, and the transducer FMU has no drifting zero)
+BENCH_CANNOT_HIDE = {"viscosity_drift", "torque_sensor_drift"}
 
 #: hidden-effect sizes (the registry's synth defaults): comparable with the transducer noise
 #: (0.003 N*m), invisible by eye
@@ -157,6 +161,10 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
     if engine == "bench":
         if len(hidden) != 1 or added_torque is not None or temperature_rise is not None:
             raise ValueError("engine = 'bench' hides exactly one library effect")
+        if set(hidden) & BENCH_CANNOT_HIDE:
+            raise CycloidInputError("effect", next(iter(hidden)),
+                                    "the bench's FMUs do not carry it (replay only); use "
+                                    "engine 'fast'")
         (eid, (values, eff_shape)), = hidden.items()
         return _through_the_bench(eid, values, eff_shape, true_design, plan, hold, mode,
                                   duration, seed, settings, friction_error, fmu_dir, progress)
@@ -267,8 +275,11 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
                       torque_resolution=settings.torque_resolution,
                       speed_noise=settings.speed_noise, speed_resolution=settings.speed_resolution,
                       seed=seed,
-                      torque_in_offset=values.get("offset", 0.0) if effect == "torque_sensor_offset" else 0.0)
-    ex = switch_on(ex, effect, values, shape)
+                      torque_in_offset=values.get("offset", 0.0) if effect == "torque_sensor_offset" else 0.0,
+                      torque_in_gain_error=values.get("gain_error", 0.0)
+                      if effect == "torque_sensor_gain" else 0.0)
+    if effect not in ("torque_sensor_offset", "torque_sensor_gain"):
+        ex = switch_on(ex, effect, values, shape)
     design = replace(true_design, extra=ex)
     pole_pairs = 1
     f_sched = "; ".join(f"{t0:.6g} {n * pole_pairs / 60:.6g}" for t0, n, _ in steps)

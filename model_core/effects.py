@@ -226,9 +226,11 @@ EFFECTS = {
         "torque_sensor_drift", "the input torque transducer's zero drifts as it warms (first "
         "order in time, or with the temperature column): the same in both directions of "
         "motion and at every load, unlike a loss",
-        # bounds: those of the zero offset; a strain-gauge transducer's zero drifts by about
-        # 0.1 % of its nominal torque per 10 K (HBM T22: +-0.1 %/10 K, i.e. 5 mN*m at 5 N*m)
-        (Parameter("offset_change", "N*m", -0.5, 0.5, "change of the zero reading when warm "
+        # bounds: a strain-gauge transducer's zero drifts by about 0.1 % of its nominal
+        # torque per 10 K (HBM T22: +-0.1 %/10 K, 10 mN*m at 10 N*m); ten times that,
+        # +-0.1 N*m, holds a warm-up of several tens of K; beyond it the zero is wrong, not
+        # drifting (the offset's own bounds are +-0.5 N*m)
+        (Parameter("offset_change", "N*m", -0.1, 0.1, "change of the zero reading when warm "
                    "(or per 10 K with a temperature column)"),),
         shape=TAU_GRID, shape_name="tau", shape_unit="s",
         separating_run="zero readings at standstill before and after the run (a zero drift "
@@ -388,8 +390,14 @@ def _apply_zero_drift(design, v, shape, temperature):
     if temperature:
         return _with_extra(design, torque_in_zero_per_10K=ex.torque_in_zero_per_10K
                            + v["offset_change"]), [note]
-    return _with_extra(design, torque_in_zero_drift=v["offset_change"],
-                       torque_in_zero_tau=shape), [note]
+    if ex.torque_in_zero_drift and abs(ex.torque_in_zero_tau - shape) > 1e-9:
+        # a drift of another time constant already in the design: the new fit holds only
+        # what that one left; kept at the earlier time constant, added (a first-order sum)
+        return _with_extra(design, torque_in_zero_drift=ex.torque_in_zero_drift
+                           + v["offset_change"]), [note + f"; added at the design's time "
+                                                   f"constant {ex.torque_in_zero_tau:g} s"]
+    return _with_extra(design, torque_in_zero_drift=ex.torque_in_zero_drift
+                       + v["offset_change"], torque_in_zero_tau=shape), [note]
 
 
 def _apply_gain(design, v, shape, temperature):

@@ -476,6 +476,25 @@ def test_names_the_effect_hidden_in_the_fmu_dir(fmu_dir, effect, mode):
         assert d.rmse_after_Nm <= 0.5 * d.rmse_before_Nm
 
 
+def test_the_bench_hides_a_gain_error_in_its_transducer_and_refuses_replay_only_effects(
+        fmu_dir):
+    """A transducer gain error goes into the bench's input torque transducer (it went into
+    the reducer's replay-only fields, which the FMUs do not carry, so the bench hid nothing);
+    effects the FMUs cannot carry are refused, naming the effect."""
+    from model_core.errors import CycloidInputError
+    g = EFFECTS["torque_sensor_gain"].synth_default[0]["gain_error"]
+    r = synthesize("torque_sensor_gain", 3, "S1", "tiny", engine="bench", fmu_dir=fmu_dir,
+                   friction_error=0.0)
+    r0 = synthesize("none", 3, "S1", "tiny", engine="bench", fmu_dir=fmu_dir,
+                    friction_error=0.0)
+    loaded = np.abs(r0["torque_in_Nm"]) > 0.1
+    ratio = np.median(r["torque_in_Nm"][loaded] / r0["torque_in_Nm"][loaded])
+    assert ratio == pytest.approx(1 + g, abs=0.002)
+    for effect in ("torque_sensor_drift", "viscosity_drift"):
+        with pytest.raises(CycloidInputError, match=effect):
+            synthesize(effect, 3, "S1", "tiny", engine="bench", fmu_dir=fmu_dir)
+
+
 def test_fixed_frequency_told_from_a_shaft_order_that_shares_it():
     """A fixed frequency persists while the speed moves; a shaft order moves with it. 50 Hz
     pick-up at 200 Hz sampling, in a test plan that holds 600 r/min (whose fifth order is

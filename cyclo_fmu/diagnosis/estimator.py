@@ -453,6 +453,12 @@ class Diagnoser:
                     withdrawn += [t.effect for t in out]
                     S = prob.fit(tuple(t for t in S.terms if t not in out))
                 with_g = self._best_next_to(prob, S.terms, P["structure"])
+            # the dominant effects still named, measured again against the final selection
+            if dominant:
+                g_adds = _fit_rms(prob, S, with_g)
+                dominant = [(e, _fit_rms(prob, prob.fit(tuple(x for x in S.terms
+                                                              if x.effect != e)), S), g_adds)
+                            for e, _, _ in dominant if e in S.ids]
         # forward driving only: would the transducer gain error (not selectable) explain what
         # is left? Said in a note, with the run that decides, never named
         gain_alone = None
@@ -533,23 +539,25 @@ class Diagnoser:
             eff = EFFECTS[t.effect]
             rest = prob.fit(tuple(x for x in S.terms if x != t), cv=False)
             expl = math.sqrt(max(rest.rss - S.rss, 0.0) / max(sum(prob.sw), 1e-300))
+            share = (rest.rss - S.rss) / max(total_before, 1e-300)
+            # the effect's own torque at sample level (a ripple above the blocks' rate, which
+            # the 10 ms block means that the fit runs on mostly average out, shows here)
+            torque = first_order(eff.basis(sig, t.shape), dt, self.bandwidth) @ v
             if t.effect == "friction_miscalibrated" and rel1 and first is not st:
                 # relinearised: this analysis replays at the corrected level, where the term
-                # is left with ~nothing; what the level explains is the first analysis's
-                # (at the design's own level)
+                # is left with ~nothing; what the level explains, and its torque, are the
+                # first analysis's (at the design's own level), at the whole relative error
                 S1 = first["S"]
                 fr1 = [x for x in S1.terms if x.effect == t.effect]
                 if fr1:
                     rest1 = first["prob"].fit(tuple(x for x in S1.terms if x not in fr1),
                                               cv=False)
                     expl = _fit_rms(first["prob"], rest1, S1)
-            # the effect's own torque at sample level (a ripple above the blocks' rate, which
-            # the 10 ms block means that the fit runs on mostly average out, shows here)
-            if t.effect == "friction_miscalibrated":
-                torque_rms = expl
-            else:
-                torque = first_order(eff.basis(sig, t.shape), dt, self.bandwidth) @ v
-                torque_rms = float(np.sqrt(np.mean(torque ** 2)))
+                    share = (rest1.rss - S1.rss) / max(total_before, 1e-300)
+                whole = (1 + rel1) * (1 + float(v[0])) - 1
+                torque = whole * first_order(eff.basis(first["P"]["sig"], None), dt,
+                                             self.bandwidth)[:, 0]
+            torque_rms = float(np.sqrt(np.mean(torque ** 2)))
             params = {}
             for name, unit, val, se in zip(t.names, t.units, v, s):
                 if t.effect == "friction_miscalibrated" and rel1:
@@ -567,7 +575,7 @@ class Diagnoser:
             entry = {"id": t.effect, "description": eff.description, "parameters": params,
                      "explained_rms_Nm": expl,
                      "torque_rms_Nm": torque_rms,
-                     "share_of_residual": (rest.rss - S.rss) / max(total_before, 1e-300),
+                     "share_of_residual": share,
                      "stability": st["stability"].get(t.effect, 1.0),
                      "separating_run": eff.separating_run,
                      "form": "per 10 K of the temperature column" if form else
@@ -599,6 +607,7 @@ class Diagnoser:
                            P["blocks"]["w_in"], P["blocks"]["T_out"], P["blocks"]["T_in"],
                            P["blocks"]["alpha"], P["blocks"]["temperature"])
         step_transient = unexplained.pop("step_transient")
+        smooth_reported = unexplained.pop("_smooth")
         located["orders"] = {k: a for k, (a, se) in unexplained.pop("_orders_all").items()
                              if a > ORDER_SE * se and a >= st["min_expl"]}
         if not effects and not unexplained["present"]:
@@ -630,7 +639,7 @@ class Diagnoser:
                          f"{DOMINANCE:g} times the {1e3 * g_rms:.2f} mN*m the generic basis adds "
                          "beside it (a shape the library's term does not quite have, or a "
                          "small unknown; "
-                         + ("reported as unexplained)" if unexplained["present"] else
+                         + ("reported as unexplained)" if smooth_reported else
                             f"below the {1e3 * st['min_expl']:.2f} mN*m this recording's noise "
                             "lets be reported)"))
         for c in dict.fromkeys(st.get("confounded", ())):
@@ -675,10 +684,12 @@ class Diagnoser:
         parts = []
         follows = {}
         in_fit = st.get("remainder_fit", 0.0)
+        smooth = present
         if not present and in_fit >= min_expl:
             # a dominant effect kept beside structure the fit evidences (BIC) but the
             # time-ordered held-out test does not confirm: reported with its RMS in the fit
-            present, rms = True, in_fit
+            present = smooth = True
+            rms = in_fit
             parts.append(f"a mismatch of {1e3 * rms:.2f} mN*m (in the fit; the time-ordered "
                          "held-out test, weak for a smooth function of the operating point, does "
                          "not confirm it) remains beside "
@@ -783,19 +794,30 @@ class Diagnoser:
         # the RMS of all that remains: the smooth part (held out) and the sinusoids of the
         # orders and peaks (amplitude a: RMS a/sqrt(2))
         lines = [a for a in {**inside, **outside}.values()] + [a for _, a in peaks]
-        total = math.sqrt((rms if rms >= min_expl else 0.0) ** 2
-                          + sum(a * a / 2 for a in lines))
+        total = math.sqrt((rms if smooth else 0.0) ** 2 + sum(a * a / 2 for a in lines))
         if step_transient or rev:
-            # the excluded bursts' share of the RMS over the whole recording (block means)
-            y = P["y"]
-            total = math.hypot(total, math.sqrt(float(np.sum(y[st["weights"] == 0] ** 2))
-                                                / max(len(y), 1)))
+            # the reported bursts' share of the RMS over the whole recording: the excluded
+            # blocks near the events they are tied to, in the residual after the fit
+            tb, wb, Tb = P["blocks"]["t"], P["blocks"]["w_in"], P["blocks"]["T_out"]
+            events = []
+            if step_transient:
+                events.append(np.union1d(R._steps(tb, Tb), R._steps(tb, wb)))
+            if "speed reversals" in rev:
+                events.append(R._reversals(tb, wb))
+            if "torque reversals" in rev:
+                events.append(R._reversals(tb, Tb))
+            near = R._near(tb, np.sort(np.concatenate(events)), R.EVENT_WINDOW)
+            y = P["y"] - sum((P["X"][:, list(t.cols)] @ S.of(t)[0] for t in S.terms),
+                             np.zeros(len(P["y"])))
+            burst = (st["weights"] == 0) & near
+            total = math.hypot(total, math.sqrt(float(np.sum(y[burst] ** 2)) / max(len(y), 1)))
         return {"present": present, "rms_Nm": total if present else 0.0, "statement": statement,
                 "follows": follows, "orders": {n: a for n, a in outside.items()},
                 "library_orders_left": inside, "peaks_Hz_Nm": peaks,
                 "could_include": list(st["withdrawn"]) + set_aside + (
                     ["friction_miscalibrated"] if doubted else []),
-                "bursts": b, "_orders_all": amps, "step_transient": step_transient}
+                "bursts": b, "_orders_all": amps, "step_transient": step_transient,
+                "_smooth": smooth}
 
     def _lookalikes(self, st) -> dict:
         prob, S, opts = st["prob"], st["S"], st["opts"]

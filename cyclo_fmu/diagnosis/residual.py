@@ -174,7 +174,7 @@ def _order_coverage(speed, orders, fs, freqs, n_seg, nper):
     return (half[:-1] | half[1:]).T
 
 
-def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=1.0, speed=None,
+def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=2.5, speed=None,
                    orders=()) -> list:
     """Narrow peaks of the residual's spectrum at fixed frequencies (Welch: 2 s Hann segments,
     half overlapping): bins standing ``factor`` times above the local median level (+-5 Hz)
