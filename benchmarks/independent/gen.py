@@ -180,12 +180,21 @@ def _shape(kind, s, p):
 SENSOR_KINDS = {"gain", "delay", "lowpass"}
 
 
+def temp_profile(t, rng):
+    """Grease temperature (degC) of a warm-up with two time constants (60 s and 400 s)."""
+    temp = 24.0 + 22.0 * (1 - np.exp(-t / 60.0)) + 14.0 * (1 - np.exp(-t / 400.0))
+    return temp + rng.normal(0, 0.05, t.size)
+
+
 # ----------------------------------------------------------------------------- one case
-def build(case):
+def build(case, plan=None, shape=_shape, noise_fn=noise, temperature=temp_profile):
+    """(data, truth) of one case. The second batch (gen2.py) passes its own test plan
+    ``plan(rng, duration)``, hidden shapes, noise and temperature profile."""
     rng = np.random.default_rng(case["seed"])
     fs, dur = case["fs"], case["duration"]
     design = DriveDesign()
-    spd, tout_f = plan_steps(rng, dur, **case.get("plan", {}))
+    spd, tout_f = (plan(rng, dur) if plan is not None
+                   else plan_steps(rng, dur, **case.get("plan", {})))
     t = np.arange(0, dur, 1.0 / fs)
     # the model on a 5 ms grid, interpolated in time (speed & load change slowly)
     tg = np.arange(0, dur + 0.005, 0.005)
@@ -208,11 +217,7 @@ def build(case):
     T_in = np.interp(t, tg, Tg)
     w = rpm_to_rad_s(n_in)
     theta = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) / fs)])
-    temp = None
-    if case.get("temperature"):
-        tau1, tau2 = 60.0, 400.0
-        temp = 24.0 + 22.0 * (1 - np.exp(-t / tau1)) + 14.0 * (1 - np.exp(-t / tau2))
-        temp = temp + rng.normal(0, 0.05, t.size)
+    temp = temperature(t, rng) if case.get("temperature") else None
     s = dict(t=t, w=w, tout=tout, theta=theta, alpha=np.gradient(w, t),
              loss=model_loss_in(T_in, n_in, tout), temp=temp if temp is not None else 0 * t,
              T_in=T_in)
@@ -223,7 +228,7 @@ def build(case):
         if kind in SENSOR_KINDS:
             truth.append(dict(eff))
             continue
-        sh = _shape(kind, s, eff)
+        sh = shape(kind, s, eff)
         if "rms_mNm" in eff:
             sh = sh * (eff["rms_mNm"] * 1e-3 / np.sqrt(np.mean(sh ** 2)))
         elif "peak_mNm" in eff:
@@ -260,10 +265,15 @@ def build(case):
         for tr in truth:
             if tr["kind"] == k:
                 tr["rms_mNm_actual"] = round(1e3 * float(eff_rms), 2)
+    if case.get("mu_scale"):     # the friction change's own size, for the truth
+        T0 = clean_torque_in(design, n_g, L_g)
+        ok = np.isfinite(T0) & np.isfinite(Tg)
+        truth.append(dict(kind="mu_scale", **case["mu_scale"], rms_mNm_actual=round(
+            1e3 * float(np.sqrt(np.mean((Tg[ok] - T0[ok]) ** 2))), 2)))
     sig = case.get("noise_mNm", 3.0) * 1e-3
     col = case.get("noise_colour", "white")
-    Tin_meas = Tin_meas + noise(rng, t.size, sig, col, fs)
-    Tout_meas = Tout_meas + noise(rng, t.size, sig * 3, col, fs)   # output transducer, larger range
+    Tin_meas = Tin_meas + noise_fn(rng, t.size, sig, col, fs)
+    Tout_meas = Tout_meas + noise_fn(rng, t.size, sig * 3, col, fs)   # output transducer, larger range
     n_in_meas = n_in + rng.normal(0, 0.3, t.size)
     n_out_meas = n_in / RATIO + rng.normal(0, 0.05, t.size)
     data = dict(time_s=t, speed_in_rpm=n_in_meas, speed_out_rpm=n_out_meas,

@@ -9,7 +9,6 @@ before any diagnosis was run.
 """
 from __future__ import annotations
 
-import dataclasses
 import json
 import os
 import sys
@@ -20,8 +19,6 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import gen  # noqa: E402
 
 import numpy as np  # noqa: E402
-from scipy import signal  # noqa: E402
-from model_core import DriveDesign, rpm_to_rad_s  # noqa: E402
 
 HERE = Path(os.environ["CYCLO_INDEPENDENT_OUT"]).resolve()
 RECS = HERE / "recs"
@@ -115,9 +112,6 @@ def shape2(kind, s, p):
     return gen._shape(kind, s, p)
 
 
-SENSOR_KINDS = {"gain", "delay", "lowpass"}
-
-
 def temp_profile(t, rng):
     """Own warm-up: 28 degC rising towards 58 degC with one 150 s time constant + a 0.5 K wobble."""
     T = 28.0 + 30.0 * (1 - np.exp(-t / 150.0)) + 0.5 * np.sin(2 * np.pi * t / 97.0)
@@ -125,85 +119,10 @@ def temp_profile(t, rng):
 
 
 def build(case):
-    rng = np.random.default_rng(case["seed"])
-    fs, dur = case["fs"], case["duration"]
-    design = DriveDesign()
-    spd, tout_f = make_plan(rng, dur, case.get("plan"))
-    t = np.arange(0, dur, 1.0 / fs)
-    tg = np.arange(0, dur + 0.005, 0.005)
-    n_g, L_g = spd(tg), tout_f(tg)
-    b, a = signal.butter(2, 4.0 / (200 / 2))
-    n_g = signal.filtfilt(b, a, n_g)
-    L_g = signal.filtfilt(b, a, L_g)
-    n_in = np.interp(t, tg, n_g)
-    tout = np.interp(t, tg, L_g)
-    true_design = design
-    if case.get("mu_scale"):
-        fr = design.friction
-        true_design = dataclasses.replace(design, friction=dataclasses.replace(
-            fr, **{k: getattr(fr, k) * f for k, f in case["mu_scale"].items()}))
-    Tg = gen.clean_torque_in(true_design, n_g, L_g)
-    bad = ~np.isfinite(Tg)
-    if bad.any():
-        Tg[bad] = np.interp(tg[bad], tg[~bad], Tg[~bad])
-    T_in = np.interp(t, tg, Tg)
-    w = rpm_to_rad_s(n_in)
-    theta = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) / fs)])
-    temp = temp_profile(t, rng) if case.get("temperature") else None
-    s = dict(t=t, w=w, tout=tout, theta=theta, alpha=np.gradient(w, t),
-             loss=gen.model_loss_in(T_in, n_in, tout),
-             temp=temp if temp is not None else 0 * t, T_in=T_in)
-    hidden_total = np.zeros_like(t)
-    truth = []
-    for eff in case.get("hidden", []):
-        kind = eff["kind"]
-        if kind in SENSOR_KINDS:
-            truth.append(dict(eff))
-            continue
-        sh = shape2(kind, s, eff)
-        if "rms_mNm" in eff:
-            sh = sh * (eff["rms_mNm"] * 1e-3 / np.sqrt(np.mean(sh ** 2)))
-        elif "peak_mNm" in eff:
-            sh = sh * (eff["peak_mNm"] * 1e-3 / np.max(np.abs(sh)))
-        else:
-            sh = sh * eff["coef"]
-        hidden_total += sh
-        truth.append(dict(eff, rms_mNm_actual=round(1e3 * float(np.sqrt(np.mean(sh ** 2))), 2)))
-    Tin_meas = T_in + hidden_total
-    Tout_meas = tout.copy()
-    for eff in case.get("hidden", []):
-        k = eff["kind"]
-        if k == "gain":
-            before = Tin_meas.copy()
-            Tin_meas = Tin_meas * (1 + eff["g"])
-        elif k == "delay":
-            d = int(round(eff["ms"] * 1e-3 * fs))
-            before = Tin_meas.copy()
-            Tin_meas = np.r_[np.full(d, Tin_meas[0]), Tin_meas[:-d]]
-            if not eff.get("tin_only"):
-                Tout_meas = np.r_[np.full(d, Tout_meas[0]), Tout_meas[:-d]]
-        else:
-            continue
-        eff_rms = np.sqrt(np.mean((Tin_meas - before) ** 2))
-        for tr in truth:
-            if tr["kind"] == k:
-                tr["rms_mNm_actual"] = round(1e3 * float(eff_rms), 2)
-    if case.get("mu_scale"):
-        T0 = gen.clean_torque_in(design, n_g, L_g)
-        ok = np.isfinite(T0) & np.isfinite(Tg)
-        truth.append(dict(kind="mu_scale", **case["mu_scale"],
-                          rms_mNm_actual=round(1e3 * float(np.sqrt(np.mean((Tg[ok] - T0[ok]) ** 2))), 2)))
-    sig = case.get("noise_mNm", 3.0) * 1e-3
-    col = case.get("noise_colour", "white")
-    Tin_meas = Tin_meas + noise2(rng, t.size, sig, col, fs)
-    Tout_meas = Tout_meas + noise2(rng, t.size, sig * 3, col, fs)
-    n_in_meas = n_in + rng.normal(0, 0.3, t.size)
-    n_out_meas = n_in / RATIO + rng.normal(0, 0.05, t.size)
-    data = dict(time_s=t, speed_in_rpm=n_in_meas, speed_out_rpm=n_out_meas,
-                torque_in_Nm=Tin_meas, torque_out_Nm=Tout_meas)
-    if temp is not None:
-        data["temperature_C"] = temp
-    return data, truth
+    """(data, truth) of one case: batch 1's build (gen.build) with this batch's plans, hidden
+    shapes, noise and temperature profile."""
+    return gen.build(case, plan=lambda rng, dur: make_plan(rng, dur, case.get("plan")),
+                     shape=shape2, noise_fn=noise2, temperature=temp_profile)
 
 
 # ----------------------------------------------------------------------------- the cases

@@ -389,7 +389,7 @@ class Diagnoser:
             S = sel.fit
         self._stage("structure")
         # the honest unknown: what the generic basis still explains next to the selection
-        withdrawn, dominant = [], []
+        withdrawn, dominant = [], []   # dominant: (effect, RMS it explains, RMS the basis adds)
         friction_doubted = False
         with_g = self._best_next_to(prob, S.terms, P["structure"])
         present = (S.bic - with_g.bic >= DELTA_BIC and explained(S, with_g) >= min_expl)
@@ -439,7 +439,7 @@ class Diagnoser:
                     t_explains = _fit_rms(prob, prob.fit(tuple(x for x in S.terms if x != t)),
                                           S)
                     if t_explains >= DOMINANCE * g_adds:
-                        dominant.append((t.effect, t_explains, g_adds))
+                        dominant.append(t.effect)
                     else:
                         withdrawn.append(t.effect)
             if withdrawn:
@@ -453,12 +453,11 @@ class Diagnoser:
                     withdrawn += [t.effect for t in out]
                     S = prob.fit(tuple(t for t in S.terms if t not in out))
                 with_g = self._best_next_to(prob, S.terms, P["structure"])
-            # the dominant effects still named, measured again against the final selection
-            if dominant:
-                g_adds = _fit_rms(prob, S, with_g)
-                dominant = [(e, _fit_rms(prob, prob.fit(tuple(x for x in S.terms
-                                                              if x.effect != e)), S), g_adds)
-                            for e, _, _ in dominant if e in S.ids]
+            # the dominant effects still named, with what they and the generic basis explain
+            # in the final selection (after any withdrawal)
+            g_adds = _fit_rms(prob, S, with_g)
+            dominant = [(e, _fit_rms(prob, prob.fit(tuple(x for x in S.terms if x.effect != e)),
+                                     S), g_adds) for e in dominant if e in S.ids]
         # forward driving only: would the transducer gain error (not selectable) explain what
         # is left? Said in a note, with the run that decides, never named
         gain_alone = None
@@ -479,8 +478,7 @@ class Diagnoser:
                 "confounded": confounded, "gain_alone": gain_alone,
                 "withdrawn": withdrawn, "friction_doubted": friction_doubted,
                 "dominant": dominant,
-                "remainder_fit": (max(g for _, _, g in dominant)
-                                  if dominant and not present else 0.0),
+                "remainder_fit": dominant[0][2] if dominant and not present else 0.0,
                 "unstable": unstable, "stability": stability,
                 "n_spikes": n_spikes, "sigma": sigma, "noise": noise, "min_expl": min_expl, "base": base,
                 "friction": fr, "opts": opts, "path": sel.path, "weights": w}
@@ -798,15 +796,8 @@ class Diagnoser:
         if step_transient or rev:
             # the reported bursts' share of the RMS over the whole recording: the excluded
             # blocks near the events they are tied to, in the residual after the fit
-            tb, wb, Tb = P["blocks"]["t"], P["blocks"]["w_in"], P["blocks"]["T_out"]
-            events = []
-            if step_transient:
-                events.append(np.union1d(R._steps(tb, Tb), R._steps(tb, wb)))
-            if "speed reversals" in rev:
-                events.append(R._reversals(tb, wb))
-            if "torque reversals" in rev:
-                events.append(R._reversals(tb, Tb))
-            near = R._near(tb, np.sort(np.concatenate(events)), R.EVENT_WINDOW)
+            near = R.near_events(P["blocks"]["t"], P["blocks"]["w_in"], P["blocks"]["T_out"],
+                                 rev + (["load or speed steps"] if step_transient else []))
             y = P["y"] - sum((P["X"][:, list(t.cols)] @ S.of(t)[0] for t in S.terms),
                              np.zeros(len(P["y"])))
             burst = (st["weights"] == 0) & near

@@ -302,6 +302,21 @@ def _steps(t, x, factor=20.0):
     return t[1:][d > factor * ref]
 
 
+def burst_events(t, w, T_out) -> dict:
+    """The events residual bursts are judged against, {kind: sorted times}: speed reversals,
+    torque reversals, steps of load or speed."""
+    return {"speed reversals": np.sort(_reversals(t, w)),
+            "torque reversals": np.sort(_reversals(t, T_out)),
+            "load or speed steps": np.union1d(_steps(t, T_out), _steps(t, w))}
+
+
+def near_events(t, w, T_out, kinds) -> np.ndarray:
+    """Blocks (times ``t``) within EVENT_WINDOW of an event of the given ``kinds``."""
+    ev = burst_events(t, w, T_out)
+    times = np.sort(np.concatenate([ev[k] for k in kinds])) if kinds else np.zeros(0)
+    return _near(t, times, EVENT_WINDOW)
+
+
 def bursts(t, spikes, w, T_out) -> dict:
     """Where the excluded spike blocks sit: at speed reversals, at torque reversals, at steps of
     load or speed, or elsewhere; ``tied``: the events whose bursts are too many for chance
@@ -315,10 +330,7 @@ def bursts(t, spikes, w, T_out) -> dict:
         return out
     left = spikes.copy()
     out["events_with_burst"] = {}
-    for name, events in (("speed reversals", _reversals(t, w)),
-                         ("torque reversals", _reversals(t, T_out)),
-                         ("load or speed steps", np.union1d(_steps(t, T_out), _steps(t, w)))):
-        events = np.sort(events)
+    for name, events in burst_events(t, w, T_out).items():
         near = _near(t, events, EVENT_WINDOW)
         k = int((left & near).sum())
         out["at"][name] = k
