@@ -7,8 +7,14 @@ DIMENSIONLESS = ("1", "", "-")
 
 
 def unit_suffix(unit) -> str:
-    """`` unit`` to print after a number, or ``""`` for a dimensionless quantity."""
-    return "" if unit is None or str(unit).strip() in DIMENSIONLESS else f" {unit}"
+    """`` unit`` to print after a number, or ``""`` for a dimensionless quantity; a
+    dimensionless rate keeps its denominator (``"1 per 10 K"`` -> ``" per 10 K"``)."""
+    text = "" if unit is None else str(unit).strip()
+    if text in DIMENSIONLESS:
+        return ""
+    if text.startswith("1 per "):
+        return " " + text[2:]
+    return f" {text}"
 
 
 def friction_level_fields(profile: str) -> str:

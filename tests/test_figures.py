@@ -63,6 +63,8 @@ def test_dimensionless_units_print_as_nothing():
     assert unit_suffix("1") == ""
     assert unit_suffix(None) == ""
     assert unit_suffix("N*m") == " N*m"
+    assert unit_suffix("1 per 10 K") == " per 10 K"
+    assert unit_suffix("N*m per 10 K") == " N*m per 10 K"
     assert f"p = {0.66667:.5g}{unit_suffix('1')}" == "p = 0.66667"
 
 
