@@ -14,3 +14,33 @@ def on_page_markdown(markdown, page, config, files, **kwargs):
         markdown = markdown.replace(
             DESIGN_MARKER, "```toml\n" + design_to_toml(DriveDesign()).rstrip() + "\n```")
     return markdown
+
+
+# -- numpydoc docstrings are written for Sphinx (pvlib style: ``.. math::`` blocks and :func:
+# roles); mkdocstrings renders them as Markdown, so the API pages would show the directives
+# as text. These substitutions turn them into MathJax and plain code.
+import html as _html
+import re as _re
+
+_MATH_BLOCK = _re.compile(r'<p>\.\. math::</p>\s*<div class="highlight"><pre><span></span>'
+                          r'<code>(.*?)</code></pre></div>', _re.S)
+_MATH_LINE = _re.compile(r"<p>\.\. math::\s*(.+?)</p>", _re.S)
+_MATH_ROLE = _re.compile(r":math:<code>(.*?)</code>", _re.S)
+_ROLE = _re.compile(r":(?:py:)?(?:func|mod|class|meth|attr|data|obj|exc|const):(<code>)")
+
+
+def _tex(escaped: str) -> str:
+    """Docstring TeX as HTML text for MathJax (double backslashes of non-raw strings undone)."""
+    return _html.escape(_html.unescape(escaped).replace("\\\\", "\\").strip(), quote=False)
+
+
+def on_page_content(html, page, config, files, **kwargs):
+    if "math::" not in html and ":math:" not in html and _ROLE.search(html) is None:
+        return html
+    html = _MATH_BLOCK.sub(lambda m: f'<div class="arithmatex">\\[{_tex(m.group(1))}\\]</div>',
+                           html)
+    html = _MATH_LINE.sub(lambda m: f'<div class="arithmatex">\\[{_tex(m.group(1))}\\]</div>',
+                          html)
+    html = _MATH_ROLE.sub(lambda m: f'<span class="arithmatex">\\({_tex(m.group(1))}\\)</span>',
+                          html)
+    return _ROLE.sub(r"\1", html)
