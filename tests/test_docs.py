@@ -105,3 +105,38 @@ def test_mkdocs_build_strict(tmp_path):
             assert s in cli_html, f"{name} {s} is not on the built CLI page"
     api = (site / "reference" / "api" / "model_core" / "index.html").read_text(encoding="utf-8")
     assert "operating_point" in api and "kreines_efficiency" in api
+
+
+FMUS = ("CycloidDrive", "CycloidDriveNative", "InductionMotor", "FeltBrake", "Transducer")
+
+
+@pytest.mark.parametrize("name", FMUS)
+def test_every_fmu_variable_is_in_the_generated_table(name):
+    from cyclo_fmu.fmu_reference import model_description, render_fmu_variables, variables
+    table = render_fmu_variables(name)
+    for v in variables(model_description(name)):
+        if not v["name"].startswith("_"):
+            assert f"| `{v['name']}` | {v['causality']}, {v['variability']} |" in table
+
+
+def _built_variables(fmu_path):
+    import zipfile
+    import xml.etree.ElementTree as ET
+    from cyclo_fmu.fmu_reference import variables
+    with zipfile.ZipFile(fmu_path) as z:
+        md = ET.fromstring(z.read("modelDescription.xml"))
+    return [(v["name"], v["causality"], v["variability"], v["type"], v["unit"])
+            for v in variables(md)]
+
+
+def test_generated_fmu_tables_match_the_built_fmus(fmu_dir, tmp_path):
+    """The docs' variable lists are what a host reads from the built FMUs (names, causality,
+    variability, type, unit, in order)."""
+    from cyclo_fmu.fmu_reference import model_description, variables
+    from cyclo_fmu.native.build import build_native_fmu
+    built = {name: fmu_dir / f"{name}.fmu" for name in FMUS if name != "CycloidDriveNative"}
+    built["CycloidDriveNative"] = build_native_fmu(dest=tmp_path)
+    for name, path in built.items():
+        documented = [(v["name"], v["causality"], v["variability"], v["type"], v["unit"])
+                      for v in variables(model_description(name))]
+        assert documented == _built_variables(path), name

@@ -1,6 +1,7 @@
 """MkDocs hook: renders the command-line reference from argparse (``cyclo_fmu.cli_reference``)
-into the page that holds the marker, and the default design file into the page that holds
-``<!-- default-design -->``. Generated at build time, so the docs cannot disagree with --help."""
+into the page that holds the marker, the FMUs' variables from their modelDescription.xml
+(``cyclo_fmu.fmu_reference``, marker ``<!-- fmu-variables NAME -->``), and the default design
+file into the page that holds ``<!-- default-design -->``. Generated at build time, so the docs cannot disagree with --help."""
 from cyclo_fmu.cli_reference import MARKER, render_cli_reference
 
 DESIGN_MARKER = "<!-- default-design -->"
@@ -9,6 +10,8 @@ DESIGN_MARKER = "<!-- default-design -->"
 def on_page_markdown(markdown, page, config, files, **kwargs):
     if MARKER in markdown:
         markdown = markdown.replace(MARKER, render_cli_reference())
+    from cyclo_fmu.fmu_reference import MARKER as FMU_MARKER, render_fmu_variables
+    markdown = FMU_MARKER.sub(lambda m: render_fmu_variables(m.group(1)), markdown)
     if DESIGN_MARKER in markdown:
         from model_core import DriveDesign, design_to_toml
         markdown = markdown.replace(
