@@ -140,3 +140,30 @@ def test_generated_fmu_tables_match_the_built_fmus(fmu_dir, tmp_path):
         documented = [(v["name"], v["causality"], v["variability"], v["type"], v["unit"])
                       for v in variables(model_description(name))]
         assert documented == _built_variables(path), name
+
+
+def _contract_section(anchor: str) -> str:
+    page = (ROOT / "docs" / "reference" / "contracts.md").read_text(encoding="utf-8")
+    return page.split(f"{{#{anchor}}}", 1)[1].split("\n## ", 1)[0]
+
+
+@pytest.mark.parametrize("argv, anchor", [
+    (["efficiency", "--mode", "S1", "--speed", "2800", "--torque", "0.85", "--json"],
+     "efficiency"),
+    (["stiffness", "--json"], "stiffness")])
+def test_json_contract_page_names_every_key(argv, anchor, capsys):
+    """Every key a --json command prints (nested objects' keys too) is named on the contracts
+    page, in that command's section."""
+    import json
+    from cyclo_fmu.cli import main
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    section = _contract_section(anchor)
+
+    def keys(obj):
+        for k, v in obj.items():
+            yield k
+            if isinstance(v, dict) and not set(v) <= {"PL1", "PL2", "PL3", "PL5", "PL6"}:
+                yield from keys(v)
+    for k in keys(out):
+        assert re.search(rf"\b{re.escape(k)}\b", section), f"{anchor} --json key {k} undocumented"
