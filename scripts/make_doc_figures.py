@@ -6,8 +6,9 @@
   on the default design (physical profile, the paper profile as the dotted reference);
 - ``docs/img/diagnosis.png``: ``cyclo-fmu diagnose`` of the tutorial's recording
   (``cyclo-fmu synth --effect load_independent_loss --seed 3 --mode S1 --size small``);
-- ``docs/img/report.png``: that diagnosis' ``report.html`` in headless Chromium, checked for
-  console errors (``scripts/check_report_html.py``), when Chromium is installed.
+- ``docs/img/report.png``: the first screen of that diagnosis' ``report.html`` in headless
+  Chromium, checked for console errors (``scripts/check_report_html.py``), when Chromium is
+  installed.
 
 Every figure is made by the command line a user runs, in a temporary folder, then copied.
 """
@@ -20,6 +21,9 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+#: Height [px] of the report screenshot kept for the README: statement, effects, what remains
+#: and the checks (the figure below them is docs/img/diagnosis.png).
+REPORT_TOP_PX = 1200
 IMG = ROOT / "docs" / "img"
 
 
@@ -38,8 +42,8 @@ def main() -> int:
         for name in ("efficiency_S1_S2.png", "partial_losses.png"):
             shutil.copyfile(tmp / "paper" / name, IMG / name)
         cli("synth", "--effect", "load_independent_loss", "--seed", 3, "--mode", "S1",
-            "--size", "small", "--out", tmp / "rec.csv", "--quiet", cwd=tmp)
-        cli("diagnose", tmp / "rec.csv", "--mode", "auto", "--out", tmp / "diag", cwd=tmp)
+            "--size", "small", "--out", "rec.csv", "--quiet", cwd=tmp)
+        cli("diagnose", "rec.csv", "--mode", "auto", "--out", "diag", cwd=tmp)
         shutil.copyfile(tmp / "diag" / "diagnosis.png", IMG / "diagnosis.png")
         sys.path.insert(0, str(ROOT / "scripts"))
         from check_report_html import check
@@ -52,6 +56,10 @@ def main() -> int:
             print(f"report.html: {f}")
         if findings:
             return 1
+        if (IMG / "report.png").is_file():      # the README shows the report's first screen
+            from PIL import Image
+            with Image.open(IMG / "report.png") as im:
+                im.crop((0, 0, im.width, min(im.height, REPORT_TOP_PX))).save(IMG / "report.png")
     for f in sorted(IMG.glob("*.png")):
         print(f"{f.relative_to(ROOT)}: {f.stat().st_size // 1024} KiB")
     return 0
