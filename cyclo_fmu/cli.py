@@ -413,6 +413,7 @@ def cmd_synth(args) -> int:
 
 def cmd_diagnose(args) -> int:
     from .diagnosis import DiagnosisError
+    from .fmt import friction_level_fields, unit_suffix
     from .io import RecordingError, load_recording
     from .sweep.batch import diagnose_recording
     design = _load_design(args.design, args.profile)
@@ -445,10 +446,11 @@ def cmd_diagnose(args) -> int:
               f"{form})")
         for k, v in e["parameters"].items():
             ci = f" [{v['ci95'][0]:.4g}, {v['ci95'][1]:.4g}]" if v["ci95"] else ""
-            print(f"  {k} = {v['value']:.5g} {v['unit']}{ci}")
+            print(f"  {k} = {v['value']:.5g}{unit_suffix(v['unit'])}{ci}")
     if d.calibration and d.effect != "friction_miscalibrated":
         v = d.calibration["mu_boundary_rel_error"]
-        print(f"friction level: mu_boundary off by {100 * v['value']:+.2f} % "
+        print(f"friction level ({friction_level_fields(design.profile)}) off by "
+              f"{100 * v['value']:+.2f} % "
               f"[{100 * v['ci95'][0]:+.2f}, {100 * v['ci95'][1]:+.2f}]")
     if d.indistinguishable_from:
         print(f"  cannot be told apart from: {', '.join(d.indistinguishable_from)}; "

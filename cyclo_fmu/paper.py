@@ -18,12 +18,13 @@ from model_core.paper import (PAPER_EXPERIMENT, PAPER_THEORY, BenchEnvelope, env
 BENCH_SPEEDS_RPM = (1000.0, 1500.0, 2000.0, 2500.0, 2800.0)
 
 
-def _figures(design, envelope, out: Path, breakdown_of=None) -> list[Path]:
-    import matplotlib
-    matplotlib.use("Agg")
+def _efficiency_figure(design, envelope, path: Path, reference=None) -> Path:
+    """Efficiency over input torque at the bench's speeds (left) and output over input power
+    (right), S1 and S2, in ``design``'s profile, against the paper's band (experiment for the
+    physical profile, theory for the paper profile). ``reference``: another design (the other
+    profile) drawn at 2800 r/min as a dotted line for comparison."""
     import matplotlib.pyplot as plt
 
-    out.mkdir(parents=True, exist_ok=True)
     torques = np.linspace(envelope.torque_min, envelope.torque_max, 30)
     fig, axes = plt.subplots(2, 2, figsize=(10, 7.5))
     for row, mode in enumerate(("S1", "S2")):
@@ -32,53 +33,83 @@ def _figures(design, envelope, out: Path, breakdown_of=None) -> list[Path]:
         ax = axes[row, 0]
         for i, n in enumerate(BENCH_SPEEDS_RPM):
             ax.plot(torques, 100 * m.eta[i], label=f"{n:.0f} r/min")
+        if reference is not None:
+            r = efficiency_map(reference, mode, rpm_to_rad_s(np.asarray([2800.0])), torques)
+            ax.plot(torques, 100 * r.eta[0], color="0.3", ls=":", lw=1.5,
+                    label=f"{reference.profile} profile, 2800 r/min")
         what = "experiment" if design.profile == "physical" else "theory"
         ref = (PAPER_EXPERIMENT if design.profile == "physical" else PAPER_THEORY)[mode]
         ax.axhspan(100 * ref["min"], 100 * ref["max"], color="0.85", label=f"paper {what} range")
         ax.axhline(100 * ref["mean"], color="k", ls="--", lw=0.8, label=f"paper {what} mean")
-        ax.set(xlabel="input torque T_S / N*m", ylabel=f"efficiency eta_{mode} / %",
-               title=f"mode {mode}, profile {design.profile}: efficiency over input torque")
-        ax.legend(fontsize=7)
+        ax.set(xlabel="input torque / N·m", ylabel=f"efficiency in {mode} / %",
+               title=f"{mode}, {design.profile} profile: efficiency over input torque")
+        ax.legend(fontsize=7, loc="lower right", ncol=2)
+        ax.grid(alpha=0.3)
         ax = axes[row, 1]
         p_in = m.input_power
         p_out = p_in * m.eta
         sc = ax.scatter(p_in.ravel(), p_out.ravel(), c=100 * m.eta.ravel(), s=8, cmap="viridis")
         fig.colorbar(sc, ax=ax, label="efficiency / %")
         ax.set(xlabel="input power / W", ylabel="output power / W",
-               title=f"mode {mode}: output over input power")
+               title=f"{mode}: output over input power")
+        ax.grid(alpha=0.3)
     fig.tight_layout()
-    f1 = out / "efficiency_S1_S2.png"
-    fig.savefig(f1, dpi=110)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
+    return path
 
-    # Fig. 7-like: partial losses at the rated point, both profiles, plain rollers vs needles
+
+def _partial_losses_figure(design, path: Path) -> Path:
+    """Fig. 7-like: partial losses at the rated point (2800 r/min, 0.85 N·m, S1 and S2), both
+    profiles, plain rollers against needle-bearing rollers. Horizontal bars, so that each loss
+    is named in full next to its bars."""
+    import textwrap
+    import matplotlib.pyplot as plt
+
     w_rated, t_rated = rpm_to_rad_s(2800.0), 0.85
     names = list(LOSS_NAMES) + list(IDLE_NAMES)
     descr = {**LOSS_DESCRIPTIONS, **IDLE_DESCRIPTIONS}
-    fig, axes = plt.subplots(1, 2, figsize=(14, 5), sharey=True)
-    x = np.arange(len(names))
-    width = 0.2
-    src = design if breakdown_of is None else breakdown_of
-    for ax, (pname, base) in zip(axes, (("paper", paper_profile(src)),
-                                        ("physical", physical_profile(src)))):
+    labels = [f"{n}: " + textwrap.fill(descr[n], 30) for n in names]
+    y = np.arange(len(names))
+    height = 0.2
+    fig, axes = plt.subplots(1, 2, figsize=(13, 6.5), sharey=True, sharex=True)
+    for ax, (pname, base) in zip(axes, (("paper", paper_profile(design)),
+                                        ("physical", physical_profile(design)))):
         variants = [("plain rollers", base),
-                    ("needle-bearing rollers", replace(base, ring_rollers="needle",
-                                                       disc_rollers="needle"))]
+                    ("needle rollers", replace(base, ring_rollers="needle",
+                                               disc_rollers="needle"))]
         for j, mode in enumerate(("S1", "S2")):
             for k, (label, d) in enumerate(variants):
                 op = operating_point(d, mode, w_rated, t_rated)
                 vals = [float(getattr(op.losses, n)) for n in names]
-                ax.bar(x + (2 * j + k - 1.5) * width, vals, width,
-                       label=f"{mode}, {label}: eta = {100 * float(op.eta):.1f} %")
-        ax.set_xticks(x, [f"{n}\n" + descr[n].replace(" ", "\n", 2) for n in names], fontsize=6)
-        ax.set(ylabel="power loss / W", title=f"profile {pname}: partial losses at 2800 r/min, "
-               "0.85 N*m input")
-        ax.legend(fontsize=7)
+                ax.barh(y + (2 * j + k - 1.5) * height, vals, height,
+                        label=f"{mode}, {label}: efficiency {100 * float(op.eta):.1f} %")
+        ax.set_yticks(y, labels, fontsize=8)
+        ax.invert_yaxis()
+        ax.set(xlabel="power loss / W",
+               title=f"{pname} profile: partial losses at 2800 r/min, 0.85 N·m input")
+        ax.grid(axis="x", alpha=0.3)
+        ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
-    f2 = out / "partial_losses.png"
-    fig.savefig(f2, dpi=110)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
-    return [f1, f2]
+    return path
+
+
+def _figures(design, envelope, out: Path) -> list[Path]:
+    """The figures of ``cyclo-fmu paper``: ``efficiency_S1_S2.png`` in the design's own profile
+    (the default: physical, against the paper's experiment, with the paper profile's 2800 r/min
+    curve dotted), ``efficiency_S1_S2_<other>.png`` in the other profile, and
+    ``partial_losses.png`` (both profiles in one figure). Each file is written once."""
+    import matplotlib
+    matplotlib.use("Agg")
+
+    out.mkdir(parents=True, exist_ok=True)
+    other = paper_profile(design) if design.profile == "physical" else physical_profile(design)
+    return [_efficiency_figure(design, envelope, out / "efficiency_S1_S2.png", reference=other),
+            _efficiency_figure(other, envelope, out / f"efficiency_S1_S2_{other.profile}.png",
+                               reference=design),
+            _partial_losses_figure(design, out / "partial_losses.png")]
 
 
 def paper_profile(design):
@@ -107,10 +138,7 @@ def paper_comparison(design, envelope=BenchEnvelope()) -> dict:
 def run_paper_comparison(design, out, as_json: bool) -> int:
     envelope = BenchEnvelope()
     stats = paper_comparison(design, envelope)
-    files = _figures(paper_profile(design), envelope, Path(out), design) if out else []
-    if files:
-        phys = _figures(physical_profile(design), envelope, Path(out) / "physical", design)
-        files = files[:1] + [phys[0]] + files[1:]
+    files = _figures(design, envelope, Path(out)) if out else []
     if as_json:
         print(json.dumps(stats, indent=2))
         return 0

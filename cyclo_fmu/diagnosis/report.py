@@ -5,12 +5,14 @@ import base64
 import html
 import io
 import math
+import textwrap
 
 import numpy as np
 
 from model_core import DriveDesign
 from model_core.effects import EFFECTS
 
+from ..fmt import friction_level_fields, unit_suffix
 from .estimator import Diagnosis
 
 
@@ -47,25 +49,50 @@ def _figure(d: Diagnosis):
     label = ", ".join(e["id"] for e in d.effects) or "none"
     ax.plot(s["t"][:len(s["residual_after"])], 1e3 * s["residual_after"], lw=0.4,
             label=f"with {label}")
-    ax.set(xlabel="time / s", ylabel="input torque residual / mN*m",
+    ax.set(xlabel="time / s", ylabel="input torque residual / mN·m",
            title="measured - model input torque (block means)")
     ax.legend(fontsize=7)
     lim = float(np.nanpercentile(np.abs(1e3 * s["residual_before"]), 99)) or 1.0
     n = len(s["residual_after"])
     for ax, key, title in ((axes[0, 1], "residual_before", "model as given"),
-                           (axes[1, 0], "residual_after", f"with {label}")):
+                           (axes[1, 0], "residual_after",
+                            textwrap.shorten(f"with {label}", 60, placeholder=" ..."))):
         sc = ax.scatter(s["speed_in"][:n] * 30 / math.pi, s["torque_out"][:n],
                         c=1e3 * s[key][:n], s=2, cmap="coolwarm", vmin=-lim, vmax=lim)
-        fig.colorbar(sc, ax=ax, label="residual / mN*m")
-        ax.set(xlabel="input speed / (r/min)", ylabel="output torque / N*m",
-               title=f"residual over the operating map, {title}")
-    ax = axes[1, 1]
-    ev = d.evidence
-    ax.barh([e["id"] + (" *" if e.get("selected") else "") for e in ev],
-            [e["bic"] - ev[0]["bic"] for e in ev])
-    ax.set(xlabel="BIC - best BIC (with the selection)", title="evidence (* selected)")
+        fig.colorbar(sc, ax=ax, label="residual / mN·m")
+        ax.set(xlabel="input speed / (r/min)", ylabel="output torque / N·m",
+               title=f"residual over the operating map,\n{title}")
+    _evidence_chart(axes[1, 1], d.evidence)
     fig.tight_layout()
     return fig
+
+
+def _evidence_chart(ax, ev) -> None:
+    """BIC of each candidate (with the selection) above the best, on a symmetric-log axis:
+    linear below ``DELTA_BIC``, logarithmic above, so that the plain model's bar ("none",
+    often 10^4-10^5 above) does not flatten the candidates that differ by a few units; the
+    selection threshold is drawn and each bar carries its value."""
+    from .selection import DELTA_BIC
+    if not ev:
+        ax.set_axis_off()
+        return
+    best = min(e["bic"] for e in ev)
+    vals = [max(e["bic"] - best, 0.0) for e in ev]
+    names = [e["id"] + (" (selected)" if e.get("selected") else "") for e in ev]
+    colors = ["tab:green" if e.get("selected") else "tab:blue" for e in ev]
+    y = np.arange(len(ev))
+    ax.barh(y, vals, color=colors)
+    ax.set_yticks(y, names, fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xscale("symlog", linthresh=DELTA_BIC)
+    ax.set_xlim(0, max(max(vals), DELTA_BIC) * 3)
+    ax.axvline(DELTA_BIC, color="k", ls="--", lw=0.8)
+    for yi, v in zip(y, vals):
+        ax.text(v, yi, f" {v:.3g}", va="center", fontsize=7)
+    ax.set(xlabel=f"BIC − best BIC (symmetric log scale)\ndashed: ΔBIC = {DELTA_BIC:g}, "
+           "the selection threshold",
+           title="evidence: candidates next to the selection")
+    ax.grid(axis="x", alpha=0.3)
 
 
 def plot_diagnosis(d: Diagnosis, out) -> list:
@@ -97,17 +124,20 @@ def _fmt(v):
     return html.escape(str(v))
 
 
-def write_report(d: Diagnosis, path, result: dict, source: str = "") -> None:
+def write_report(d: Diagnosis, path, result: dict, source: str = "",
+                 profile: str = "physical") -> None:
     """A self-contained HTML report (figures embedded) an engineer can attach to a test report:
     the statement, the effects with their parameters and intervals, what remains, the checks,
-    the evidence table and the residual before and after, over time and over the map."""
+    the evidence table and the residual before and after, over time and over the map.
+    ``profile``: the design's model profile, which names the coefficients the friction level
+    scales."""
     import matplotlib
     matplotlib.use("Agg")
     e = html.escape
     rows = []
     for eff in d.effects:
         ps = "<br>".join(
-            f"{e(k)} = {_fmt(v['value'])} {e(v['unit'])}"
+            f"{e(k)} = {_fmt(v['value'])}{e(unit_suffix(v['unit']))}"
             + (f" [{_fmt(v['ci95'][0])}, {_fmt(v['ci95'][1])}]" if v.get("ci95") else "")
             for k, v in eff["parameters"].items())
         rows.append(f"<tr><td>{e(eff['id'])}</td><td>{e(eff['description'])}</td><td>{ps}</td>"
@@ -124,7 +154,7 @@ def write_report(d: Diagnosis, path, result: dict, source: str = "") -> None:
     excl = "".join(f"<li>{e(str(x.get('reason')))}: {x.get('count')}</li>"
                    for x in result.get("excluded", []))
     u = d.unexplained
-    cal = "".join(f"<li>{e(k)} = {_fmt(v['value'])} {e(v['unit'])}</li>"
+    cal = "".join(f"<li>{e(k)} = {_fmt(v['value'])}{e(unit_suffix(v['unit']))}</li>"
                   for k, v in d.calibration.items())
     img = _png(_figure(d))
     text = f"""<!DOCTYPE html>
@@ -134,14 +164,14 @@ table{{border-collapse:collapse}}td,th{{border:1px solid #bbb;padding:4px 8px;ve
 .warn{{background:#fff3cd;padding:8px}}</style></head><body>
 <h1>Diagnosis of {e(source) or 'a recording'}</h1>
 <p>Mode {e(str(result.get('mode', '')))}. Held-out RMS of the input torque residual
-{1e3 * d.rmse_before_Nm:.3g} &rarr; {1e3 * d.rmse_after_Nm:.3g} mN*m; additional-loss factor
+{1e3 * d.rmse_before_Nm:.3g} &rarr; {1e3 * d.rmse_after_Nm:.3g} mN·m; additional-loss factor
 zeta_d (paper Eq. 31) {100 * d.zeta_d_before:.2f} &rarr; {100 * d.zeta_d_after:.2f} %.</p>
 <h2>Statement</h2><p>{e(d.located.get('statement', ''))}</p>
 <h2>Effects the data supports</h2>
 {('<table><tr><th>effect</th><th>what</th><th>parameters [95 % interval]</th>'
-  '<th>explained RMS / mN*m</th><th>stable across folds</th><th>cannot be told apart from</th>'
+  '<th>explained RMS / mN·m</th><th>stable across folds</th><th>cannot be told apart from</th>'
   '</tr>' + ''.join(rows) + '</table>') if rows else '<p>none</p>'}
-{f'<p>Friction level (model calibration):</p><ul>{cal}</ul>' if cal else ''}
+{f'<p>Friction level (model calibration; scales {e(friction_level_fields(profile))} together):</p><ul>{cal}</ul>' if cal else ''}
 <h2>What remains</h2>
 <p class="{'warn' if u.get('present') else ''}">{e(u.get('statement', ''))}</p>
 {f"<p>A run that would separate look-alikes: {e(d.suggested_test)}</p>" if d.suggested_test else ''}
@@ -150,7 +180,7 @@ zeta_d (paper Eq. 31) {100 * d.zeta_d_before:.2f} &rarr; {100 * d.zeta_d_after:.
 <li>{d.excluded_blocks} blocks excluded as spikes</li></ul>
 <h2>Residual</h2><img alt="residual before and after" src="data:image/png;base64,{img}">
 <h2>Evidence</h2><table><tr><th>candidate (with the selection)</th><th>BIC - best</th>
-<th>held-out RMS / mN*m</th><th>inside bounds</th></tr>{ev}</table>
+<th>held-out RMS / mN·m</th><th>inside bounds</th></tr>{ev}</table>
 <p><small>cyclo-fmu diagnose; notes: {e('; '.join(d.notes)) or 'none'}</small></p>
 </body></html>"""
     from pathlib import Path
@@ -165,7 +195,7 @@ def write_diagnosis(out_dir, d, design, result, source=""):
     from ..outputs import staged_dir
     with staged_dir("out", out_dir) as out:
         plot_diagnosis(d, out)
-        write_report(d, out / "report.html", result, source)
+        write_report(d, out / "report.html", result, source, design.profile)
         (out / "diagnosis.json").write_text(json.dumps(result, indent=2))
         fixed, notes = d.updated or updated_design(design, d)
         (out / "design_updated.toml").write_text(design_to_toml(fixed) + "".join(
