@@ -1,13 +1,13 @@
 """Make the figures of the README and the docs site from the tool's own output.
 
-    python scripts/make_doc_figures.py          # writes docs/img/*.png
+    python docs/scripts/make_doc_figures.py          # writes docs/img/*.png
 
 - ``docs/img/efficiency_S1_S2.png`` and ``docs/img/partial_losses.png``: ``cyclo-fmu paper``
   on the default design (physical profile, the paper profile as the dotted reference);
 - ``docs/img/diagnosis.png``: ``cyclo-fmu diagnose`` of the tutorial's recording
   (``cyclo-fmu synth --effect load_independent_loss --seed 3 --mode S1 --size small``);
 - ``docs/img/report.png``: the first screen of that diagnosis' ``report.html`` in headless
-  Chromium, checked for console errors (``scripts/check_report_html.py``), when Chromium is
+  Chromium, checked for console errors (``docs/scripts/check_report_html.py``), when Chromium is
   installed.
 
 Every figure is made by the command line a user runs, in a temporary folder, then copied.
@@ -20,7 +20,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 #: Height [px] of the report screenshot kept for the README: statement, effects, what remains
 #: and the checks (the figure below them is docs/img/diagnosis.png).
 REPORT_TOP_PX = 1200

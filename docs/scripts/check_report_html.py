@@ -1,11 +1,11 @@
 """Open a diagnosis ``report.html`` in headless Chromium: take a screenshot and check that the
 page logs no console error and that its embedded figure decodes.
 
-    python scripts/check_report_html.py out/diagnosis/report.html [screenshot.png]
+    python docs/scripts/check_report_html.py out/diagnosis/report.html [screenshot.png]
 
 Exit status 0 when the page is clean, 1 when Chromium logged a console error or the figure does
 not decode, 2 when Chromium is not installed (``apt-get install chromium``). Prints one line
-per finding. Used by ``scripts/make_doc_figures.py`` for the docs' screenshot.
+per finding. Used by ``docs/scripts/make_doc_figures.py`` for the docs' screenshot.
 """
 from __future__ import annotations
 
