@@ -45,7 +45,7 @@ def main() -> int:
             "--size", "small", "--out", "rec.csv", "--quiet", cwd=tmp)
         cli("diagnose", "rec.csv", "--mode", "auto", "--out", "diag", cwd=tmp)
         shutil.copyfile(tmp / "diag" / "diagnosis.png", IMG / "diagnosis.png")
-        sys.path.insert(0, str(ROOT / "scripts"))
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
         from check_report_html import check
         try:
             findings = check(tmp / "diag" / "report.html", IMG / "report.png")
