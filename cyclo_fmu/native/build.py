@@ -45,8 +45,15 @@ GENERATED = "cd_map_data.c"
 #: The flags the binary is compiled with. -ffp-contract=off: no fused multiply-add, so that the
 #: interpolation rounds as Python's does; -fvisibility=hidden: only the fmi2 functions are
 #: exported, so two of these FMUs (two designs) in one process cannot bind to each other's data.
-CFLAGS = ("-std=c99", "-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-ffp-contract=off",
-          "-Wall", "-Wl,--no-undefined")
+#: Hardening of every native binary we compile (this FMU, the pythonfmu status front, the
+#: bench loop; docs/explanation/fmu-safety.md): stack protector on functions with arrays,
+#: glibc's checked string/memory functions (_FORTIFY_SOURCE needs -O1 or more), full RELRO
+#: (the GOT read-only after loading, every symbol bound at load), position-independent code,
+#: and format-string warnings as errors.
+HARDEN = ("-fstack-protector-strong", "-D_FORTIFY_SOURCE=2", "-fPIC", "-Wformat",
+          "-Werror=format-security", "-Wl,-z,relro,-z,now", "-Wl,-z,noexecstack")
+CFLAGS = ("-std=c99", "-O2", "-shared", "-fvisibility=hidden", "-ffp-contract=off",
+          "-Wall", "-Wl,--no-undefined") + HARDEN
 
 #: Map range, as the Python FMU's defaults (map_torque_max, map_speed_max): the same grid, so
 #: that the two FMUs interpolate the same table.

@@ -50,6 +50,9 @@ class FeltBrake(UnitSlave):
         self._twist = 0.0
         self._w_drum = 0.0
 
+    #: the dynamic state besides the variables (fmi2GetFMUstate)
+    state_attributes = ("_twist", "_w_drum")
+
     #: at the start the drum turns with the shaft, untwisted: no coupling torque yet
     init_independent = ("J_out", "k_coupling", "zeta_coupling")
 

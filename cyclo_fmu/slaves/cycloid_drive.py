@@ -35,7 +35,6 @@ import pickle
 from pathlib import Path
 
 from . import core
-from .heap import map_solving_heap
 from .base import Boolean, Fmi2Status, Integer, Real, String, UnitSlave
 
 # FMU parameter -> (design section or None, design field, unit, description)
@@ -265,6 +264,9 @@ class CycloidDrive(UnitSlave):
                 return folder
         return _MAP_DIR
 
+    #: the dynamic state besides the variables (fmi2GetFMUstate)
+    state_attributes = ("_theta", "_w_last", "_slope_key", "_last_inputs", "_warned_range")
+
     #: no step yet in Initialization Mode: no acceleration, no warm-up
     init_independent = ("input_inertia", "thermal_loss_change", "thermal_tau")
 
@@ -299,9 +301,11 @@ class CycloidDrive(UnitSlave):
             elif self._map is None or self._map_key != map_key:
                 self._map = _shipped_map(map_key, self._map_folder())
                 if self._map is None:
-                    with map_solving_heap():
-                        self._map = core.lossmap.ModeMap(self._design, self._mode,
-                                                         self.map_torque_max, self.map_speed_max)
+                    # no mallopt here: an FMU must not change the host's allocator (the map
+                    # solves 10-20 % slower with glibc's default thresholds early in a
+                    # process; docs/explanation/fmu-safety.md)
+                    self._map = core.lossmap.ModeMap(self._design, self._mode,
+                                                     self.map_torque_max, self.map_speed_max)
                 self._map_key = map_key
             ex = self._design.extra
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
