@@ -50,9 +50,11 @@ GENERATED = "cd_map_data.c"
 #: bench loop; docs/explanation/fmu-safety.md): stack protector on functions with arrays,
 #: glibc's checked string/memory functions (_FORTIFY_SOURCE needs -O1 or more), full RELRO
 #: (the GOT read-only after loading, every symbol bound at load), position-independent code,
-#: and format-string warnings as errors.
+#: format-string warnings as errors, and the command line recorded in the binary's
+#: .GCC.command.line section (so that a test, or a user, can read what it was built with).
 HARDEN = ("-fstack-protector-strong", "-D_FORTIFY_SOURCE=2", "-fPIC", "-Wformat",
-          "-Werror=format-security", "-Wl,-z,relro,-z,now", "-Wl,-z,noexecstack")
+          "-Werror=format-security", "-Wl,-z,relro,-z,now", "-Wl,-z,noexecstack",
+          "-frecord-gcc-switches")
 CFLAGS = ("-std=c99", "-O2", "-shared", "-fvisibility=hidden", "-ffp-contract=off",
           "-Wall", "-Wl,--no-undefined") + HARDEN
 

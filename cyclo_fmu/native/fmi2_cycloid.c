@@ -910,8 +910,9 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicat
             c->s = before;
             return nonfinite(c, "fmi2DoStep");
         }
+        /* the step that first left the map (eta0 held at its edge) says so in its status */
+        return c->s.warned_range && !before.warned_range ? fmi2Warning : fmi2OK;
     }
-    return fmi2OK;
 }
 
 FMI2_Export fmi2Status fmi2CancelStep(fmi2Component comp)

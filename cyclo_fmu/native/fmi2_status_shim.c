@@ -22,8 +22,8 @@
  * on, so the front always switches it on underneath and itself drops the fmi2OK messages while
  * the host has logging off; warnings and errors (with their reason) always reach the host.
  * A message is text, never a format: pythonfmu hands the slave's message over as the format
- * argument, so the front copies it (undoing the slaves' "%%" escape, slaves/base.py) and gives it
- * to the host as the argument of "%s".
+ * argument, so the front copies it (undoing the slaves' "%%" escape, slaves/base.py) and hands
+ * the host that text with every '%' doubled (host_log), never formatting it itself.
  *
  * Thread safety: the library handle and the resolved functions are published with atomic
  * stores (loaded once under a mutex); the list of live handles is guarded by a mutex. Calls on
@@ -120,14 +120,25 @@ typedef struct Wrap {
 static pthread_mutex_t list_lock = PTHREAD_MUTEX_INITIALIZER;
 static Wrap *wraps = NULL;
 
-/* a message to the host: text, passed as the argument of "%s" */
+/* A message to the host: text with every '%' doubled, given as the message and no arguments.
+ * FMI 2.0 calls the message a format, but hosts differ: FMI Library and fmpy's proxy format
+ * it, a plain C host or fmpy's Python callback print it as it is (a "%s" with the text as its
+ * argument would print "%s" there). Doubled, no directive is left for a formatting host
+ * (which prints one '%') and a printing host shows '%%'. */
 static void host_log(const fmi2CallbackFunctions *host, const char *name, fmi2Status st,
                      const char *text)
 {
+    char buf[2048];
+    size_t i, k = 0;
     const char *cat = st == fmi2Error || st == fmi2Fatal ? "logStatusError"
                     : st == fmi2Warning ? "logStatusWarning" : "logAll";
     if (host == NULL || host->logger == NULL) return;
-    host->logger(host->componentEnvironment, name ? name : "", st, cat, "%s", text);
+    for (i = 0; text && text[i] && k + 2 < sizeof buf; i++) {
+        buf[k++] = text[i];
+        if (text[i] == '%') buf[k++] = '%';
+    }
+    buf[k] = '\0';
+    host->logger(host->componentEnvironment, name ? name : "", st, cat, buf);
 }
 
 /* the front's own messages: our fixed formats, arguments quoted by the caller */
