@@ -259,7 +259,7 @@ def main(argv=None) -> int:
         print(f"skip: {why}")
         return SKIP
     runs = args.only or ["native", "front", "loop"]
-    iterations = 20 if args.quick else 200
+    iterations = 20 if args.quick else 1000
     failed = []
     with tempfile.TemporaryDirectory(prefix="cyclofmu_sanitize_") as tmp:
         for name in runs:
