@@ -368,6 +368,31 @@ def test_python_fmu_refuses_inputs_that_give_no_finite_outputs(fmu_dir):
         inst.close()
 
 
+@pytest.mark.parametrize("name, params, inputs", [
+    ("InductionMotor", {}, dict(tau_shaft=-1e308, J_load=0.0)),
+    ("Transducer", dict(scale=1e3), dict(x=1e308)),
+    ("FeltBrake", dict(J_out=2e-3), dict(w=1e308))])
+def test_python_rig_fmus_refuse_inputs_that_give_no_finite_outputs(fmu_dir, name, params,
+                                                                  inputs):
+    inst = Inst(str(fmu_dir / f"{name}.fmu"), **params)
+    try:
+        with pytest.raises(Exception):
+            for _ in range(3):
+                inst.step(**inputs)
+        assert "not a finite number" in errors(inst), inst.messages
+    finally:
+        inst.close()
+
+
+def test_slave_messages_escape_percent():
+    """pythonfmu hands a message over as a printf format (also in the win64 binary, which has
+    no C front): every '%' of a slave's message is escaped."""
+    from cyclo_fmu.slaves.brake import FeltBrake
+    slave = FeltBrake(instance_name="x")
+    slave.log("schedule '0:%s%n' refused")
+    assert slave.log_queue[-1].msg == "schedule '0:%%s%%n' refused"
+
+
 # -- native FMU --------------------------------------------------------------------------------
 def _state_blob(native, **params):
     """A serialised state of the native FMU after one step with distinctive values."""

@@ -92,4 +92,7 @@ class Transducer(UnitSlave):
         a = self._a
         self._filtered = a * self._filtered + (1 - a) * self.scale * x
         self._read()
+        if not math.isfinite(self.y):
+            self.fail(f"x = {x!r} gives a reading that is not a finite number (scale = "
+                      f"{self.scale!r}): refused")
         return True
