@@ -238,6 +238,33 @@ def test_python_fmu_state_round_trip_is_exact(fmu_dir, name):
         a.close()
 
 
+@pytest.mark.parametrize("corrupt", ["unknown entry", "wrong type", "unknown internal"])
+def test_python_fmu_refuses_a_corrupted_state(fmu_dir, corrupt):
+    """A serialised state is JSON of the slave's values: entries it does not know (pythonfmu
+    would set them as attributes) or of another type are refused, nothing changed."""
+    inst = Inst(str(fmu_dir / "FeltBrake.fmu"), J_out=2e-3)
+    try:
+        inst.step(w=3.0)
+        st = inst.fmu.getFMUState()
+        state = json.loads(bytes(inst.fmu.serializeFMUState(st)))
+        inst.fmu.freeFMUState(st)
+        if corrupt == "unknown entry":
+            state["do_step"] = 1
+        elif corrupt == "wrong type":
+            state["J_out"] = "2e-3"
+        else:
+            state["_internal"]["_setup"] = None
+        before = inst.get("tau_out", "T_brake")
+        bad = inst.fmu.deserializeFMUState(json.dumps(state).encode())
+        with pytest.raises(Exception):
+            inst.fmu.setFMUState(bad)
+        assert "not a state of this FMU" in errors(inst)
+        inst.step(w=3.0)                                   # steps on as before
+        assert all(math.isfinite(v) for v in inst.get("tau_out", "T_brake")) and before
+    finally:
+        inst.close()
+
+
 MISUSE = """
 import ctypes, json, math, sys
 from fmpy import extract, read_model_description

@@ -521,7 +521,19 @@ SET_FN(fmi2SetString, fmi2String, String)
     }
 
 STATE_FN(fmi2GetFMUstate, (fmi2Component c, fmi2FMUstate *s), (w->comp, s), s != NULL)
-STATE_FN(fmi2SetFMUstate, (fmi2Component c, fmi2FMUstate s), (w->comp, s), s != NULL)
+static fmi2SetFMUstateTYPE *cache_fmi2SetFMUstate = NULL;
+
+/* the slave checks a state before it takes it and reports a bad one through _failed */
+FMI2_Export fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s)
+{
+    fmi2SetFMUstateTYPE *f;
+    Wrap *w = handle(c);
+    if (w == NULL) return fmi2Error;
+    if (s == NULL) return fail(w, "fmi2SetFMUstate: NULL argument");
+    RESOLVE(f, fmi2SetFMUstate);
+    if (!f) return fmi2Error;
+    return checked(w, f(w->comp, s));
+}
 STATE_FN(fmi2FreeFMUstate, (fmi2Component c, fmi2FMUstate *s), (w->comp, s),
          s != NULL && *s != NULL)
 STATE_FN(fmi2SerializedFMUstateSize, (fmi2Component c, fmi2FMUstate s, size_t *n),

@@ -212,7 +212,42 @@ class UnitSlave(Fmi2Slave):
                               self.state_attributes + _BASE_STATE}
         return json.loads(json.dumps(state))          # a copy, detached from the live values
 
+    def _state_problem(self, state):
+        """Why ``state`` is not a state of this FMU (None if it is): every registered variable
+        with a value of its type, and only the internal attributes this slave lists."""
+        if not isinstance(state, dict):
+            return "not a mapping"
+        kinds = {v.name: type(v) for v in self.vars.values()}
+        extra = set(state) - set(kinds) - {"_internal"}
+        if extra:
+            return f"unknown entries {sorted(extra)[:3]}"
+        for name, kind in kinds.items():
+            if name not in state:
+                return f"{name} missing"
+            v = state[name]
+            ok = (isinstance(v, bool) if kind is Boolean else isinstance(v, str) if kind is String
+                  else isinstance(v, int) and not isinstance(v, bool) if kind is Integer
+                  else isinstance(v, (int, float)) and not isinstance(v, bool))
+            if not ok:
+                return f"{name} = {v!r} is not a {kind.__name__}"
+        internal = state.get("_internal", {})
+        if not isinstance(internal, dict):
+            return "internal state not a mapping"
+        unknown = set(internal) - set(self.state_attributes) - set(_BASE_STATE)
+        if unknown:
+            return f"unknown internal entries {sorted(unknown)[:3]}"
+        return None
+
     def _set_fmu_state(self, state):
+        problem = self._state_problem(state)
+        if problem is not None:
+            # refused before anything changes; the C front reads _failed (fmi2Error)
+            message = f"fmi2SetFMUstate: not a state of this FMU ({problem})"
+            self.log(message, Fmi2Status.error, "logStatusError")
+            if not STATUS_FRONT:
+                raise _Failure(message)
+            self._failed = True
+            return
         state = dict(state)
         internal = state.pop("_internal", {})
         super()._set_fmu_state(state)
