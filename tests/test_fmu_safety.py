@@ -226,8 +226,9 @@ def test_python_fmu_state_round_trip_is_exact(fmu_dir, name):
         again = _run(a, 25, inputs)
         assert again == first                       # bit for bit
         a.fmu.freeFMUState(state)
-        # serialised, into a second instance set up the same way
-        b = Inst(path, name="other", **params)
+        # serialised, into a second instance only instantiated (as fmusim's
+        # --initial-fmu-state-file does it): the state carries Step Mode and the parameters
+        b = Inst(path, name="other", start=False)
         try:
             b.fmu.setFMUState(b.fmu.deserializeFMUState(blob))
             b.t = t0
@@ -246,7 +247,9 @@ def test_python_fmu_refuses_a_corrupted_state(fmu_dir, corrupt):
     try:
         inst.step(w=3.0)
         st = inst.fmu.getFMUState()
-        state = json.loads(bytes(inst.fmu.serializeFMUState(st)))
+        raw = bytes(inst.fmu.serializeFMUState(st))
+        header, state = raw[:8], json.loads(raw[8:])      # the front's header: "CFST", phase
+        assert header[:4] == b"CFST"
         inst.fmu.freeFMUState(st)
         if corrupt == "unknown entry":
             state["do_step"] = 1
@@ -255,7 +258,7 @@ def test_python_fmu_refuses_a_corrupted_state(fmu_dir, corrupt):
         else:
             state["_internal"]["_setup"] = None
         before = inst.get("tau_out", "T_brake")
-        bad = inst.fmu.deserializeFMUState(json.dumps(state).encode())
+        bad = inst.fmu.deserializeFMUState(header + json.dumps(state).encode())
         with pytest.raises(Exception):
             inst.fmu.setFMUState(bad)
         assert "not a state of this FMU" in errors(inst)

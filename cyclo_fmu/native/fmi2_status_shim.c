@@ -506,42 +506,172 @@ SET_FN(fmi2SetInteger, fmi2Integer, Integer)
 SET_FN(fmi2SetBoolean, fmi2Boolean, Boolean)
 SET_FN(fmi2SetString, fmi2String, String)
 
-/* -- FMU state ------------------------------------------------------------------------------ */
-#define STATE_FN(name, params, args, guard)                                            \
-    static name##TYPE *cache_##name = NULL;                                            \
-    FMI2_Export fmi2Status name params                                                 \
-    {                                                                                  \
-        name##TYPE *f;                                                                 \
-        Wrap *w = handle(c);                                                           \
-        if (w == NULL) return fmi2Error;                                               \
-        if (!(guard)) return fail(w, #name ": NULL argument");                         \
-        RESOLVE(f, name);                                                              \
-        if (!f) return fmi2Error;                                                      \
-        return map(f args);                                                            \
-    }
+/* -- FMU state ------------------------------------------------------------------------------
+ * The front's own state around pythonfmu's: the phase of the instance (a state taken in Step
+ * Mode restores Step Mode, as FMI 2.0 and hosts such as fmusim's --initial-fmu-state-file
+ * expect) and pythonfmu's state. Serialised: "CFST", the phase (4 bytes), then pythonfmu's
+ * bytes (the slave's JSON, checked by the slave when it is set). */
+#define STATE_MAGIC 0x54534643u   /* "CFST" */
+#define STATE_HEADER 8
 
-STATE_FN(fmi2GetFMUstate, (fmi2Component c, fmi2FMUstate *s), (w->comp, s), s != NULL)
+typedef struct {
+    unsigned int magic;
+    int phase;
+    fmi2FMUstate inner;
+} WState;
+
+static WState *wstate(Wrap *w, fmi2FMUstate s, const char *fn)
+{
+    WState *ws = (WState *)s;
+    if (ws == NULL || ws->magic != STATE_MAGIC) {
+        fail(w, "%s: not a state of this FMU", fn);
+        return NULL;
+    }
+    return ws;
+}
+
+static fmi2GetFMUstateTYPE *cache_fmi2GetFMUstate = NULL;
+
+FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s)
+{
+    fmi2GetFMUstateTYPE *f;
+    fmi2Status st;
+    WState *ws;
+    int fresh = 0;
+    Wrap *w = handle(c);
+    if (w == NULL) return fmi2Error;
+    if (s == NULL) return fail(w, "fmi2GetFMUstate: NULL argument");
+    RESOLVE(f, fmi2GetFMUstate);
+    if (!f) return fmi2Error;
+    if (*s != NULL) {                       /* overwrite a state of ours */
+        if ((ws = wstate(w, *s, "fmi2GetFMUstate")) == NULL) return fmi2Error;
+    } else {
+        ws = (WState *)calloc(1, sizeof *ws);
+        if (ws == NULL) return fail(w, "fmi2GetFMUstate: out of memory");
+        ws->magic = STATE_MAGIC;
+        fresh = 1;
+    }
+    st = map(f(w->comp, &ws->inner));
+    if (st > fmi2Warning) {
+        if (fresh) { ws->magic = 0; free(ws); }
+        return st;
+    }
+    ws->phase = w->phase;
+    *s = ws;
+    return st;
+}
+
 static fmi2SetFMUstateTYPE *cache_fmi2SetFMUstate = NULL;
 
 /* the slave checks a state before it takes it and reports a bad one through _failed */
 FMI2_Export fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s)
 {
     fmi2SetFMUstateTYPE *f;
+    fmi2Status st;
+    WState *ws;
     Wrap *w = handle(c);
     if (w == NULL) return fmi2Error;
-    if (s == NULL) return fail(w, "fmi2SetFMUstate: NULL argument");
+    if ((ws = wstate(w, s, "fmi2SetFMUstate")) == NULL) return fmi2Error;
     RESOLVE(f, fmi2SetFMUstate);
     if (!f) return fmi2Error;
-    return checked(w, f(w->comp, s));
+    st = checked(w, f(w->comp, ws->inner));
+    if (st <= fmi2Warning) w->phase = ws->phase;
+    return st;
 }
-STATE_FN(fmi2FreeFMUstate, (fmi2Component c, fmi2FMUstate *s), (w->comp, s),
-         s != NULL && *s != NULL)
-STATE_FN(fmi2SerializedFMUstateSize, (fmi2Component c, fmi2FMUstate s, size_t *n),
-         (w->comp, s, n), s != NULL && n != NULL)
-STATE_FN(fmi2SerializeFMUstate, (fmi2Component c, fmi2FMUstate s, fmi2Byte b[], size_t n),
-         (w->comp, s, b, n), s != NULL && b != NULL)
-STATE_FN(fmi2DeSerializeFMUstate, (fmi2Component c, const fmi2Byte b[], size_t n,
-                                   fmi2FMUstate *s), (w->comp, b, n, s), b != NULL && s != NULL)
+
+static fmi2FreeFMUstateTYPE *cache_fmi2FreeFMUstate = NULL;
+
+FMI2_Export fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s)
+{
+    fmi2FreeFMUstateTYPE *f;
+    fmi2Status st = fmi2OK;
+    WState *ws;
+    Wrap *w = handle(c);
+    if (w == NULL) return fmi2Error;
+    if (s == NULL || *s == NULL) return fmi2OK;          /* nothing to free (FMI 2.0) */
+    if ((ws = wstate(w, *s, "fmi2FreeFMUstate")) == NULL) return fmi2Error;
+    RESOLVE(f, fmi2FreeFMUstate);
+    if (!f) return fmi2Error;
+    if (ws->inner) st = map(f(w->comp, &ws->inner));
+    ws->magic = 0;
+    free(ws);
+    *s = NULL;
+    return st;
+}
+
+static fmi2SerializedFMUstateSizeTYPE *cache_fmi2SerializedFMUstateSize = NULL;
+
+FMI2_Export fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate s, size_t *n)
+{
+    fmi2SerializedFMUstateSizeTYPE *f;
+    fmi2Status st;
+    WState *ws;
+    Wrap *w = handle(c);
+    if (w == NULL) return fmi2Error;
+    if (n == NULL) return fail(w, "fmi2SerializedFMUstateSize: NULL argument");
+    if ((ws = wstate(w, s, "fmi2SerializedFMUstateSize")) == NULL) return fmi2Error;
+    RESOLVE(f, fmi2SerializedFMUstateSize);
+    if (!f) return fmi2Error;
+    st = map(f(w->comp, ws->inner, n));
+    if (st <= fmi2Warning) *n += STATE_HEADER;
+    return st;
+}
+
+static fmi2SerializeFMUstateTYPE *cache_fmi2SerializeFMUstate = NULL;
+
+FMI2_Export fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate s, fmi2Byte b[],
+                                             size_t n)
+{
+    fmi2SerializeFMUstateTYPE *f;
+    WState *ws;
+    unsigned int magic = STATE_MAGIC;
+    Wrap *w = handle(c);
+    if (w == NULL) return fmi2Error;
+    if (b == NULL || n < STATE_HEADER)
+        return fail(w, "fmi2SerializeFMUstate: no buffer or one of %lu bytes",
+                    (unsigned long)n);
+    if ((ws = wstate(w, s, "fmi2SerializeFMUstate")) == NULL) return fmi2Error;
+    RESOLVE(f, fmi2SerializeFMUstate);
+    if (!f) return fmi2Error;
+    memcpy(b, &magic, 4);
+    memcpy(b + 4, &ws->phase, 4);
+    return map(f(w->comp, ws->inner, b + STATE_HEADER, n - STATE_HEADER));
+}
+
+static fmi2DeSerializeFMUstateTYPE *cache_fmi2DeSerializeFMUstate = NULL;
+
+FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b[], size_t n,
+                                               fmi2FMUstate *s)
+{
+    fmi2DeSerializeFMUstateTYPE *f;
+    fmi2Status st;
+    WState *ws;
+    unsigned int magic;
+    int phase;
+    Wrap *w = handle(c);
+    if (w == NULL) return fmi2Error;
+    if (b == NULL || s == NULL) return fail(w, "fmi2DeSerializeFMUstate: NULL argument");
+    if (n < STATE_HEADER) return fail(w, "fmi2DeSerializeFMUstate: %lu bytes", (unsigned long)n);
+    memcpy(&magic, b, 4);
+    memcpy(&phase, b + 4, 4);
+    if (magic != STATE_MAGIC || phase < PH_INSTANTIATED || phase > PH_FAILED)
+        return fail(w, "fmi2DeSerializeFMUstate: not a state of this FMU");
+    RESOLVE(f, fmi2DeSerializeFMUstate);
+    if (!f) return fmi2Error;
+    ws = (WState *)calloc(1, sizeof *ws);
+    if (ws == NULL) return fail(w, "fmi2DeSerializeFMUstate: out of memory");
+    ws->magic = STATE_MAGIC;
+    ws->phase = phase;
+    st = map(f(w->comp, b + STATE_HEADER, n - STATE_HEADER, &ws->inner));
+    if (st > fmi2Warning || ws->inner == NULL) {
+        ws->magic = 0;
+        free(ws);
+        return st > fmi2Warning ? st : fmi2Error;
+    }
+    if (*s != NULL) fmi2FreeFMUstate(c, s);     /* the host's old state of ours */
+    *s = ws;
+    return st;
+}
 
 /* -- not provided by pythonfmu: answered here ----------------------------------------------- */
 FMI2_Export fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[],

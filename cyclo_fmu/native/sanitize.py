@@ -193,6 +193,36 @@ for logging in (0, 1):
     check(lib.fmi2DoStep(c, 0.0, 1e-3, 1) == 3, "step after failed initialization")
     lib.fmi2FreeInstance(c)
 check(any(b"%%s%%s" in m for m in seen), "the schedule was not logged as text")
+# states: a round trip, a foreign pointer, a short and a corrupted serialised state
+for name, args in (("fmi2SerializedFMUstateSize", [P, P, P]),
+                   ("fmi2SerializeFMUstate", [P, P, P, S]),
+                   ("fmi2DeSerializeFMUstate", [P, P, S, P])):
+    getattr(lib, name).restype, getattr(lib, name).argtypes = ctypes.c_int, args
+c = instance()
+lib.fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0)
+lib.fmi2EnterInitializationMode(c)
+lib.fmi2ExitInitializationMode(c)
+st, size = ctypes.c_void_p(), ctypes.c_size_t()
+check(lib.fmi2GetFMUstate(c, ctypes.byref(st)) == 0, "get state")
+check(lib.fmi2SerializedFMUstateSize(c, st, ctypes.byref(size)) == 0, "state size")
+blob = (ctypes.c_char * size.value)()
+check(lib.fmi2SerializeFMUstate(c, st, blob, size.value) == 0, "serialize")
+check(lib.fmi2SerializeFMUstate(c, st, blob, 3) == 3, "short buffer")
+back = ctypes.c_void_p()
+check(lib.fmi2DeSerializeFMUstate(c, blob, size.value, ctypes.byref(back)) == 0, "deserialize")
+check(lib.fmi2SetFMUstate(c, back) == 0, "set state")
+foreign = (ctypes.c_char * 64)()
+check(lib.fmi2SetFMUstate(c, foreign) == 3, "a foreign state")
+check(lib.fmi2DeSerializeFMUstate(c, blob, 5, ctypes.byref(back)) == 3, "5 bytes")
+bad = bytearray(blob.raw)
+bad[4] = 99
+check(lib.fmi2DeSerializeFMUstate(c, bytes(bad), size.value, ctypes.byref(back)) == 3, "phase")
+bad = bytearray(blob.raw)
+bad[8:12] = b"]]]]"
+check(lib.fmi2DeSerializeFMUstate(c, bytes(bad), size.value, ctypes.byref(back)) == 3, "json")
+lib.fmi2FreeFMUstate(c, ctypes.byref(st))
+lib.fmi2FreeFMUstate(c, ctypes.byref(back))
+lib.fmi2FreeInstance(c)
 # threads creating, stepping and freeing instances at once (the GIL is released in the calls)
 def work(k):
     for i in range(n):
