@@ -72,6 +72,14 @@ static void *load(void)
     return h;
 }
 
+/* why the binary did not load, copied under the lock (another thread may be retrying) */
+static void why_not_loaded(char *out, size_t n)
+{
+    pthread_mutex_lock(&lib_lock);
+    snprintf(out, n, "%s", load_error[0] ? load_error : "not found");
+    pthread_mutex_unlock(&lib_lock);
+}
+
 /* unloaded with this library: pythonfmu's binary goes when ours goes, as without the front */
 __attribute__((destructor)) static void unload(void)
 {
@@ -301,10 +309,11 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     }
     RESOLVE(f, fmi2Instantiate);
     if (!f) {
-        const char *why = load_error[0] ? load_error : NULL;
+        char why[768];
+        why_not_loaded(why, sizeof why);
         snprintf(buf, sizeof buf, "cannot load the pythonfmu binary (%s): a non-Python host needs "
                  "libpython preloaded (LD_PRELOAD) and numpy/scipy on PYTHONPATH (README, Use it "
-                 "in your tool)", why ? why : "not found");
+                 "in your tool)", why);
         host_log(functions, name, fmi2Error, buf);
         return NULL;
     }
