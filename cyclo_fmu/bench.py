@@ -469,28 +469,59 @@ def _c_loop():
     return _LOOP["fn"]
 
 
-def _compile_loop():
-    import ctypes
+#: the bench loop's compiler flags (with the hardening of every native binary)
+def _loop_flags():
+    from .native.build import HARDEN
+    return ("-std=c99", "-O2", "-shared", "-Wall", *HARDEN)
+
+
+def _cached_loop(cc, cache=None):
+    """The compiled bench loop in the user's cache, built if needed: named by a digest of its
+    source, the compiler and its flags and the platform, and verified before it is loaded:
+    the SHA-256 of the library is stored beside it (``.sha256``) when it is built, and a
+    library whose digest differs (changed, truncated, replaced) is rebuilt, not loaded."""
     import hashlib
     import os
     import subprocess
     import sys
 
+    flags = _loop_flags()
+    source = _LOOP_SOURCE.read_bytes()
+    key = hashlib.sha256(b"\0".join([source, sys.platform.encode(), cc.encode(),
+                                      " ".join(flags).encode()])).hexdigest()[:16]
+    cache = Path(cache or (os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")) \
+        / "cyclo-fmu"
+    lib_path = cache / f"bench_loop_{key}.so"
+    sum_path = lib_path.with_name(lib_path.name + ".sha256")
+
+    def digest(path):
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    try:
+        if lib_path.is_file() and sum_path.read_text().strip() == digest(lib_path):
+            return lib_path
+    except OSError:
+        pass
+    cache.mkdir(parents=True, exist_ok=True, mode=0o700)
+    tmp = lib_path.with_name(f"{lib_path.name}.{os.getpid()}.tmp")
+    r = subprocess.run([cc, *flags, "-o", str(tmp), str(_LOOP_SOURCE)], capture_output=True,
+                       text=True)
+    if r.returncode != 0:
+        raise RuntimeError(f"cc failed: {r.stderr.strip()[:200]}")
+    tmp_sum = sum_path.with_name(f"{sum_path.name}.{os.getpid()}.tmp")
+    tmp_sum.write_text(digest(tmp) + "\n")
+    os.replace(tmp, lib_path)
+    os.replace(tmp_sum, sum_path)
+    return lib_path
+
+
+def _compile_loop():
+    import ctypes
+    import os
+
     from .native.build import find_compiler
     if os.environ.get("CYCLOFMU_PYTHON_LOOP"):
         return None
-    source = _LOOP_SOURCE.read_bytes()
-    tag = hashlib.sha256(source + sys.platform.encode()).hexdigest()[:16]
-    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "cyclo-fmu"
-    lib_path = cache / f"bench_loop_{tag}.so"
-    if not lib_path.is_file():
-        cache.mkdir(parents=True, exist_ok=True)
-        tmp = lib_path.with_suffix(f".{os.getpid()}.tmp")
-        r = subprocess.run([find_compiler(), "-O2", "-shared", "-fPIC", "-o", str(tmp),
-                            str(_LOOP_SOURCE)], capture_output=True, text=True)
-        if r.returncode != 0:
-            raise RuntimeError(f"cc failed: {r.stderr.strip()[:200]}")
-        os.replace(tmp, lib_path)
+    lib_path = _cached_loop(find_compiler())
     # PyDLL: the GIL stays held through the loop, as the pythonfmu slaves it calls need it
     fn = ctypes.PyDLL(str(lib_path)).bench_loop
     fn.restype = ctypes.c_long
@@ -530,8 +561,12 @@ def _compile_loop():
             m = min(chunk, n_steps - k0)
             ptr = rows.ctypes.data + k0 * width * size
             bad = fn(n, comps, sets, steps_, gets, in_vrs, n_in, in_off, out_vrs, n_out, out_off,
-                     starts, dst, src, int(gauss), buf, len(buf), P(ptr), ctypes.c_long(k0),
+                     starts, dst, src, int(gauss), buf, len(buf), P(ptr),
+                     ctypes.c_long(rows.shape[0] - k0), int(width), ctypes.c_long(k0),
                      ctypes.c_long(m), ctypes.c_double(step), fail)
+            if bad < 0:
+                raise RuntimeError(f"bench loop: inconsistent arguments (check {fail[0]}, "
+                                   f"item {fail[1]})")
             if bad:
                 function = ("fmi2SetReal", "fmi2DoStep", "fmi2GetReal")[fail[1]]
                 raise _fmu_error(calls[fail[0]][0], function, (bad - 1) * step)

@@ -49,54 +49,26 @@ def test_map_zero_speed_and_torque(design):
     assert sum(m.solve(100.0, 0.0)[2]) == 0.0
 
 
-def test_map_solving_heap_changes_no_number(design, monkeypatch):
-    """The FMU solves its map inside slaves.heap.map_solving_heap (glibc keeps the temporaries
-    on its heap): the same tables to the bit, and the allocator is left alone on request."""
-    from cyclo_fmu.slaves import heap
+def test_heap_settings_change_no_number(design):
+    """keep_temporaries_on_heap (for our own processes only: the FMUs never touch the host's
+    allocator, tests/test_fmu_safety.py) leaves every table of the map as it was, to the bit."""
+    import json
+    import subprocess
+    import sys
+    code = ("import json\nfrom cyclo_fmu.slaves.heap import keep_temporaries_on_heap\n"
+            "from model_core import DriveDesign\nfrom model_core.lossmap import ModeMap\n"
+            "keep_temporaries_on_heap()\n"
+            "m = ModeMap(DriveDesign(profile='paper'), 'S2', 30.0, 350.0, n_torque=12, n_speed=6)\n"
+            "print(json.dumps([m._tables[True], m._tables[False], m._idle]))\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     plain = ModeMap(design, "S2", 30.0, 350.0, n_torque=12, n_speed=6)
-    with heap.map_solving_heap():
-        tuned = ModeMap(design, "S2", 30.0, 350.0, n_torque=12, n_speed=6)
-    for forward in (True, False):
-        assert tuned._tables[forward] == plain._tables[forward]
-    assert tuned._idle == plain._idle
+    tuned = json.loads(r.stdout)
+    assert tuned == json.loads(json.dumps([plain._tables[True], plain._tables[False],
+                                           plain._idle]))
+
+
+def test_heap_settings_can_be_switched_off(monkeypatch):
+    from cyclo_fmu.slaves import heap
     monkeypatch.setenv("CYCLO_FMU_KEEP_MALLOC", "1")
     assert heap._glibc() is None
-
-
-def test_map_solving_heap_gives_a_host_its_own_thresholds_back(monkeypatch):
-    """An FMU runs in its host's process: thresholds the host gave glibc in its environment are
-    restored after the map's solve; without any, glibc's 2x rule for the trim threshold."""
-    from cyclo_fmu.slaves import heap
-
-    class Recorder:
-        def __init__(self):
-            self.calls = []
-
-        def mallopt(self, param, value):
-            self.calls.append((param, value))
-            return 1
-
-        def malloc_trim(self, pad):
-            self.calls.append(("trim", pad))
-            return 1
-
-    for var in ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_", "GLIBC_TUNABLES"):
-        monkeypatch.delenv(var, raising=False)
-    libc = Recorder()
-    monkeypatch.setattr(heap, "_glibc", lambda: libc)
-    with heap.map_solving_heap():
-        assert libc.calls == [(heap._M_MMAP_THRESHOLD, heap.MMAP_THRESHOLD),
-                              (heap._M_TRIM_THRESHOLD, heap.TRIM_THRESHOLD)]
-    assert libc.calls[2:] == [(heap._M_TRIM_THRESHOLD, 2 * heap.MMAP_THRESHOLD), ("trim", 0)]
-    monkeypatch.setenv("MALLOC_MMAP_THRESHOLD_", "262144")
-    monkeypatch.setenv("GLIBC_TUNABLES", "glibc.malloc.arena_max=2:glibc.malloc.trim_threshold=0x100000")
-    assert heap.host_thresholds() == (262144, 1 << 20)
-    libc.calls.clear()
-    with heap.map_solving_heap():
-        pass
-    assert libc.calls[2:] == [(heap._M_MMAP_THRESHOLD, 262144),
-                              (heap._M_TRIM_THRESHOLD, 1 << 20), ("trim", 0)]
-    # tunables win over the older variables, and what glibc would not parse is not given
-    assert heap.host_thresholds({"MALLOC_TRIM_THRESHOLD_": "5",
-                                 "GLIBC_TUNABLES": "glibc.malloc.trim_threshold=7"}) == (None, 7)
-    assert heap.host_thresholds({"MALLOC_MMAP_THRESHOLD_": "4k"}) == (None, None)
+    assert heap.keep_temporaries_on_heap() is False

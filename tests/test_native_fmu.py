@@ -182,7 +182,11 @@ def test_model_description_metadata(native, fmu):
     init = {u.variable.name: {d.name for d in u.dependencies} for u in md.initialUnknowns}
     assert init["w_out"] == {"w_in", "mode", "mode_number"}
     assert {"drag_torque", "ripple_1x", "tau_out"} <= init["tau_in"]
-    assert "drag_torque" not in init["tau_housing"]
+    # the drag's reaction closes the torque balance on the housing (issue 20)
+    assert {"drag_torque", "drag_exponent"} <= init["tau_housing"]
+    assert "drag_torque" not in init["PL1"]
+    for name in ("tau_in", "P_loss", "eta"):     # drag_exponent acts in Initialization Mode
+        assert "drag_exponent" in init[name], name
     assert {"J_out", "alpha_ref"} <= init["J_load"]
     assert len(out) == len(init) == 21       # 20 Real outputs and locked
 

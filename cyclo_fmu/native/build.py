@@ -19,6 +19,7 @@ import math
 import os
 import shutil
 import subprocess
+import sys
 import tempfile
 import uuid
 import zipfile
@@ -45,13 +46,26 @@ GENERATED = "cd_map_data.c"
 #: The flags the binary is compiled with. -ffp-contract=off: no fused multiply-add, so that the
 #: interpolation rounds as Python's does; -fvisibility=hidden: only the fmi2 functions are
 #: exported, so two of these FMUs (two designs) in one process cannot bind to each other's data.
-CFLAGS = ("-std=c99", "-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-ffp-contract=off",
-          "-Wall", "-Wl,--no-undefined")
+#: Hardening of every native binary we compile (this FMU, the pythonfmu status front, the
+#: bench loop; docs/explanation/fmu-safety.md): stack protector on functions with arrays,
+#: glibc's checked string/memory functions (_FORTIFY_SOURCE needs -O1 or more), full RELRO
+#: (the GOT read-only after loading, every symbol bound at load), position-independent code,
+#: format-string warnings as errors, and the command line recorded in the binary's
+#: .GCC.command.line section (so that a test, or a user, can read what it was built with).
+HARDEN = ("-fstack-protector-strong", "-D_FORTIFY_SOURCE=2", "-fPIC", "-Wformat",
+          "-Werror=format-security", "-Wl,-z,relro,-z,now", "-Wl,-z,noexecstack",
+          "-frecord-gcc-switches")
+CFLAGS = ("-std=c99", "-O2", "-shared", "-fvisibility=hidden", "-ffp-contract=off",
+          "-Wall", "-Wl,--no-undefined") + HARDEN
 
 #: Map range, as the Python FMU's defaults (map_torque_max, map_speed_max): the same grid, so
 #: that the two FMUs interpolate the same table.
 MAP_TORQUE_MAX = 30.0   # N*m
 MAP_SPEED_MAX = 350.0   # rad/s
+
+#: The declared ``min`` of a parameter that must be positive: FMI's min is inclusive, so the
+#: smallest positive normal double (2.2e-308), which is what the FMU accepts (> 0).
+POSITIVE_MIN = sys.float_info.min
 
 #: Run-time parameters, in the order of the C struct CDExtra (cd_model.h):
 #: (name, unit, quantity, min, min exclusive, description)
@@ -60,16 +74,17 @@ EXTRA = (
      "load-independent drag at 300 rad/s of the driving shaft, ~ speed^(2/3)"),
     ("stribeck_torque", "N.m", "Torque", 0.0, False,
      "extra friction at standstill of the driving shaft, decaying as exp(-(w/w_s)^2)"),
-    ("stribeck_speed", "rad/s", "AngularVelocity", 0.0, True, "Stribeck speed w_s (> 0)"),
+    ("stribeck_speed", "rad/s", "AngularVelocity", POSITIVE_MIN, True,
+     "Stribeck speed w_s (> 0)"),
     ("input_inertia", "kg.m2", "MomentOfInertia", 0.0, False,
      "unmodelled inertia at the driving shaft"),
     ("ripple_1x", "N.m", "Torque", None, False, "torque ripple at 1x the driving speed"),
     ("ripple_1x_phase", "rad", "Angle", None, False, "phase of the 1x ripple"),
     ("ripple_roller", "N.m", "Torque", None, False, "torque ripple at the roller-pass order"),
     ("ripple_roller_phase", "rad", "Angle", None, False, "phase of the roller-pass ripple"),
-    ("thermal_loss_change", "1", None, None, False,
-     "relative change of the losses when warm"),
-    ("thermal_tau", "s", "Time", 0.0, True, "warm-up time constant (> 0)"),
+    ("thermal_loss_change", "1", None, -1.0, False,
+     "relative change of the losses when warm (>= -1: the losses cannot fall below zero)"),
+    ("thermal_tau", "s", "Time", POSITIVE_MIN, True, "warm-up time constant (> 0)"),
     ("drag_exponent", "1", None, 0.0, False, "exponent p of the drag's speed law "
      "(|w|/300 rad/s)^p (0 to 2)"),
 )
@@ -329,7 +344,7 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
        f'<Real {_real_attrs("kg.m2", "MomentOfInertia", 0.0, min_=0.0)}/>', "exact")
     sv("alpha_ref", 51, "parameter", "fixed", "acceleration of the driving shaft over which "
        "J_load and J_load_dec are secants (the order of the accelerations the train sees). "
-       "Assumption", f'<Real {_real_attrs("rad/s2", "AngularAcceleration", ALPHA_REF, min_=0.0)}/>',
+       "Assumption", f'<Real {_real_attrs("rad/s2", "AngularAcceleration", ALPHA_REF, min_=POSITIVE_MIN)}/>',
        "exact")
     for c, vr in zip(constants, _vr_tables(constants)):
         name, kind, value, unit, desc = c
@@ -356,17 +371,19 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
     # Outputs: dependencies on the inputs in Step Mode. InitialUnknowns: on inputs and
     # parameters in Initialization Mode (t = start, no step yet: no inertia or warm-up term).
     mode_p = ["mode", "mode_number"]
-    steady = ["drag_torque", "stribeck_torque", "stribeck_speed", "ripple_1x",
-              "ripple_1x_phase", "ripple_roller", "ripple_roller_phase"]
+    steady = ["drag_torque", "stribeck_torque", "stribeck_speed", "drag_exponent",
+              "ripple_1x", "ripple_1x_phase", "ripple_roller", "ripple_roller_phase"]
     # alpha_in acts through J_out (0 by default); declared, so that the dependencies hold for
     # every parameter value
     both = ["w_in", "tau_out", "alpha_in"]
     inertia = ["J_out"]
     deps = {"w_out": (["w_in"], ["w_in"] + mode_p)}
-    for name in ("tau_in", "P_loss", "eta", "P_extra", "P_stored", "tau_in_static"):
+    # tau_housing closes the torque balance: it carries the extra physics' reaction too
+    for name in ("tau_in", "P_loss", "eta", "P_extra", "P_stored", "tau_in_static",
+                 "tau_housing"):
         deps[name] = (both, both + mode_p + steady + inertia
                       + (["alpha_ref"] if name == "tau_in_static" else []))
-    for name in ("tau_housing", "PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal",
+    for name in ("PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal",
                  "PL_churn", "eta0", "locked", "torque_out"):
         deps[name] = (both, both + mode_p + inertia)
     for name in ("J_load", "J_load_dec"):

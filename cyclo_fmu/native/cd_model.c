@@ -53,8 +53,10 @@ static int interp(const CDMap *map, const double *table, double t, double w, dou
         lw = fmin(fmax(lw, gw[0]), gw[nw - 1]);
     }
     i = bisect_right(gt, nt, lt) - 1;
+    if (i < 0) i = 0;
     if (i > nt - 2) i = nt - 2;
     j = bisect_right(gw, nw, lw) - 1;
+    if (j < 0) j = 0;
     if (j > nw - 2) j = nw - 2;
     ft = (lt - gt[i]) / (gt[i + 1] - gt[i]);
     fw = (lw - gw[j]) / (gw[j + 1] - gw[j]);
@@ -71,8 +73,10 @@ static int interp(const CDMap *map, const double *table, double t, double w, dou
     return clamped;
 }
 
-/* ModeMap._interp_speed: linear in ln|w|, clamped at the top; below the lowest speed
- * proportional to w (w_low = exp(lw[0]), stored as map->w_low) */
+/* ModeMap._interp_speed: linear in ln|w|, clamped at both ends; below the lowest speed
+ * proportional to w (w_low = exp(lw[0]), stored as map->w_low). The bottom clamp matters: w a
+ * little above w_low can have log(w) one ulp below lw[0] (exp and log round), and the index
+ * would then be -1. */
 static void interp_speed(const CDMap *map, const double *idle, double w, double *row)
 {
     const double *gw = map->lw;
@@ -83,8 +87,9 @@ static void interp_speed(const CDMap *map, const double *idle, double w, double 
         for (c = 0; c < CD_N_IDLE; c++) row[c] = idle[c] * (w / map->w_low);
         return;
     }
-    lw = fmin(log(w), gw[nw - 1]);
+    lw = fmin(fmax(log(w), gw[0]), gw[nw - 1]);
     j = bisect_right(gw, nw, lw) - 1;
+    if (j < 0) j = 0;
     if (j > nw - 2) j = nw - 2;
     fw = (lw - gw[j]) / (gw[j + 1] - gw[j]);
     r0 = idle + (size_t)j * CD_N_IDLE;

@@ -170,6 +170,8 @@ static const char *extra_problem(int i, double v)
         return v < 0 ? "must not be negative" : NULL;
     case 2: case 9:
         return v > 0 ? NULL : "must be positive";
+    case 8:   /* the losses cannot fall below zero when warm (keeps P_loss >= 0) */
+        return v >= -1 ? NULL : "must not be below -1";
     case 10:
         return (v >= 0 && v <= 2) ? NULL : "must lie between 0 and 2";
     default:
@@ -251,7 +253,6 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     }
     s->out[O_W_OUT] = r.speeds[m->b];
     tau_in = tau_in_gear = r.torques[m->a];
-    s->out[O_TAU_HOUSING] = r.torques[m->h];
     s->out[O_PL1] = r.losses[0];
     s->out[O_PL2] = r.losses[1];
     s->out[O_PL3] = r.losses[2];
@@ -261,6 +262,7 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     s->out[O_PL_SEAL] = r.losses[6];
     s->out[O_PL_CHURN] = r.losses[7];
     if (steady) tau_in += cd_steady_torque(&s->extra, w_in);
+    double inertia = 0.0;   /* input_inertia's torque: stored in the shaft, not reacted */
     if (dynamic) {
         /* CycloidDrive._dynamic_torque */
         double alpha = (!s->has_w_last || dt <= 0) ? 0.0 : (w_in - s->w_last) / dt;
@@ -273,10 +275,15 @@ static void evaluate(Instance *c, double t, double dt, int commit)
         }
         loss_in = tau_in_gear + tau_out * m->ratio_out;   /* minus the lossless torque */
         tau_in += cd_dynamic_torque(&s->extra, alpha, theta, m->order, t - s->t_start, loss_in);
+        inertia = s->extra.input_inertia * alpha;
         /* the conservative part (inertia, ripples: d/dt of an energy), not a loss */
         p_stored = cd_dynamic_torque(&s->extra, alpha, theta, m->order, 0.0, 0.0) * w_in;
     }
     s->out[O_TAU_IN] = tau_in;
+    /* the support takes what the shafts do not: the gear's reaction and the drag of bearings,
+     * seals and grease (they act between the shafts and the housing), so that
+     * tau_in + tau_out + tau_housing = input_inertia * alpha (0 without it) */
+    s->out[O_TAU_HOUSING] = -(tau_in - inertia + tau_out);
     s->out[O_P_EXTRA] = (tau_in - tau_in_gear) * w_in;
     s->out[O_P_STORED] = p_stored;
     s->out[O_P_LOSS] = tau_in * w_in + tau_out * s->out[O_W_OUT] - p_stored;
@@ -291,6 +298,24 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     s->locked = r.locked;
     s->out[O_TORQUE_OUT] = -tau_out;
     output_inertia(s, mode, tau_ext, J_r, tau_in_gear, commit);
+}
+
+/* Every output a finite number (an extreme input, e.g. tau_out = -1e308, overflows the
+ * products of the map's torques and speeds). */
+static int outputs_finite(const CDState *s)
+{
+    int i;
+    for (i = 0; i < N_OUT; i++)
+        if (!isfinite(s->out[i])) return 0;
+    return 1;
+}
+
+static fmi2Status nonfinite(Instance *c, const char *fn)
+{
+    logmsg(c, fmi2Error, "%s: w_in = %g rad/s, tau_out = %g N.m, alpha_in = %g rad/s2 give "
+           "outputs that are not finite numbers (inputs far beyond any drive): refused, the "
+           "state is that before the call", fn, c->s.w_in, c->s.tau_out, c->s.alpha_in);
+    return fmi2Error;
 }
 
 #define CHECK_INSTANCE(fn) \
@@ -351,6 +376,14 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
         logmsg(&tmp, fmi2Error, "fmi2Instantiate: this FMU supports Co-Simulation only");
         return NULL;
     }
+    /* the host's allocator and ours never mix: a block from allocateMemory must go back
+     * through freeMemory, so both or neither */
+    if ((tmp.allocate == NULL) != (tmp.release == NULL)) {
+        logmsg(&tmp, fmi2Error, "fmi2Instantiate: the callbacks give %s but not %s (both or "
+               "neither)", tmp.allocate ? "allocateMemory" : "freeMemory",
+               tmp.allocate ? "freeMemory" : "allocateMemory");
+        return NULL;
+    }
     if (fmuGUID == NULL || strcmp(fmuGUID, CD_GUID) != 0) {
         char q[64];
         quote(fmuGUID, q, sizeof q);
@@ -401,10 +434,17 @@ FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
 {
     CHECK_INSTANCE(fmi2ExitInitializationMode);
     if (c->s.phase != PH_INIT) return not_in_phase(c, "fmi2ExitInitializationMode");
-    c->s.mode_eff = resolve_mode(&c->s);
-    c->s.phase = PH_STEP;
-    c->s.has_key = 0;
-    evaluate(c, c->s.t_start, 0.0, 1);
+    {
+        CDState before = c->s;
+        c->s.mode_eff = resolve_mode(&c->s);
+        c->s.phase = PH_STEP;
+        c->s.has_key = 0;
+        evaluate(c, c->s.t_start, 0.0, 1);
+        if (!outputs_finite(&c->s)) {
+            c->s = before;
+            return nonfinite(c, "fmi2ExitInitializationMode");
+        }
+    }
     return fmi2OK;
 }
 
@@ -439,9 +479,13 @@ static fmi2Status bad_vr(Instance *c, const char *fn, unsigned int vr)
 }
 
 /* Initialization Mode: the outputs follow the inputs and parameters set so far (f_init). */
-static void refresh(Instance *c)
+static int refresh(Instance *c)
 {
-    if (c->s.phase == PH_INIT || c->s.phase == PH_INSTANTIATED) evaluate(c, c->s.t_start, 0.0, 0);
+    if (c->s.phase == PH_INIT || c->s.phase == PH_INSTANTIATED) {
+        evaluate(c, c->s.t_start, 0.0, 0);
+        return outputs_finite(&c->s);
+    }
+    return 1;
 }
 
 FMI2_Export fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference vr[],
@@ -460,7 +504,10 @@ FMI2_Export fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference 
         else if (r == VR_J_OUT) value[i] = c->s.J_out;
         else if (r == VR_ALPHA_REF) value[i] = c->s.alpha_ref;
         else if (r >= VR_OUT0 && r < VR_OUT0 + N_OUT) {
-            if (!refreshed) { refresh(c); refreshed = 1; }
+            if (!refreshed) {
+                if (!refresh(c)) return nonfinite(c, "fmi2GetReal");
+                refreshed = 1;
+            }
             value[i] = c->s.out[r - VR_OUT0];
         } else if (r >= VR_EXTRA0 && r < VR_EXTRA0 + CD_N_EXTRA)
             value[i] = *extra_field(&c->s.extra, (int)(r - VR_EXTRA0));
@@ -495,7 +542,7 @@ FMI2_Export fmi2Status fmi2GetBoolean(fmi2Component comp, const fmi2ValueReferen
     if (nvr && (vr == NULL || value == NULL)) return fmi2Error;
     for (i = 0; i < nvr; i++) {
         if (vr[i] != VR_LOCKED) return bad_vr(c, "fmi2GetBoolean", vr[i]);
-        refresh(c);
+        if (!refresh(c)) return nonfinite(c, "fmi2GetBoolean");
         value[i] = c->s.locked ? fmi2True : fmi2False;
     }
     return fmi2OK;
@@ -665,17 +712,37 @@ FMI2_Export fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReferenc
 }
 
 /* -- FMU state ------------------------------------------------------------------------------ */
-static int state_valid(const CDState *s)
+static int flag(int v) { return v == 0 || v == 1; }
+
+/* A state from a host's bytes: every field is checked as fmi2SetReal and the step would check
+ * it, so a corrupted state is refused instead of giving NaN outputs with fmi2OK. NULL if
+ * valid, else the first field that is not. */
+static const char *state_problem(const CDState *s)
 {
     int i;
-    if (s->magic != STATE_MAGIC || s->version != STATE_VERSION) return 0;
-    if (s->phase < PH_INSTANTIATED || s->phase > PH_TERMINATED) return 0;
-    if (s->mode < 0 || s->mode >= CD_N_MODES || s->mode_eff < 0 || s->mode_eff >= CD_N_MODES)
-        return 0;
-    if (s->mode_number < 0 || s->mode_number > CD_N_MODES) return 0;
+    if (s->magic != STATE_MAGIC || s->version != STATE_VERSION) return "magic/version";
+    if (s->phase < PH_INSTANTIATED || s->phase > PH_TERMINATED) return "phase";
+    if (s->mode < 0 || s->mode >= CD_N_MODES) return "mode";
+    if (s->mode_eff < 0 || s->mode_eff >= CD_N_MODES) return "mode_eff";
+    if (s->mode_number < 0 || s->mode_number > CD_N_MODES) return "mode_number";
     for (i = 0; i < CD_N_EXTRA; i++)
-        if (extra_problem(i, *extra_field((CDExtra *)&s->extra, i))) return 0;
-    return isfinite(s->w_in) && isfinite(s->tau_out);
+        if (extra_problem(i, *extra_field((CDExtra *)&s->extra, i))) return EXTRA_NAMES[i];
+    if (!isfinite(s->w_in)) return "w_in";
+    if (!isfinite(s->tau_out)) return "tau_out";
+    if (!isfinite(s->alpha_in)) return "alpha_in";
+    if (!(isfinite(s->J_out) && s->J_out >= 0)) return "J_out";
+    if (!(isfinite(s->alpha_ref) && s->alpha_ref > 0)) return "alpha_ref";
+    if (!isfinite(s->t_start)) return "t_start";
+    if (!isfinite(s->theta)) return "theta";
+    if (!isfinite(s->w_last)) return "w_last";
+    for (i = 0; i < N_OUT; i++)
+        if (!isfinite(s->out[i])) return "outputs";
+    if (!flag(s->locked) || !flag(s->has_w_last) || !flag(s->warned_range) || !flag(s->has_key))
+        return "flags";
+    if (s->has_key && !(isfinite(s->key_w) && isfinite(s->key_tau) && isfinite(s->key_J_acc)
+                        && isfinite(s->key_J_dec) && s->key_J_acc > 0 && s->key_J_dec > 0))
+        return "J_load secants";
+    return NULL;
 }
 
 FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *FMUstate)
@@ -696,9 +763,11 @@ FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *FMUstat
 FMI2_Export fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate FMUstate)
 {
     const CDState *s = (const CDState *)FMUstate;
+    const char *why;
     CHECK_INSTANCE(fmi2SetFMUstate);
-    if (s == NULL || !state_valid(s)) {
-        logmsg(c, fmi2Error, "fmi2SetFMUstate: not a state of this FMU");
+    if (s == NULL || (why = state_problem(s)) != NULL) {
+        logmsg(c, fmi2Error, "fmi2SetFMUstate: not a state of this FMU (%s)",
+               s ? why : "NULL");
         return fmi2Error;
     }
     c->s = *s;
@@ -755,6 +824,7 @@ FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp,
                                                fmi2FMUstate *FMUstate)
 {
     char guid[GUID_BYTES];
+    const char *why;
     CDState s, *dst;
     CHECK_INSTANCE(fmi2DeSerializeFMUstate);
     if (serializedState == NULL || FMUstate == NULL || size != GUID_BYTES + sizeof(CDState)) {
@@ -764,9 +834,14 @@ FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp,
     }
     guid_bytes(guid);
     memcpy(&s, serializedState + GUID_BYTES, sizeof s);
-    if (memcmp(serializedState, guid, GUID_BYTES) != 0 || !state_valid(&s)) {
+    if (memcmp(serializedState, guid, GUID_BYTES) != 0) {
         logmsg(c, fmi2Error, "fmi2DeSerializeFMUstate: not a state of this FMU (GUID %s)",
                CD_GUID);
+        return fmi2Error;
+    }
+    if ((why = state_problem(&s)) != NULL) {
+        logmsg(c, fmi2Error, "fmi2DeSerializeFMUstate: corrupted state (field %s invalid)",
+               why);
         return fmi2Error;
     }
     dst = (CDState *)(*FMUstate ? *FMUstate : mem_alloc(c, sizeof *dst));
@@ -828,8 +903,16 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicat
                currentCommunicationPoint, communicationStepSize);
         return fmi2Error;
     }
-    evaluate(c, currentCommunicationPoint + communicationStepSize, communicationStepSize, 1);
-    return fmi2OK;
+    {
+        CDState before = c->s;
+        evaluate(c, currentCommunicationPoint + communicationStepSize, communicationStepSize, 1);
+        if (!outputs_finite(&c->s)) {
+            c->s = before;
+            return nonfinite(c, "fmi2DoStep");
+        }
+        /* the step that first left the map (eta0 held at its edge) says so in its status */
+        return c->s.warned_range && !before.warned_range ? fmi2Warning : fmi2OK;
+    }
 }
 
 FMI2_Export fmi2Status fmi2CancelStep(fmi2Component comp)

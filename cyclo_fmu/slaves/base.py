@@ -14,9 +14,12 @@
 """
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 import operator
 import sys
+import uuid
 from pathlib import Path
 from xml.etree.ElementTree import Element, SubElement
 
@@ -95,6 +98,13 @@ class UnitSlave(Fmi2Slave):
             # _guarded, inlined: a step is the hot path of a co-simulation
             self._failed = False
             try:
+                if not 0.0 <= h < math.inf or not -math.inf < t < math.inf:
+                    self.fail(f"fmi2DoStep: currentCommunicationPoint = {t!r}, "
+                              f"communicationStepSize = {h!r}: need finite values and a step "
+                              ">= 0")
+                if self._setup_key is None:
+                    self.fail("fmi2DoStep: the instance is not initialized (fmi2ExitInitialization"
+                              "Mode was not called or failed; its reason was logged there)")
                 result = step(t, h)
             except Exception as exc:   # noqa: BLE001 - reported as fmi2Error, never lost
                 return self._failure(exc)
@@ -111,6 +121,7 @@ class UnitSlave(Fmi2Slave):
         self._error_logged = False
         self._in_init = False
         self._setup_key = None
+        self._prepared_key = None
 
     # -- registration helpers -----------------------------------------------------------------
     def parameter(self, name, value, unit=None, description="", kind=Real, min=None, max=None,
@@ -182,6 +193,75 @@ class UnitSlave(Fmi2Slave):
             self._units[name] = unit
         self._depends[name] = list(depends)
 
+    # -- messages -----------------------------------------------------------------------------
+    def log(self, msg, status=Fmi2Status.ok, category=None, debug=None):
+        """pythonfmu's ``log`` with every '%' escaped as '%%': pythonfmu's binary hands the
+        message to the host's logger as its *format* argument (and our C front reads the text
+        the same way), so a user's value in a message (a schedule, a mode) must never carry a
+        printf directive."""
+        super().log(str(msg).replace("%", "%%"), status, category)
+
+    # -- FMU state ------------------------------------------------------------------------------
+    #: internal attributes (JSON values) that, with the registered variables, define what the
+    #: slave does from here on; subclasses list theirs (fmi2GetFMUstate/fmi2SetFMUstate)
+    state_attributes: tuple = ()
+
+    def _get_fmu_state(self):
+        state = super()._get_fmu_state()
+        state["_internal"] = {a: _to_json(getattr(self, a, None)) for a in
+                              self.state_attributes + _BASE_STATE}
+        return json.loads(json.dumps(state))          # a copy, detached from the live values
+
+    def _state_problem(self, state):
+        """Why ``state`` is not a state of this FMU (None if it is): every registered variable
+        with a value of its type, and only the internal attributes this slave lists."""
+        if not isinstance(state, dict):
+            return "not a mapping"
+        kinds = {v.name: type(v) for v in self.vars.values()}
+        extra = set(state) - set(kinds) - {"_internal"}
+        if extra:
+            return f"unknown entries {sorted(extra)[:3]}"
+        for name, kind in kinds.items():
+            if name not in state:
+                return f"{name} missing"
+            v = state[name]
+            ok = (isinstance(v, bool) if kind is Boolean else isinstance(v, str) if kind is String
+                  else isinstance(v, int) and not isinstance(v, bool) if kind is Integer
+                  else isinstance(v, (int, float)) and not isinstance(v, bool))
+            if not ok:
+                return f"{name} = {v!r} is not a {kind.__name__}"
+        internal = state.get("_internal", {})
+        if not isinstance(internal, dict):
+            return "internal state not a mapping"
+        unknown = set(internal) - set(self.state_attributes) - set(_BASE_STATE)
+        if unknown:
+            return f"unknown internal entries {sorted(unknown)[:3]}"
+        return None
+
+    def _set_fmu_state(self, state):
+        problem = self._state_problem(state)
+        if problem is not None:
+            # refused before anything changes; the C front reads _failed (fmi2Error)
+            message = f"fmi2SetFMUstate: not a state of this FMU ({problem})"
+            self.log(message, Fmi2Status.error, "logStatusError")
+            if not STATUS_FRONT:
+                raise _Failure(message)
+            self._failed = True
+            return
+        state = dict(state)
+        internal = state.pop("_internal", {})
+        super()._set_fmu_state(state)
+        internal = {a: _from_json(v) for a, v in internal.items()}
+        if (internal.get("_setup_key") is not None
+                and internal["_setup_key"] != getattr(self, "_prepared_key", None)):
+            # a state of an instance set up with other parameters (the state's own are
+            # restored above): prepare for them, then restore the dynamic state
+            self._setup()
+            self._prepared_key = internal["_setup_key"]
+        for a, v in internal.items():
+            setattr(self, a, v)
+        self._getters, self._setters = {}, {}
+
     # -- errors -------------------------------------------------------------------------------
     def fail(self, message: str):
         """Log an error and raise; ``_guarded`` turns it into fmi2Error (through the C front)."""
@@ -237,7 +317,7 @@ class UnitSlave(Fmi2Slave):
         key = self._parameter_key()
         if key != self._setup_key:
             self._setup()
-            self._setup_key = key
+            self._setup_key = self._prepared_key = key
 
     def enter_initialization_mode(self):
         self._in_init = True
@@ -310,6 +390,21 @@ class UnitSlave(Fmi2Slave):
 
     # -- model description --------------------------------------------------------------------
     def to_xml(self, model_options=dict()) -> Element:
+        root = self._to_xml(model_options)
+        # a deterministic GUID: a digest of the description itself (its content and the
+        # version), without the build time, so that the same model always has the same GUID
+        # and a host that cached it does not re-import an unchanged FMU
+        from xml.etree.ElementTree import tostring
+        root.set("guid", "")
+        stamp = root.attrib.pop("generationDateAndTime", None)
+        digest = hashlib.sha256(tostring(root) + _version().encode()).digest()
+        root.set("guid", "{" + str(uuid.UUID(bytes=digest[:16], version=5)) + "}")
+        self.guid = root.get("guid")
+        if stamp is not None:
+            root.set("generationDateAndTime", stamp)
+        return root
+
+    def _to_xml(self, model_options) -> Element:
         root = super().to_xml(model_options)
         root.set("version", _version())
         root.set("license", LICENSE)
@@ -392,6 +487,31 @@ class UnitSlave(Fmi2Slave):
         if deps:
             attrib["dependenciesKind"] = " ".join(["dependent"] * len(deps))
         return attrib
+
+
+#: the base class's own internal state
+_BASE_STATE = ("_setup_key", "_in_init")
+
+
+def _to_json(v):
+    """A value as JSON data; tuples tagged so that they come back as tuples."""
+    if isinstance(v, tuple):
+        return {"__tuple__": [_to_json(x) for x in v]}
+    if isinstance(v, list):
+        return [_to_json(x) for x in v]
+    if isinstance(v, dict):
+        return {k: _to_json(x) for k, x in v.items()}
+    return v
+
+
+def _from_json(v):
+    if isinstance(v, dict):
+        if set(v) == {"__tuple__"}:
+            return tuple(_from_json(x) for x in v["__tuple__"])
+        return {k: _from_json(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [_from_json(x) for x in v]
+    return v
 
 
 class _Failure(ValueError):

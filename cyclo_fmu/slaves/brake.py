@@ -50,6 +50,9 @@ class FeltBrake(UnitSlave):
         self._twist = 0.0
         self._w_drum = 0.0
 
+    #: the dynamic state besides the variables (fmi2GetFMUstate)
+    state_attributes = ("_twist", "_w_drum")
+
     #: at the start the drum turns with the shaft, untwisted: no coupling torque yet
     init_independent = ("J_out", "k_coupling", "zeta_coupling")
 
@@ -108,5 +111,11 @@ class FeltBrake(UnitSlave):
 
     def do_step(self, current_time, step_size):
         # the setpoint of the step's start (a step in the setpoint acts from its time on)
-        self._update(current_time, step_size)
+        try:
+            self._update(current_time, step_size)
+        except OverflowError:
+            self.tau_out = self.T_brake = math.nan
+        if not math.isfinite(self.tau_out + self.T_brake):
+            self.fail(f"w = {self.w!r} rad/s gives a torque that is not a finite number: "
+                      "refused")
         return True

@@ -32,10 +32,10 @@ from __future__ import annotations
 import dataclasses
 import math
 import pickle
+import sys
 from pathlib import Path
 
 from . import core
-from .heap import map_solving_heap
 from .base import Boolean, Fmi2Status, Integer, Real, String, UnitSlave
 
 # FMU parameter -> (design section or None, design field, unit, description)
@@ -103,10 +103,12 @@ PARAMETER_LIMITS = dict(
     z1=(3, None), n_disc_rollers=(3, None), lam=(1.0, None),
     **{n: (0.0, None) for n in ("e", "d_v1", "d_o1", "b1", "d_v2", "d_o2", "b2", "d_m2", "D_cz",
                                 "D_p", "d_p", "delta_z", "nu", "rho_oil", "pin_roughness",
-                                "drag_torque", "stribeck_torque", "stribeck_speed",
-                                "input_inertia", "thermal_tau")},
+                                "drag_torque", "stribeck_torque", "input_inertia")},
+    # must be positive: FMI's min is inclusive, so the smallest positive normal double
+    **{n: (sys.float_info.min, None) for n in ("stribeck_speed", "thermal_tau")},
     mu_boundary=(0.0, 1.0), mu_rolling=(0.0, 1.0), thermal_loss_change=(-1.0, None),
-    mode_number=(0, 6), map_torque_max=(0.0, None), map_speed_max=(0.0, None),
+    mode_number=(0, 6), map_torque_max=(sys.float_info.min, None),
+    map_speed_max=(sys.float_info.min, None),
     operating_temperature=(0.0, None))
 
 #: partial losses with an output each: the paper's load-dependent ones, then the physical
@@ -194,9 +196,11 @@ class CycloidDrive(UnitSlave):
                        "driving side's integrator (see J_load)", min=0.0)
         self.parameter("alpha_ref", ALPHA_REF, "rad/s2", "acceleration of the driving shaft "
                        "over which J_load and J_load_dec are secants (the order of the "
-                       "accelerations the train sees). Assumption", min=0.0)
-        self.parameter("map_torque_max", MAP_TORQUE_MAX, "N.m", "largest |tau_out| in the loss map", min=0.0)
-        self.parameter("map_speed_max", MAP_SPEED_MAX, "rad/s", "largest |w_in| in the loss map", min=0.0)
+                       "accelerations the train sees). Assumption", min=sys.float_info.min)
+        self.parameter("map_torque_max", MAP_TORQUE_MAX, "N.m", "largest |tau_out| in the loss map",
+                       min=sys.float_info.min)
+        self.parameter("map_speed_max", MAP_SPEED_MAX, "rad/s", "largest |w_in| in the loss map",
+                       min=sys.float_info.min)
         self.input("w_in", 0.0, "rad/s", "speed of the driving shaft")
         self.input("tau_out", 0.0, "N.m", "torque the load applies on the driven shaft")
         self.input("alpha_in", 0.0, "rad/s2", "acceleration of the driving shaft (from its "
@@ -265,6 +269,9 @@ class CycloidDrive(UnitSlave):
                 return folder
         return _MAP_DIR
 
+    #: the dynamic state besides the variables (fmi2GetFMUstate)
+    state_attributes = ("_theta", "_w_last", "_slope_key", "_last_inputs", "_warned_range")
+
     #: no step yet in Initialization Mode: no acceleration, no warm-up
     init_independent = ("input_inertia", "thermal_loss_change", "thermal_tau")
 
@@ -299,9 +306,11 @@ class CycloidDrive(UnitSlave):
             elif self._map is None or self._map_key != map_key:
                 self._map = _shipped_map(map_key, self._map_folder())
                 if self._map is None:
-                    with map_solving_heap():
-                        self._map = core.lossmap.ModeMap(self._design, self._mode,
-                                                         self.map_torque_max, self.map_speed_max)
+                    # no mallopt here: an FMU must not change the host's allocator (the map
+                    # solves 10-20 % slower with glibc's default thresholds early in a
+                    # process; docs/explanation/fmu-safety.md)
+                    self._map = core.lossmap.ModeMap(self._design, self._mode,
+                                                     self.map_torque_max, self.map_speed_max)
                 self._map_key = map_key
             ex = self._design.extra
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
@@ -413,10 +422,18 @@ class CycloidDrive(UnitSlave):
         else:
             speeds, torques, losses, eta, eta0, locked = self._exact(w_in, tau_out)
         self.P_stored = 0.0
+        self._inertia_torque = 0.0
         if self._dynamic_extra:
             self.tau_in += self._dynamic_torque(t, dt, w_in, tau_out)
         self.P_extra = (self.tau_in - self._tau_in_gear) * w_in
         self.P_loss = self.tau_in * w_in + tau_out * self.w_out - self.P_stored
+        # the support takes what the shafts do not: the gear's reaction and the drag of
+        # bearings, seals and grease (they act between shafts and housing), so that
+        # tau_in + tau_out + tau_housing = input_inertia * alpha (0 without it)
+        self.tau_housing = -(self.tau_in - self._inertia_torque + tau_out)
+        if not (math.isfinite(self.P_loss) and math.isfinite(self.tau_housing)):
+            self.fail(f"w_in = {w_in!r} rad/s, tau_out = {tau_out!r} N.m give outputs that "
+                      "are not finite numbers (inputs far beyond any drive): refused")
         if self._steady_extra or self._dynamic_extra:
             p_in = max(self.tau_in * w_in, tau_out * self.w_out)
             p_out = -min(self.tau_in * w_in, tau_out * self.w_out)
@@ -437,6 +454,7 @@ class CycloidDrive(UnitSlave):
         # the conservative part: d/dt of J w^2/2 and of the ripples' potentials
         # -A cos(theta + phi) - A_z/z cos(z theta + phi_z), each times w = dtheta/dt
         stored = float(ex.dynamic_torque(alpha, self._theta, self._order, 0.0, 0.0))
+        self._inertia_torque = ex.input_inertia * alpha
         self.P_stored = stored * w_in
         return torque
 

@@ -14,18 +14,12 @@ The settings are what that dynamic rule would reach: the mmap threshold :data:`M
 (4 MiB, above the largest temporary of the maps) and the trim threshold :data:`TRIM_THRESHOLD`
 (64 MiB), so the temporaries are recycled on the heap.
 
-- ``keep_temporaries_on_heap`` sets them for the whole process: for processes of our own (the
-  ``cyclo-fmu`` command; the sweep's dask workers get them as environment variables,
-  ``cyclo_fmu.sweep.cluster.worker_environ``).
-- ``map_solving_heap`` sets them while an FMU solves its map inside a host's process;
-  afterwards the trim threshold is twice the mmap threshold (glibc's own rule) and
-  ``malloc_trim(0)`` gives the freed heap back, so the host keeps no memory it did not have.
-  A host that chose its own thresholds (``MALLOC_MMAP_THRESHOLD_``, ``MALLOC_TRIM_THRESHOLD_``
-  or ``GLIBC_TUNABLES=glibc.malloc.mmap_threshold=...:glibc.malloc.trim_threshold=...`` in its
-  environment, which is where glibc reads them) gets its own values back instead
-  (:func:`host_thresholds`). A side effect on a host that chose none: glibc stops adapting its
-  thresholds once they are set explicitly, so the mmap threshold stays at 4 MiB for the rest
-  of the process.
+``keep_temporaries_on_heap`` sets them for the whole process: for processes of our own (the
+``cyclo-fmu`` command; the sweep's dask workers get them as environment variables,
+``cyclo_fmu.sweep.cluster.worker_environ``).
+An FMU never calls them: it lives in someone else's process and must not change the host's
+allocator (docs/explanation/fmu-safety.md; the map of an FMU solves with glibc's defaults,
+``benchmarks/bench_fmu_heap.py`` measures what that costs).
 
 A program using ``model_core`` directly gets the same with the environment variables
 ``MALLOC_MMAP_THRESHOLD_=4194304 MALLOC_TRIM_THRESHOLD_=67108864`` or by calling
@@ -35,7 +29,6 @@ allocator alone.
 """
 from __future__ import annotations
 
-import contextlib
 import ctypes
 import os
 
@@ -46,8 +39,6 @@ _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
 MMAP_THRESHOLD = 4 << 20
 #: bytes of free heap top kept (the temporaries alive at once stay below it)
 TRIM_THRESHOLD = 64 << 20
-#: bytes, afterwards: twice the mmap threshold, glibc's dynamic rule
-TRIM_THRESHOLD_AFTER = 2 * MMAP_THRESHOLD
 
 
 def _glibc():
@@ -70,34 +61,6 @@ def _glibc():
     return libc
 
 
-def host_thresholds(environ=None):
-    """The mmap and trim thresholds (bytes) the process's environment gave glibc at start-up,
-    each None where it gave none: ``MALLOC_MMAP_THRESHOLD_`` / ``MALLOC_TRIM_THRESHOLD_``, or
-    the tunables ``glibc.malloc.mmap_threshold`` / ``glibc.malloc.trim_threshold`` in
-    ``GLIBC_TUNABLES`` (which take precedence, as in glibc). A value glibc would not parse as a
-    whole decimal or 0x hexadecimal number counts as not given (glibc ignores it too)."""
-    env = os.environ if environ is None else environ
-
-    def number(text):
-        text = (text or "").strip()
-        try:
-            return int(text, 16) if text.lower().startswith("0x") else int(text, 10)
-        except ValueError:
-            return None
-    mmap = number(env.get("MALLOC_MMAP_THRESHOLD_"))
-    trim = number(env.get("MALLOC_TRIM_THRESHOLD_"))
-    for item in env.get("GLIBC_TUNABLES", "").split(":"):
-        name, _, value = item.partition("=")
-        v = number(value)
-        if v is None:
-            continue
-        if name == "glibc.malloc.mmap_threshold":
-            mmap = v
-        elif name == "glibc.malloc.trim_threshold":
-            trim = v
-    return mmap, trim
-
-
 def keep_temporaries_on_heap() -> bool:
     """Set :data:`MMAP_THRESHOLD` and :data:`TRIM_THRESHOLD` for the whole process (see the
     module); False where nothing was changed (not glibc, or ``CYCLO_FMU_KEEP_MALLOC``)."""
@@ -111,21 +74,3 @@ def keep_temporaries_on_heap() -> bool:
 def _keep(libc):
     libc.mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)
     libc.mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD)
-
-
-@contextlib.contextmanager
-def map_solving_heap():
-    """Context in which glibc recycles large temporaries on its heap (see the module)."""
-    libc = _glibc()
-    if libc is None:
-        yield
-        return
-    host_mmap, host_trim = host_thresholds()
-    _keep(libc)
-    try:
-        yield
-    finally:
-        if host_mmap is not None:
-            libc.mallopt(_M_MMAP_THRESHOLD, host_mmap)
-        libc.mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD_AFTER if host_trim is None else host_trim)
-        libc.malloc_trim(0)

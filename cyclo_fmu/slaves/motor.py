@@ -138,4 +138,7 @@ class InductionMotor(UnitSlave):
         self.alpha = r * (inv_acc if (r >= 0) == (w >= 0) else inv_dec)
         self.T_em = T_em
         self.P_mech = T_em * w
+        if not math.isfinite(self.P_mech + self.alpha):
+            self.fail(f"tau_shaft = {tau!r} N.m, J_load = {J_acc!r} kg.m2 give a speed or "
+                      "acceleration that is not a finite number: refused")
         return True

@@ -34,6 +34,19 @@ class Transducer(UnitSlave):
         self._filtered = None
 
     init_independent = ("bandwidth",)   # the filter starts at the input
+    #: the dynamic state besides the variables (fmi2GetFMUstate): filter, noise stream
+    state_attributes = ("_filtered", "_noise", "_next", "_dt", "_a", "_rng_state")
+
+    @property
+    def _rng_state(self):
+        rng = getattr(self, "_rng", None)
+        return None if rng is None else rng.bit_generator.state
+
+    @_rng_state.setter
+    def _rng_state(self, state):
+        if state is not None:
+            self._rng = np.random.default_rng(int(self.seed))
+            self._rng.bit_generator.state = state
 
     def _setup(self):
         try:
@@ -79,4 +92,7 @@ class Transducer(UnitSlave):
         a = self._a
         self._filtered = a * self._filtered + (1 - a) * self.scale * x
         self._read()
+        if not math.isfinite(self.y):
+            self.fail(f"x = {x!r} gives a reading that is not a finite number (scale = "
+                      f"{self.scale!r}): refused")
         return True

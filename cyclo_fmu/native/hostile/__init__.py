@@ -1,0 +1,1 @@
+"""Hostile hosts in C for the sanitizer run (cyclo_fmu.native.sanitize)."""
