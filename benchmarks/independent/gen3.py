@@ -399,12 +399,42 @@ def build(case):
     n_in, tout = PLANS[case["plan"]](rng, t, fs, i)
     w = rpm_to_rad_s(n_in)
     theta = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) / fs)])
-    s = dict(t=t, w=w, tout=tout, theta=theta, alpha=np.gradient(w, t),
+    s = dict(t=t, n_in=n_in, w=w, tout=tout, theta=theta, alpha=np.gradient(w, t),
              z=roller_pass_order(mode, design), revs=np.abs(theta) / (2 * np.pi))
-    kinds = {e["kind"] for e in case["effects"]}
     q0, bridged = reducer_losses(design, mode, t, n_in, tout)
+    q = hidden_loss_torques(case, s, design, q0)
+    fg, fi, k_mesh = loss_factors(case, s)
+    L_loss = fg * q[:, 0] + fi * q[:, 1] + k_mesh * q[:, 2]      # P_loss/|w_in| [N*m]
+    T_gear_in = np.sign(w) * L_loss + tout / i                   # quasi-static, the gear
+    s["T_gear_in"] = T_gear_in
+    extra_c = input_torques(case, s)
+    extra = {k: v[0] for k, v in extra_c.items()}
+    T_shaft = T_gear_in + sum(extra.values()) if extra else T_gear_in.copy()
+    truth = effect_sizes(case, s, design, q0, extra_c, T_shaft)
+    # ---- energy audit (noise-free, before the transducer)
+    ripples = [extra[k] for k in ("ripple", "ripple_load") if k in extra]
+    P_loss = L_loss * np.abs(w) + sum(extra[k] * w for k in extra
+                                      if k not in ("inertia", "ripple", "ripple_load"))
+    audit = dict(t=t, n_in=n_in, torque_out=tout, w_in=w, w_out=w / i, T_in=T_shaft,
+                 P_in=T_shaft * w, P_out=tout * w / i, P_loss=P_loss,
+                 P_stored=extra.get("inertia", 0.0) * w,
+                 P_ripple=sum(ripples) * w if ripples else np.zeros_like(w),
+                 ratio=i, loss_torques=q, theta=theta)
+    data = measure(case, rng, s, T_shaft, i, q0)
+    stats = plan_stats(t, n_in, tout, i)
+    stats["model_undefined_samples_bridged"] = bridged
+    data = logger(case, rng, data, stats)
+    return data, dict(effects=truth, plan=stats), audit
+
+
+def hidden_loss_torques(case, s, design, q0):
+    """The core's loss torques under the case's design changes: the friction level, a
+    viscosity drifting in time; and the housing's warm-up (s["temp_rise"], K) a thermal
+    effect follows."""
+    t, w, n_in = s["t"], s["w"], s["n_in"]
+    mode, tout = case["mode"], s["tout"]
+    kinds = {e["kind"] for e in case["effects"]}
     q = q0
-    truth = []
     for e in case["effects"]:
         if e["kind"] == "friction":      # the sliding friction coefficients off by a factor
             q = reducer_losses(scale_friction_level(design, e["factor"]), mode, t, n_in,
@@ -423,49 +453,42 @@ def build(case):
         e = next(e for e in case["effects"] if e["kind"] == "thermal")
         P_nom = (q[:, 0] + q[:, 1]) * np.abs(w)
         s["temp_rise"] = lumped_temperature(t, P_nom, tau=e["tau"], R=e["R_K_per_W"])
-    fg, fi, k_mesh = loss_factors(case, s)
-    L_loss = fg * q[:, 0] + fi * q[:, 1] + k_mesh * q[:, 2]      # P_loss/|w_in| [N*m]
-    sw = np.sign(w)
-    T_gear_in = sw * L_loss + tout / i                           # quasi-static, the gear
-    s["T_gear_in"] = T_gear_in
-    extra_c = input_torques(case, s)
-    extra = {k: v[0] for k, v in extra_c.items()}
-    T_shaft = T_gear_in + sum(extra.values()) if extra else T_gear_in.copy()
-    # ---- truth: each effect's physics and its size at the input (RMS, mN*m)
-    T_nominal = sw * (q0[:, 0] + q0[:, 1]) + tout / i
+    return q
+
+
+def effect_sizes(case, s, design, q0, extra_c, T_shaft):
+    """The truth: each effect's parameters and its size at the input (RMS, mN*m, the effect
+    alone against the nominal model; a transducer fault: the reading error it makes)."""
+    i = mode_ratio(case["mode"], design)
+    T_nominal = np.sign(s["w"]) * (q0[:, 0] + q0[:, 1]) + s["tout"] / i
+    truth = []
     for e in case["effects"]:
         k = e["kind"]
         tr = dict(e)
-        if k in extra:
-            tr["rms_mNm_actual"] = round(1e3 * _rms(extra[k]), 2)
+        if k in extra_c:
+            tr["rms_mNm_actual"] = round(1e3 * _rms(extra_c[k][0]), 2)
             if k != "inertia":
                 tr["coef_SI"] = float(extra_c[k][1])
-        elif k in SENSOR:     # the reading error this transducer fault alone makes
+        elif k in SENSOR:
             tr["rms_mNm_actual"] = round(1e3 * _rms(
-                transducer(dict(effects=[e]), T_shaft, fs, t) - T_shaft), 2)
+                transducer(dict(effects=[e]), T_shaft, case["fs"], s["t"]) - T_shaft), 2)
         elif k in FACTOR or k in DESIGN:
-            # this effect alone against the nominal model
             single = dict(case, effects=[e])
             tr["rms_mNm_actual"] = round(1e3 * _rms(_loss_torque_alone(single, s, design, q0)
                                                     - T_nominal), 2)
         truth.append(tr)
-    # ---- energy audit (noise-free, before the transducer)
-    w_out = w / i
-    P_stored = extra.get("inertia", 0.0) * w
-    P_ripple = sum(extra[k] for k in ("ripple", "ripple_load") if k in extra) * w \
-        if any(k in extra for k in ("ripple", "ripple_load")) else np.zeros_like(w)
-    P_loss = L_loss * np.abs(w) + sum(extra[k] * w for k in extra
-                                      if k not in ("inertia", "ripple", "ripple_load"))
-    audit = dict(t=t, n_in=n_in, torque_out=tout, w_in=w, w_out=w_out, T_in=T_shaft,
-                 P_in=T_shaft * w, P_out=tout * w_out, P_loss=P_loss, P_stored=P_stored,
-                 P_ripple=P_ripple, ratio=i, loss_torques=q, theta=theta)
-    # ---- the transducers
+    return truth
+
+
+def measure(case, rng, s, T_shaft, i, q0):
+    """The transducers' readings: the input torque's faults, noise (white, AR(1) or 1/f),
+    optional quantisation and a housing temperature column."""
+    t, n_in, tout, fs = s["t"], s["n_in"], s["tout"], float(case["fs"])
     T_meas = transducer(case, T_shaft, fs, t)
     nz = case.get("noise", {})
     sig, col = nz.get("sigma_mNm", 3.0) * 1e-3, nz.get("colour", "white")
-    noise_fn = gen2.noise2
-    T_meas = T_meas + noise_fn(rng, t.size, sig, col, fs)
-    To_meas = tout + noise_fn(rng, t.size, 3 * sig, col, fs)
+    T_meas = T_meas + gen2.noise2(rng, t.size, sig, col, fs)
+    To_meas = tout + gen2.noise2(rng, t.size, 3 * sig, col, fs)
     ni_meas = n_in + rng.normal(0, 0.3, t.size)
     no_meas = n_in / i + rng.normal(0, 0.05, t.size)
     if case.get("quantise"):         # 16-bit-like converters: 1 mN*m, 5 mN*m, 0.1, 0.01 r/min
@@ -476,22 +499,26 @@ def build(case):
     if case.get("temperature"):      # a housing thermocouple: lumped warm-up from the losses
         th = s.get("temp_rise")
         if th is None:
-            th = lumped_temperature(t, (q0[:, 0] + q0[:, 1]) * np.abs(w))
+            th = lumped_temperature(t, (q0[:, 0] + q0[:, 1]) * np.abs(s["w"]))
         data["temperature_C"] = 23.0 + th + rng.normal(0, 0.05, t.size)
-    stats = plan_stats(t, n_in, tout, i)
-    stats["model_undefined_samples_bridged"] = bridged
+    return data
+
+
+def logger(case, rng, data, stats):
+    """The logger's faults: a lost stretch of samples, time stamps that did not advance."""
+    t = data["time_s"]
     keep = np.ones(t.size, bool)
-    if case.get("gap"):              # the logger lost a stretch of samples
+    if case.get("gap"):
         g0, gl = case["gap"]
         keep &= ~((t >= g0) & (t < g0 + gl))
     data = {k: v[keep] for k, v in data.items()}
-    if case.get("dup"):              # the logger's clock did not advance on some rows
+    if case.get("dup"):
         m = data["time_s"].size
         rows = rng.choice(np.arange(1, m), size=int(case["dup"] * m), replace=False)
         data["time_s"][rows] = data["time_s"][rows - 1]
         stats["duplicated_stamps"] = int(rows.size)
     stats["samples_written"] = int(data["time_s"].size)
-    return data, dict(effects=truth, plan=stats), audit
+    return data
 
 
 def _loss_torque_alone(case, s, design, q0):
@@ -500,11 +527,12 @@ def _loss_torque_alone(case, s, design, q0):
     q = q0
     if e["kind"] == "friction":
         q = reducer_losses(scale_friction_level(design, e["factor"]), case["mode"], s["t"],
-                           60 * s["w"] / (2 * np.pi), s["tout"])[0]
+                           s["n_in"], s["tout"])[0]
     elif e["kind"] == "viscosity":
-        # at the drift's end (the largest change), scaled by the drift's RMS in time
+        # the drift's end state, blended in by its progress 1 - exp(-t/tau) (linear in
+        # ln(viscosity): an estimate of the size; the recording uses the quadratic form)
         qe = reducer_losses(scale_viscosity(design, np.exp(e["ln_change"])), case["mode"],
-                            s["t"], 60 * s["w"] / (2 * np.pi), s["tout"])[0]
+                            s["t"], s["n_in"], s["tout"])[0]
         r = 1 - np.exp(-s["t"] / e["tau"])
         q = q0 + (qe - q0) * r[:, None]
     fg, fi, k = loss_factors(case, s)
@@ -518,8 +546,9 @@ def plan_stats(t, n_in, tout, i):
     moving = np.abs(n_in) > 1.0
     p = tout * w_out
     back = moving & (p < 0)
-    q = {"Q1_fwd_pos": moving & (n_in > 0) & (p >= 0), "Q2_back_pos": moving & (n_in > 0) & (p < 0),
-         "Q3_fwd_neg": moving & (n_in < 0) & (p >= 0), "Q4_back_neg": moving & (n_in < 0) & (p < 0)}
+    pos, neg = moving & (n_in > 0), moving & (n_in < 0)
+    q = {"Q1_fwd_pos": pos & (p >= 0), "Q2_back_pos": pos & (p < 0),
+         "Q3_fwd_neg": neg & (p >= 0), "Q4_back_neg": neg & (p < 0)}
     return dict({k: round(float(v.mean()), 3) for k, v in q.items()},
                 back_driven_share=round(float(back.sum() / max(moving.sum(), 1)), 3),
                 speed_reversals=int(np.sum(np.diff(np.sign(n_in[moving])) != 0)),
