@@ -435,7 +435,8 @@ def cmd_diagnose(args) -> int:
     try:
         rec, mode, checks = load_recording(args.recording, args.mode, design,
                                            columns=args.columns, units=args.units)
-        d, result = diagnose_recording(rec, mode, checks, design, progress=True)
+        d, result = diagnose_recording(rec, mode, checks, design, progress=True,
+                                       calibrate=args.calibrate)
     except (RecordingError, DiagnosisError) as exc:
         raise CycloidInputError("recording", args.recording, str(exc))
     if args.out:
@@ -637,6 +638,11 @@ def build_parser() -> argparse.ArgumentParser:
                     "auto (inferred from the measured speed ratio and its sign)")
     dg.add_argument("--design", help="design file (TOML) or preset name (mackic-rig)")
     dg.add_argument("--out", help="folder for plots, diagnosis.json, design_updated.toml")
+    dg.add_argument("--calibrate", action="store_true",
+                    help="also fit the calibration effects (mesh_loss: a loss proportional to "
+                    "the mesh power, idle_loss_scale: a scale on the load-independent losses) "
+                    "and write them to design_updated.toml [calibration]; left out by default "
+                    "because free loss scales can stand in for a mismatch outside the library")
     dg.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     dg.add_argument("--units", help="units of columns, overriding anything detected, e.g. "
                     "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")

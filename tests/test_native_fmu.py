@@ -527,9 +527,10 @@ source = "test: made-up values"
 
 
 @pytest.fixture(scope="module")
-def calibrated_fmus(tmp_path_factory):
+def calibrated_fmus(tmp_path_factory, fmu):
     """CycloidDrive.fmu and CycloidDriveNative.fmu built by ``cyclo-fmu build --design`` with
-    a calibrated design."""
+    a calibrated design (after the session's default FMUs: pythonfmu cannot build a Python FMU
+    in a process that has loaded one of the same bundle)."""
     tmp = tmp_path_factory.mktemp("calibrated")
     toml = tmp / "calibrated.toml"
     toml.write_text(CALIBRATED_TOML)
@@ -570,6 +571,35 @@ def test_calibrated_design_python_and_native_fmus_agree(calibrated_fmus, mode):
     assert float(consts["mesh_loss_k"]) == 0.04 and float(consts["idle_loss_scale"]) == 0.3
     assert consts["calibration_source"] == "test: made-up values"
     assert "CALIBRATED" in md.description
+
+
+def test_build_design_changes_every_reducer_fmu(calibrated_fmus, native, fmu):
+    """``cyclo-fmu build --design`` builds the Python FMU with the design too (it used to stay
+    on the default design): at the same operating point each FMU built with the calibrated
+    design differs from its default build, by what the core gives for the two designs."""
+    from model_core.design import design_from_toml
+    from model_core import operating_point
+    cal_native, cal_python = calibrated_fmus
+    w, t = 250.0, -6.0
+    outs = {}
+    for key, path in (("native", native), ("python", fmu), ("native_cal", cal_native),
+                      ("python_cal", cal_python)):
+        i = Inst(path, mode="S1")
+        outs[key] = i.step(w, t)
+        i.close()
+    for kind in ("native", "python"):
+        a, b = outs[kind], outs[kind + "_cal"]
+        assert b["PL_mesh"] > 0 and a["PL_mesh"] == 0
+        assert b["tau_in"] > a["tau_in"] * 1.05           # the mesh loss k = 0.04
+        core = {d: float(operating_point(dd, "S1", w, T_out=t).torques["S"])
+                for d, dd in (("default", DriveDesign()),
+                              ("cal", design_from_toml(CALIBRATED_TOML)))}
+        assert a["tau_in"] == pytest.approx(core["default"], rel=2e-3)
+        assert b["tau_in"] == pytest.approx(core["cal"], rel=2e-3)
+    # the Python FMU's parameters start at the design's values
+    md = read_model_description(cal_python)
+    start = {v.name: v.start for v in md.modelVariables}
+    assert float(start["mesh_loss_k"]) == 0.04 and float(start["idle_loss_scale"]) == 0.3
 
 
 def test_bad_input_gives_fmi2error_with_a_message(native):

@@ -14,11 +14,11 @@ from pathlib import Path
 SUFFIXES = (".csv", ".mf4")
 
 
-def diagnose_recording(rec, mode, checks, design, progress=False):
+def diagnose_recording(rec, mode, checks, design, progress=False, calibrate=False):
     """Diagnose a loaded recording: ``(diagnosis, result dict)`` with the JSON contract's
     keys (the diagnosis's own, ``mode``, ``checks``, ``read_notes``, ``excluded``)."""
     from cyclo_fmu.diagnosis import Diagnoser
-    est = Diagnoser(design, mode, progress=progress).fit(rec)
+    est = Diagnoser(design, mode, progress=progress, calibrate=calibrate).fit(rec)
     d = est.diagnosis_
     d.updated = est.updated_design()      # (design, notes), checked against the recording
     result = d.to_json()
