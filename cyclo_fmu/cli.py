@@ -349,8 +349,9 @@ def cmd_bench(args) -> int:
     design = _load_design(args.design, args.profile)
     with _staged_dir("out", args.out) as out:
         fmu_dir = out / "fmus"
-        for name in SLAVES:
-            build_fmu(name, fmu_dir)
+        for name in SLAVES:   # the reducer with the design built in (its fields without an
+            # FMU parameter included)
+            build_fmu(name, fmu_dir, design if name == "CycloidDrive" else None)
         try:
             run = run_bench(sc, fmu_dir, out, Sensors(ideal=args.ideal_sensors, seed=args.seed),
                             step=step, design=design, progress=_progress_on(args))
@@ -360,6 +361,10 @@ def cmd_bench(args) -> int:
             raise CycloidInputError("design", args.design, str(exc))
     print(f"bench: mode {sc.mode}, scenario {sc.name}, {sc.stop_time:.0f} s simulated; "
           f"files in {out}")
+    if not design.calibration.is_default:
+        c = design.calibration
+        print(f"  reducer CALIBRATED: mesh_loss_k = {c.mesh_loss_k:.4g}, idle_loss_scale = "
+              f"{c.idle_loss_scale:.4g} (fitted to: {c.source or 'not stated'})")
     if run.windows:
         print(f"  {'n_in r/min':>10} {'T_in N*m':>9} {'eta bench %':>11} {'eta core %':>10}")
         for w in run.windows:
@@ -447,6 +452,16 @@ def cmd_diagnose(args) -> int:
         return 0
     for e in result["excluded"]:
         print(f"excluded: {e['count']} {e.get('unit', 'samples')} ({e['reason']})")
+    if "calibration_fit" in result:
+        c = result["calibration_fit"]
+        ci = c["ci95"]
+        print(f"CALIBRATED to this recording first: mesh_loss_k = {c['mesh_loss_k']:.5g} "
+              f"(+- {ci.get('mesh_loss_k', float('nan')):.2g}), idle_loss_scale = "
+              f"{c['idle_loss_scale']:.4g} (+- {ci.get('idle_loss_scale', float('nan')):.2g}; "
+              f"95 %, noise only); input-torque RMS {1e3 * c['rms_before_Nm']:.2f} -> "
+              f"{1e3 * c['rms_after_Nm']:.2f} mN*m; the rest is relative to it")
+        for n in c["notes"]:
+            print(f"  note: {n}")
     print(f"located: {d.located['statement']}")
     if not d.effects:
         print("effects: none - " + (EFFECTS_NONE_LEFT if d.unexplained["present"]
@@ -528,6 +543,7 @@ def cmd_diagnose_batch(args) -> int:
     _workers(args)
     with _staged_dir("out", args.out) as out:
         df = diagnose_batch(folder, out, design, mode, columns=columns,
+                            calibrate=args.calibrate,
                             scheduler=args.scheduler, workers=args.workers, serial=args.serial,
                             progress=_progress_on(args))
     bad = int((df["error"] != "").sum())
@@ -664,6 +680,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "and summary.csv")
     db.add_argument("--mode", required=True)
     db.add_argument("--design", help="design file (TOML) or preset name (mackic-rig)")
+    db.add_argument("--calibrate", action="store_true", help="also fit the calibration "
+                    "effects (mesh_loss, idle_loss_scale; see diagnose --calibrate)")
     db.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     _cluster_options(db)
     db.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -97,3 +97,55 @@ def test_a_plain_diagnosis_does_not_fit_them():
     r = synthesize("mesh_loss", 11, "S1", "tiny", friction_error=0.0)
     d = diagnose(r, "S1", calibrate=False)
     assert not {e["id"] for e in d.evidence} & set(CALIBRATION_EFFECTS)
+
+
+def test_fit_calibration_recovers_the_preset_from_its_recording():
+    """diagnose --calibrate's first step: the mackic-rig drive recorded (forward and reverse
+    rotation, no back-driving), calibrated from the default design by nonlinear least squares
+    on the replay: k and the idle scale come back, the paper's numbers within 0.015, and the
+    note that k cannot be told from a transducer gain without back-driven blocks."""
+    from cyclo_fmu.diagnosis.calibration_fit import fit_calibration
+    from cyclo_fmu.paper import paper_comparison
+    from model_core.paper import PAPER_EXPERIMENT
+    from model_core.presets import load_design
+    rig = load_design("mackic-rig")
+    r = synthesize("none", 7, "S1", "tiny", design=rig, friction_error=0.0)
+    f = fit_calibration(DriveDesign(), "S1", as_recording(r))
+    assert f.mesh_loss_k == pytest.approx(rig.calibration.mesh_loss_k, rel=0.01)
+    assert f.idle_loss_scale == pytest.approx(rig.calibration.idle_loss_scale, abs=0.01)
+    assert f.rms_after_Nm < 0.1 * f.rms_before_Nm
+    assert f.back_driven_share == 0 and "transducer" in f.notes[0]
+    assert "diagnose --calibrate" in f.design.calibration.source
+    st = paper_comparison(f.design)["physical"]
+    for m in ("S1", "S2"):
+        for q in ("min", "mean", "max"):
+            assert abs(st[m][q] - PAPER_EXPERIMENT[m][q]) <= 0.015, (m, q, st[m][q])
+
+
+@pytest.mark.slow
+def test_end_to_end_the_preset_recorded_and_diagnosed_reproduces_the_paper(tmp_path):
+    """Issue 19 acceptance, end to end through the command line: the mackic-rig drive
+    recorded with a four-quadrant plan, ``cyclo-fmu diagnose --calibrate`` against the default
+    design; ``paper`` on its design_updated.toml within 0.015 of the experiment."""
+    import json
+    import subprocess
+    import sys
+    from cyclo_fmu.synth import write_synth
+    from model_core.paper import PAPER_EXPERIMENT
+    from model_core.presets import load_design
+    rig = load_design("mackic-rig")
+    r = synthesize("none", 5, "S1", "small", design=rig, plan="four_quadrant",
+                   friction_error=0.0)
+    write_synth(tmp_path / "rec.csv", r)
+    run = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "diagnose",
+                          str(tmp_path / "rec.csv"), "--mode", "S1", "--calibrate", "--out",
+                          str(tmp_path / "dg")], capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr
+    assert "CALIBRATED to this recording first" in run.stdout
+    p = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "paper", "--design",
+                        str(tmp_path / "dg" / "design_updated.toml"), "--json", "--out",
+                        str(tmp_path / "f")], capture_output=True, text=True, timeout=300)
+    st = json.loads(p.stdout)["physical"]
+    for m in ("S1", "S2"):
+        for q in ("min", "mean", "max"):
+            assert abs(st[m][q] - PAPER_EXPERIMENT[m][q]) <= 0.015, (m, q, st[m][q])

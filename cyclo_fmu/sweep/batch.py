@@ -40,12 +40,30 @@ def diagnose_recording(rec, mode, checks, design, progress=False, calibrate=Fals
     """Diagnose a loaded recording: ``(diagnosis, result dict)`` with the JSON contract's
     keys (the diagnosis's own, ``mode``, ``checks``, ``read_notes``, ``excluded``)."""
     from cyclo_fmu.diagnosis import Diagnoser
+    fit = None
+    if calibrate:
+        # the calibration first, by nonlinear least squares on the replay (it can lie far from
+        # the design's values); the diagnosis then judges what remains around it
+        from cyclo_fmu.diagnosis.calibration_fit import fit_calibration
+        fit = fit_calibration(design, mode, rec,
+                              source=f"the recording {getattr(rec, 'source', '') or ''}".strip())
+        design = fit.design
     est = Diagnoser(design, mode, progress=progress, calibrate=calibrate).fit(rec)
     d = est.diagnosis_
     d.updated = est.updated_design()      # (design, notes), checked against the recording
-    if calibrate:
+    if fit is not None:
+        c = fit.design.calibration
+        d.notes.insert(0, f"calibrated to the recording first (nonlinear least squares): "
+                       f"mesh_loss_k {c.mesh_loss_k:.5g} (+- {fit.ci95.get('mesh_loss_k', float('nan')):.2g}), "
+                       f"idle_loss_scale {c.idle_loss_scale:.4g} (+- "
+                       f"{fit.ci95.get('idle_loss_scale', float('nan')):.2g}), input-torque RMS "
+                       f"{1e3 * fit.rms_before_Nm:.2f} -> {1e3 * fit.rms_after_Nm:.2f} mN*m; the "
+                       "effects below are relative to the calibrated design")
+        d.notes[1:1] = fit.notes
         _relinearise_note(d)
     result = d.to_json()
+    if fit is not None:
+        result["calibration_fit"] = fit.report()
     result["mode"] = mode
     result["checks"] = list(checks)
     result["read_notes"] = list(rec.notes)
@@ -62,11 +80,11 @@ def diagnose_recording(rec, mode, checks, design, progress=False, calibrate=Fals
     return d, result
 
 
-def diagnose_one(path, design, mode, columns=None):
+def diagnose_one(path, design, mode, columns=None, calibrate=False):
     """Read and diagnose one recording: ``(diagnosis, result dict)``."""
     from cyclo_fmu.io import load_recording
     rec, mode, checks = load_recording(path, mode, design, columns=columns)
-    return diagnose_recording(rec, mode, checks, design)
+    return diagnose_recording(rec, mode, checks, design, calibrate=calibrate)
 
 
 def find_recordings(folder) -> list:
@@ -81,12 +99,12 @@ def _folder_names(paths) -> dict:
             for p in paths}
 
 
-def _task(design, mode, columns, out, item):
+def _task(design, mode, columns, out, item, calibrate=False):
     path, name = item
     from cyclo_fmu.diagnosis import write_diagnosis
     row = {"recording": path.name, "folder": name, "effect": "", "error": ""}
     try:
-        d, result = diagnose_one(path, design, mode, columns)
+        d, result = diagnose_one(path, design, mode, columns, calibrate)
         write_diagnosis(Path(out) / name, d, design, result, source=path.name)
     except (ValueError, OSError) as exc:     # RecordingError, CycloidInputError, unreadable
         row["error"] = " ".join(str(exc).split())
@@ -98,14 +116,14 @@ def _task(design, mode, columns, out, item):
 
 
 def diagnose_batch(folder, out, design, mode, *, columns=None, scheduler=None, workers=None,
-                   serial=False, progress=True):
+                   serial=False, progress=True, calibrate=False):
     """Diagnose every recording of ``folder`` into ``out``; returns the summary DataFrame (also
     written as ``out/summary.csv``)."""
     import pandas as pd
     from .cluster import run_tasks
     paths = find_recordings(folder)
     names = _folder_names(paths)
-    rows = run_tasks(partial(_task, design, mode, columns, str(out)),
+    rows = run_tasks(partial(_task, design, mode, columns, str(out), calibrate=calibrate),
                      [(p, names[p]) for p in paths], scheduler=scheduler, workers=workers,
                      progress=progress, desc="diagnose", serial=serial)
     df = pd.DataFrame(rows, columns=["recording", "folder", "effect", "rmse_before_mNm",
