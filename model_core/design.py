@@ -22,6 +22,8 @@ ROLLER_KINDS = ("plain", "needle")
 PROFILE_MODIFICATIONS = ("equidistant", "offset")
 DISC_PIN_SLIDING = ("paper", "kinematic")
 CONTACT_LAWS = ("hertz", "linear")
+#: Shaft seals: radial lip seals on the rotating shafts (model_core.drag PL_seal) or none
+SEAL_KINDS = ("lip", "none")
 #: Model profiles: "paper" computes what the paper computed (Eq. 24 as printed, Benedict-Kelley
 #: at its boundary clamp mu_boundary calibrated to the paper's theory, frictionless contact
 #: forces, load-dependent losses only); "physical" the kinematically correct model with roll or
@@ -341,6 +343,12 @@ class DriveDesign:
                       "(what the paper computed: Eq. 24 as printed, mu_boundary calibrated to "
                       "its theory, load-dependent losses only). The physical profile does not "
                       "yet predict the paper's experiment (README, Two profiles).")
+    seals: str = _f("lip", "-", "Shaft seals: 'lip' (a radial lip seal on the input and on the "
+                    "output shaft, model_core.drag PL_seal) or 'none'. **Choice**: 'lip', what a "
+                    "production reducer has to keep its grease in (and the behaviour before the "
+                    "field existed). The paper's laboratory prototype is shown without seal "
+                    "data; its calibration (preset mackic-rig) keeps only about 2 % of the "
+                    "catalogue idle losses, which is consistent with 'none'.")
     losses: str = _f("all", "-", "Losses that enter: 'load_dependent' (the paper's model) or "
                      "'all' (adds the load-independent losses of model_core.drag). The paper "
                      "profile always uses 'load_dependent'.")
@@ -512,7 +520,7 @@ def validate_design(d: DriveDesign) -> None:
         raise CycloidInputError("d_m2", d.d_m2, "the holes reach beyond the root of the teeth")
     for name, allowed in (("ring_rollers", ROLLER_KINDS), ("disc_rollers", ROLLER_KINDS),
                           ("profile_modification", PROFILE_MODIFICATIONS),
-                          ("contact_law", CONTACT_LAWS),
+                          ("contact_law", CONTACT_LAWS), ("seals", SEAL_KINDS),
                           ("disc_pin_sliding", DISC_PIN_SLIDING)):
         if getattr(d, name) not in allowed:
             raise CycloidInputError(name, getattr(d, name), f"must be one of {', '.join(allowed)}")

@@ -215,3 +215,15 @@ def test_calibration_recovers_known_values_from_synthetic_statistics():
     assert r.mesh_loss_k == pytest.approx(0.035, abs=1e-6)
     assert r.idle_loss_scale == pytest.approx(0.4, abs=1e-4)
     assert r.within(1e-7)
+
+
+def test_seals_field_removes_only_the_seal_loss():
+    """design ``seals``: 'lip' (default, the behaviour before the field) or 'none'."""
+    lip = DriveDesign()
+    none = design_from_toml(design_to_toml(lip).replace('seals = "lip"', 'seals = "none"'))
+    assert lip.seals == "lip" and none.seals == "none"
+    a, b = (operating_point(d, "S1", 250.0, T_out=-6.0) for d in (lip, none))
+    assert float(a.losses.PL_seal) > 0 and float(b.losses.PL_seal) == 0.0
+    assert float(b.losses.PL_support) == float(a.losses.PL_support)
+    with pytest.raises(CycloidInputError, match="seals"):
+        DriveDesign(seals="felt")

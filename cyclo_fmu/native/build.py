@@ -154,6 +154,7 @@ def design_constants(design: DriveDesign):
              "lower clamp of the Benedict-Kelley coefficient"),
             ("mu_rolling_disc", "Real", design.friction.rolling_disc, "1",
              "rolling-resistance coefficient of the disc rollers (mu_rolling: the ring rollers)"),
+            ("seals", "String", design.seals, None, "shaft seals: lip or none"),
             ("calibration_source", "String", design.calibration.source, None,
              "what the calibration (mesh_loss_k, idle_loss_scale) was fitted to; empty: not "
              "calibrated"))
