@@ -55,6 +55,11 @@ def _figures(design, envelope, out: Path, breakdown_of=None) -> list[Path]:
     w_rated, t_rated = rpm_to_rad_s(2800.0), 0.85
     names = list(LOSS_NAMES) + list(IDLE_NAMES)
     descr = {**LOSS_DESCRIPTIONS, **IDLE_DESCRIPTIONS}
+    src0 = design if breakdown_of is None else breakdown_of
+    if not src0.calibration.is_default:   # the calibrated mesh loss, on its own bar
+        from model_core.losses import MESH_LOSS_DESCRIPTION, MESH_LOSS_NAME
+        names.append(MESH_LOSS_NAME)
+        descr[MESH_LOSS_NAME] = MESH_LOSS_DESCRIPTION
     fig, axes = plt.subplots(1, 2, figsize=(14, 5), sharey=True)
     x = np.arange(len(names))
     width = 0.2

@@ -524,7 +524,8 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         E[_X], E[_F], E[_T1] = eta0, f, T1
         E[_U] = np.where(iv, 1.0 / eta0, eta0)
         E[_G] = np.where(iv, 1.0 / f, f) - E[_U]
-        E[_L:] = [np.broadcast_to(getattr(L, k), eta0.shape) for k in _GEAR_NAMES]
+        E[_L:-1] = [getattr(L, k) for k in LOSS_NAMES]
+        E[-1] = L.PL_mesh   # (a scalar 0 uncalibrated)
         return E
 
     if n <= _PAIR_START_MAX:
