@@ -439,6 +439,10 @@ def validate_design(d: DriveDesign) -> None:
     _check_finite(d.friction, "friction.")
     _check_finite(d.extra, "extra.")
     _check_finite(d.calibration, "calibration.")
+    if any((ord(c) < 0x20 and c not in "\n\t") or ord(c) == 0x7f for c in d.calibration.source):
+        raise CycloidInputError("calibration.source", d.calibration.source[:40],
+                                "must be text without control characters (line breaks and tabs "
+                                "are allowed)")
     for name, (lo, hi) in (("mesh_loss_k", MESH_LOSS_K_BOUNDS),
                            ("idle_loss_scale", IDLE_LOSS_SCALE_BOUNDS)):
         v = getattr(d.calibration, name)
@@ -663,7 +667,23 @@ def design_from_dict(data: dict) -> DriveDesign:
 
 def _toml_value(v) -> str:
     if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        # a TOML basic string: backslash, quote and control characters escaped (a calibration
+        # source may span lines)
+        out = []
+        for ch in v:
+            if ch == "\\":
+                out.append("\\\\")
+            elif ch == '"':
+                out.append('\\"')
+            elif ch == "\n":
+                out.append("\\n")
+            elif ch == "\t":
+                out.append("\\t")
+            elif ord(ch) < 0x20 or ord(ch) == 0x7f:
+                out.append(f"\\u{ord(ch):04x}")
+            else:
+                out.append(ch)
+        return '"' + "".join(out) + '"'
     if isinstance(v, bool):
         return "true" if v else "false"
     return repr(v)

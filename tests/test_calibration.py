@@ -115,6 +115,11 @@ def test_toml_round_trip_and_bounds():
                        ("idle_loss_scale", 11.0), ("mesh_loss_k", float("nan"))):
         with pytest.raises(CycloidInputError, match=f"calibration.{field}"):
             with_calibration(DriveDesign(), **{field: bad})
+    # a source spanning lines, with quotes and backslashes, survives the file
+    d2 = with_calibration(DriveDesign(), 0.01, 0.5, 'fitted to "rig A",\nrun 2 \\ 3\ttabbed')
+    assert design_from_toml(design_to_toml(d2)) == d2
+    with pytest.raises(CycloidInputError, match="calibration.source"):
+        with_calibration(DriveDesign(), source="bell \x07")
     with pytest.raises(CycloidInputError, match=r"\[calibration\].k"):
         design_from_toml("[calibration]\nk = 0.1\n")
     with pytest.raises(CycloidInputError, match=r"\[calibration\].mesh_loss_k"):

@@ -208,7 +208,8 @@ def _hex(x: float) -> str:
 
 
 def _c_string(s: str) -> str:
-    return '"' + str(s).replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return ('"' + str(s).replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n")
+            .replace("\t", "\\t").replace("\r", "\\r") + '"')
 
 
 def _vr_tables(constants):
