@@ -203,7 +203,13 @@ class CycloidDrive(UnitSlave):
         super().__init__(**kwargs)
         # the design built in (build --design), read from this FMU's own resources (the FMUs
         # of a bench share the first-loaded copy of this package)
-        self._base = default = base_design(self._package_folder())
+        self._base_error = None
+        try:
+            self._base = default = base_design(self._package_folder())
+        except (core.CycloidInputError, OSError) as exc:
+            # reported at initialization as fmi2Error (an FMU must not crash its host)
+            self._base_error = str(exc)
+            self._base = default = core.DriveDesign()
         self.parameter("mode", "S1", None, "operating mode: driving shaft, driven shaft "
                        "(12, 21, 1S, S1, 2S, S2; 1 ring, 2 disc, S eccentric)", String)
         self.parameter("mode_number", 0, None, "the mode as a number for importers that cannot "
@@ -309,6 +315,8 @@ class CycloidDrive(UnitSlave):
 
     def _setup(self):
         try:
+            if self._base_error:
+                raise core.CycloidInputError(DESIGN_FILE, "(built in)", self._base_error)
             self.check_limits()
             mode = self.mode
             if self.mode_number:
