@@ -100,8 +100,9 @@ def _with_profile(design, profile):
 
 
 def _load_design(path, profile=None):
-    design = DriveDesign() if path is None else design_from_toml(Path(path))
-    return _with_profile(design, profile)
+    """The design of ``--design``: a design file, or a preset name (model_core.presets)."""
+    from model_core.presets import load_design
+    return _with_profile(load_design(path), profile)
 
 
 def _json_num(x):
@@ -176,6 +177,10 @@ def cmd_efficiency(args) -> int:
         "reaction_torque_Nm": _json_num(op.torques[h]),
         "profile": design.profile, "losses": design.losses,
     }
+    if not design.calibration.is_default:
+        # a calibrated value is reported as calibrated, with what it was fitted to
+        result["mesh_loss_W"] = _json_num(op.losses.PL_mesh)
+        result["calibration"] = design.calibration.report()
     if design.profile == "physical":
         from model_core.losses import contact_states
         from model_core.drag import IDLE_NAMES
@@ -222,11 +227,18 @@ def cmd_efficiency(args) -> int:
     from model_core.drag import IDLE_DESCRIPTIONS
     rows = [(k, losses[k], LOSS_DESCRIPTIONS[k]) for k in LOSS_NAMES]
     rows += [(k, v, IDLE_DESCRIPTIONS[k]) for k, v in result.get("idle_losses_W", {}).items()]
+    if "mesh_loss_W" in result:
+        from model_core.losses import MESH_LOSS_DESCRIPTION
+        rows.append(("PL_mesh", result["mesh_loss_W"], MESH_LOSS_DESCRIPTION))
     for k, v, text in rows:
         share = f"{100 * v / p_in:6.2f} %" if p_in > 0 else "   n/a"
         print(f"    {k:10}  {v:9.3f} W  {share} of input   {text}")
     print(f"    {'sum':10}  {result['loss_power_W']:9.3f} W")
     print(f"  profile {design.profile}, losses {design.losses}")
+    if "calibration" in result:
+        c = result["calibration"]
+        print(f"  CALIBRATED: mesh_loss_k = {c['mesh_loss_k']:.4g}, idle_loss_scale = "
+              f"{c['idle_loss_scale']:.4g} (fitted to: {c['source'] or 'not stated'})")
     if "rollers" in result:
         print(f"  grease at {result['grease_temperature_C']:.1f} degC, "
               f"{result['grease_viscosity_mm2_s']:.1f} mm^2/s")
@@ -337,8 +349,9 @@ def cmd_bench(args) -> int:
     design = _load_design(args.design, args.profile)
     with _staged_dir("out", args.out) as out:
         fmu_dir = out / "fmus"
-        for name in SLAVES:
-            build_fmu(name, fmu_dir)
+        for name in SLAVES:   # the reducer with the design built in (its fields without an
+            # FMU parameter included)
+            build_fmu(name, fmu_dir, design if name == "CycloidDrive" else None)
         try:
             run = run_bench(sc, fmu_dir, out, Sensors(ideal=args.ideal_sensors, seed=args.seed),
                             step=step, design=design, progress=_progress_on(args))
@@ -348,6 +361,10 @@ def cmd_bench(args) -> int:
             raise CycloidInputError("design", args.design, str(exc))
     print(f"bench: mode {sc.mode}, scenario {sc.name}, {sc.stop_time:.0f} s simulated; "
           f"files in {out}")
+    if not design.calibration.is_default:
+        c = design.calibration
+        print(f"  reducer CALIBRATED: mesh_loss_k = {c.mesh_loss_k:.4g}, idle_loss_scale = "
+              f"{c.idle_loss_scale:.4g} (fitted to: {c.source or 'not stated'})")
     if run.windows:
         print(f"  {'n_in r/min':>10} {'T_in N*m':>9} {'eta bench %':>11} {'eta core %':>10}")
         for w in run.windows:
@@ -424,7 +441,8 @@ def cmd_diagnose(args) -> int:
     try:
         rec, mode, checks = load_recording(args.recording, args.mode, design,
                                            columns=args.columns, units=args.units)
-        d, result = diagnose_recording(rec, mode, checks, design, progress=True)
+        d, result = diagnose_recording(rec, mode, checks, design, progress=True,
+                                       calibrate=args.calibrate)
     except (RecordingError, DiagnosisError) as exc:
         raise CycloidInputError("recording", args.recording, str(exc))
     if args.out:
@@ -435,6 +453,16 @@ def cmd_diagnose(args) -> int:
         return 0
     for e in result["excluded"]:
         print(f"excluded: {e['count']} {e.get('unit', 'samples')} ({e['reason']})")
+    if "calibration_fit" in result:
+        c = result["calibration_fit"]
+        ci = c["ci95"]
+        print(f"CALIBRATED to this recording first: mesh_loss_k = {c['mesh_loss_k']:.5g} "
+              f"(+- {ci.get('mesh_loss_k', float('nan')):.2g}), idle_loss_scale = "
+              f"{c['idle_loss_scale']:.4g} (+- {ci.get('idle_loss_scale', float('nan')):.2g}; "
+              f"95 %, noise only); input-torque RMS {1e3 * c['rms_before_Nm']:.2f} -> "
+              f"{1e3 * c['rms_after_Nm']:.2f} mN*m; the rest is relative to it")
+        for n in c["notes"]:
+            print(f"  note: {n}")
     print(f"located: {d.located['statement']}")
     if not d.effects:
         print("effects: none - " + (EFFECTS_NONE_LEFT if d.unexplained["present"]
@@ -517,6 +545,7 @@ def cmd_diagnose_batch(args) -> int:
     _workers(args)
     with _staged_dir("out", args.out) as out:
         df = diagnose_batch(folder, out, design, mode, columns=columns,
+                            calibrate=args.calibrate,
                             scheduler=args.scheduler, workers=args.workers, serial=args.serial,
                             progress=_progress_on(args))
     bad = int((df["error"] != "").sum())
@@ -544,7 +573,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="signed speed of the driving shaft, r/min")
     e.add_argument("--torque", required=True, type=_number("torque"),
                    help="torque delivered into the driving shaft, N*m")
-    e.add_argument("--design", help="design file (TOML); default: the paper's test drive")
+    e.add_argument("--design", help="design file (TOML) or preset name (mackic-rig); "
+                   "default: the paper's test drive")
     e.add_argument("--json", action="store_true", help="print one JSON object")
     e.add_argument("--temperature", type=_number("temperature"),
                    help="grease temperature, degC (fixes it; physical profile)")
@@ -555,13 +585,15 @@ def build_parser() -> argparse.ArgumentParser:
     e.set_defaults(func=cmd_efficiency)
     pp = sub.add_parser("paper", help="the paper's Section 5 comparison, theory side")
     pp.add_argument("--out", default="out", help="folder for the figures (default: out)")
-    pp.add_argument("--design", help="design file (TOML); default: the paper's test drive")
+    pp.add_argument("--design", help="design file (TOML) or preset name (mackic-rig); "
+                   "default: the paper's test drive")
     pp.add_argument("--json", action="store_true", help="print one JSON object")
     _add_profile(pp)
     pp.set_defaults(func=cmd_paper)
     sp = sub.add_parser("stiffness", help="torsional rigidity, lost motion, backlash and the "
                         "hysteresis curve from the contact model, as a catalogue states them")
-    sp.add_argument("--design", help="design file (TOML); default: the paper's test drive")
+    sp.add_argument("--design", help="design file (TOML) or preset name (mackic-rig); "
+                   "default: the paper's test drive")
     sp.add_argument("--rated-torque", type=_number("rated-torque"), help="rated output torque "
                     "N*m the catalogue values refer to (default: the paper's motor times z1-1)")
     sp.add_argument("--json", action="store_true", help="print one JSON object")
@@ -571,15 +603,18 @@ def build_parser() -> argparse.ArgumentParser:
     bp = sub.add_parser("build", help="build the FMUs (dist/CycloidDrive.fmu, "
                         "dist/CycloidDriveNative.fmu, ...)")
     bp.add_argument("--dest", default="dist", help="output folder (default: dist)")
-    bp.add_argument("--design", help="design file (TOML) whose loss map CycloidDriveNative.fmu "
-                    "carries; default: the paper's test drive")
+    bp.add_argument("--design", help="design file (TOML) or preset name (mackic-rig) built "
+                    "into the reducer FMUs (CycloidDrive: its parameters' start values and the "
+                    "fields without a parameter; CycloidDriveNative: its loss map); default: "
+                    "the paper's test drive")
     bp.add_argument("names", nargs="*", help="FMUs to build (default: all)")
     _add_profile(bp)
     bp.set_defaults(func=cmd_build)
     mx = sub.add_parser("export-modelica", help="a Modelica package: the mode as MSL LossyGear "
                         "with a loss table fitted to the core over the bench envelope")
     mx.add_argument("--mode", required=True, help=f"operating mode, one of {', '.join(MODES)}")
-    mx.add_argument("--design", help="design file (TOML); default: the paper's test drive")
+    mx.add_argument("--design", help="design file (TOML) or preset name (mackic-rig); "
+                   "default: the paper's test drive")
     mx.add_argument("--out", required=True, help="output folder (writes CycloidDrive_<mode>.mo)")
     mx.set_defaults(func=cmd_export_modelica)
     bench = sub.add_parser("bench", help="simulate the motor - reducer - brake test bench (SSP)")
@@ -594,7 +629,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "steady scenarios (README)")
     bench.add_argument("--quiet", action="store_true", help="no progress bar")
     bench.add_argument("--design", help="design file (TOML) for the reducer, e.g. the "
-                       "design_updated.toml a diagnosis wrote")
+                       "design_updated.toml a diagnosis wrote, or a preset name (mackic-rig)")
     _add_profile(bench)
     bench.set_defaults(func=cmd_bench, fmus=True)
     sy = sub.add_parser("synth", help="write a bench recording with one hidden effect")
@@ -619,8 +654,13 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("recording", help="recording CSV")
     dg.add_argument("--mode", required=True, help=f"operating mode ({', '.join(MODES)}) or "
                     "auto (inferred from the measured speed ratio and its sign)")
-    dg.add_argument("--design", help="design file (TOML)")
+    dg.add_argument("--design", help="design file (TOML) or preset name (mackic-rig)")
     dg.add_argument("--out", help="folder for plots, diagnosis.json, design_updated.toml")
+    dg.add_argument("--calibrate", action="store_true",
+                    help="also fit the calibration effects (mesh_loss: a loss proportional to "
+                    "the mesh power, idle_loss_scale: a scale on the load-independent losses) "
+                    "and write them to design_updated.toml [calibration]; left out by default "
+                    "because free loss scales can stand in for a mismatch outside the library")
     dg.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     dg.add_argument("--units", help="units of columns, overriding anything detected, e.g. "
                     "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")
@@ -641,7 +681,9 @@ def build_parser() -> argparse.ArgumentParser:
     db.add_argument("--out", required=True, help="folder for one result folder per recording "
                     "and summary.csv")
     db.add_argument("--mode", required=True)
-    db.add_argument("--design", help="design file (TOML)")
+    db.add_argument("--design", help="design file (TOML) or preset name (mackic-rig)")
+    db.add_argument("--calibrate", action="store_true", help="also fit the calibration "
+                    "effects (mesh_loss, idle_loss_scale; see diagnose --calibrate)")
     db.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     _cluster_options(db)
     db.add_argument("--quiet", action="store_true", help="no progress bar")

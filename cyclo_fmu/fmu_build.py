@@ -56,8 +56,11 @@ sys.modules[__name__].__class__ = _ReloadableModule
 '''
 
 
-def build_fmu(name: str = "CycloidDrive", dest="dist") -> Path:
-    """Build ``dest/<name>.fmu`` and return its path."""
+def build_fmu(name: str = "CycloidDrive", dest="dist", design=None) -> Path:
+    """Build ``dest/<name>.fmu`` and return its path. ``design`` (CycloidDrive only; default
+    the paper's test drive): the design built in, shipped as ``design.toml`` in the FMU's
+    resources (its values are the design parameters' start values, and it supplies the
+    fields the FMU has no parameter for) with its loss maps solved here."""
     from pythonfmu.builder import FmuBuilder
 
     if name not in SLAVES:
@@ -70,9 +73,12 @@ def build_fmu(name: str = "CycloidDrive", dest="dist") -> Path:
         ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
         shutil.copytree(HERE / "slaves", pkg, ignore=ignore)
         shutil.copytree(HERE.parent / "model_core", pkg / "_bundled_core", ignore=ignore)
-        if name == "CycloidDrive":   # the default design's maps, solved once here
-            from .slaves.cycloid_drive import write_shipped_maps
-            write_shipped_maps(pkg / "_maps")
+        if name == "CycloidDrive":   # the design's maps, solved once here
+            from .slaves.cycloid_drive import DESIGN_FILE, write_shipped_maps
+            if design is not None:
+                from model_core.design import design_to_toml
+                (pkg / DESIGN_FILE).write_text(design_to_toml(design), encoding="utf-8")
+            write_shipped_maps(pkg / "_maps", design=design)
         front = _have_compiler() and not os.environ.get("CYCLOFMU_NO_SHIM")
         if front:   # the slaves report failures to the C front (slaves.base.STATUS_FRONT)
             (pkg / "_status_front").write_text("linux64 binary: cyclo_fmu/native/"
@@ -180,24 +186,26 @@ def _install_status_shim(fmu: Path, name: str) -> None:
 
 
 def build_any(name: str, dest="dist", design=None) -> Path:
-    """Build one FMU by name: a Python FMU (SLAVES) or the native one (for ``design``, default
-    the paper's test drive; the Python FMUs take the design as parameters instead)."""
+    """Build one FMU by name: a Python FMU (SLAVES) or the native one, the reducers for
+    ``design`` (default the paper's test drive). The motor, brake and transducer FMUs do not
+    depend on the reducer's design."""
     if name in NATIVE:
         from .native import build_native_fmu
         return build_native_fmu(design, dest)
-    return build_fmu(name, dest)
+    return build_fmu(name, dest, design if name == "CycloidDrive" else None)
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="build_fmu", description="Build the cyclo-fmu FMUs.")
     p.add_argument("--dest", default="dist", help="output folder (default: dist)")
-    p.add_argument("--design", help="design file (TOML) for CycloidDriveNative")
+    p.add_argument("--design", help="design file (TOML) or preset name for the reducer FMUs "
+                   "(CycloidDrive, CycloidDriveNative)")
     p.add_argument("names", nargs="*", default=list(ALL_FMUS), help="FMUs to build")
     args = p.parse_args(argv)
     design = None
     if args.design:
-        from model_core import design_from_toml
-        design = design_from_toml(Path(args.design))
+        from model_core.presets import load_design
+        design = load_design(args.design)
     for name in args.names:
         if name not in ALL_FMUS:
             p.error(f"unknown FMU {name!r}; known: {', '.join(ALL_FMUS)}")

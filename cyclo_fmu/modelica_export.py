@@ -242,7 +242,14 @@ def export_modelica(mode: str, out_dir, design: DriveDesign | None = None,
     """Fit and write ``out_dir/CycloidDrive_<mode>.mo``; returns its path."""
     design = design or DriveDesign()
     fit = fit_loss_table(design, mode, envelope)
-    name, src = modelica_package(fit, design_name or "the paper's test drive")
+    label = design_name or "the paper's test drive"
+    cal = design.calibration
+    if not cal.is_default:   # a calibrated value is reported as calibrated, with its source
+        from html import escape
+        label += (f"; CALIBRATED: mesh_loss_k = {cal.mesh_loss_k:.6g}, idle_loss_scale = "
+                  f"{cal.idle_loss_scale:.6g}, fitted to: "
+                  f"{escape(cal.source or 'not stated').replace(chr(92), '/')}")
+    name, src = modelica_package(fit, label)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / f"{name}.mo"

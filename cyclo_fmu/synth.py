@@ -21,7 +21,7 @@ import numpy as np
 
 from model_core import DriveDesign
 from model_core.errors import CycloidInputError
-from model_core.effects import EFFECTS, effect_signals, switch_on
+from model_core.effects import EFFECTS, MODEL_PARAMETER_EFFECTS, effect_signals, switch_on
 from model_core.kinematics import parse_mode, shaft_speeds
 from model_core.lossmap import replay_input_torque
 
@@ -158,6 +158,11 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
             friction_error = math.copysign(0.06 + abs(friction_error), friction_error or 1.0)
     from model_core.design import scale_friction_level
     true_design = scale_friction_level(design, 1 + friction_error)
+    # effects that act through the design's calibration (mesh loss k, idle-loss scale): the
+    # true reducer has them, as it has the friction error
+    for eid in ("mesh_loss", "idle_loss_scale"):
+        if eid in hidden:
+            true_design, _ = EFFECTS[eid].apply(true_design, hidden[eid][0])
     if engine == "bench":
         if len(hidden) != 1 or added_torque is not None or temperature_rise is not None:
             raise ValueError("engine = 'bench' hides exactly one library effect")
@@ -188,8 +193,8 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
     offset = gain = 0.0
     for eid, (values, eff_shape) in hidden.items():
         eff = EFFECTS[eid]
-        if eid in ("none", "friction_miscalibrated"):
-            continue      # friction_miscalibrated hides nothing but the friction error itself
+        if eid in MODEL_PARAMETER_EFFECTS:
+            continue      # they act through the true design (friction error, calibration)
         if eid == "torque_sensor_offset":
             offset += values["offset"]
             continue

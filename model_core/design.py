@@ -22,6 +22,8 @@ ROLLER_KINDS = ("plain", "needle")
 PROFILE_MODIFICATIONS = ("equidistant", "offset")
 DISC_PIN_SLIDING = ("paper", "kinematic")
 CONTACT_LAWS = ("hertz", "linear")
+#: Shaft seals: radial lip seals on the rotating shafts (model_core.drag PL_seal) or none
+SEAL_KINDS = ("lip", "none")
 #: Model profiles: "paper" computes what the paper computed (Eq. 24 as printed, Benedict-Kelley
 #: at its boundary clamp mu_boundary calibrated to the paper's theory, frictionless contact
 #: forces, load-dependent losses only); "physical" the kinematically correct model with roll or
@@ -225,6 +227,58 @@ class ExtraPhysics:
                 + self.thermal_loss_change * (1.0 - _np.exp(-elapsed / self.thermal_tau)) * loss_in)
 
 
+#: Bounds of the calibration parameters (see Calibration).
+#: k [1]: 0 is the model as derived; a negative k would make the mesh create energy where the
+#: model's own losses are small (eta0 (1 - k) > 1): a model that loses too much is corrected
+#: through its friction level (diagnosis effect ``friction_miscalibrated``) instead. Above 0.5
+#: half the meshing power would vanish in a mechanism the model does not know; no lubricated
+#: gear mesh loses that much (review of the paper's drive: the known candidates stack to
+#: 0.02-0.03), so such a fit names a different defect.
+MESH_LOSS_K_BOUNDS = (0.0, 0.5)
+#: idle_loss_scale [1]: 0 removes the load-independent losses; 10 is an order of magnitude
+#: above the catalogue estimates of model_core.drag (a cold start with stiff grease and new lip
+#: seals reaches about 3-5 times them), beyond which the drag model itself is wrong.
+IDLE_LOSS_SCALE_BOUNDS = (0.0, 10.0)
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """What the model learned from a measurement: two loss parameters and where they came from.
+
+    Defaults (k = 0, scale = 1) are the model as derived, with bit-identical results. A value
+    other than the default is always reported as **calibrated**, with ``source``, what it was
+    fitted to (model_core.calibration, the diagnosis effects ``mesh_loss`` and
+    ``idle_loss_scale``).
+    """
+
+    mesh_loss_k: float = _f(0.0, "1",
+                            "Additional loss in the meshing, as a fraction k of the mesh power: "
+                            "the basic efficiency becomes eta0 (1 - k) in both relative flow "
+                            "directions (a loss element of efficiency 1 - k in series with the "
+                            "mechanism on its disc side), applied in the fixed point of "
+                            "model_core.efficiency.operating_point, so the force balance, "
+                            "self-locking and back-driving see it; booked as the partial loss "
+                            "PL_mesh. Bounds 0 to 0.5 (MESH_LOSS_K_BOUNDS). **Calibrated** "
+                            "where not 0.")
+    idle_loss_scale: float = _f(1.0, "1",
+                                "Scale on the load-independent losses of model_core.drag "
+                                "(support bearings, seals, grease drag; physical profile with "
+                                "losses = 'all'; no effect otherwise). Bounds 0 to 10 "
+                                "(IDLE_LOSS_SCALE_BOUNDS). **Calibrated** where not 1.")
+    source: str = _f("", "-", "What the values were fitted to, and how (free text, echoed by "
+                     "every output). Empty for the uncalibrated defaults.")
+
+    @property
+    def is_default(self) -> bool:
+        """Whether the model is as derived (k = 0, scale = 1)."""
+        return self.mesh_loss_k == 0.0 and self.idle_loss_scale == 1.0
+
+    def report(self) -> dict:
+        """The calibration as outputs echo it: the values, ``calibrated`` (bool) and ``source``."""
+        return {"mesh_loss_k": self.mesh_loss_k, "idle_loss_scale": self.idle_loss_scale,
+                "calibrated": not self.is_default, "source": self.source}
+
+
 @dataclass(frozen=True)
 class DriveDesign:
     """A constrained (1-DOF) cycloid drive: central ring 1 with z1 rollers, cycloid gear(s) with
@@ -289,6 +343,12 @@ class DriveDesign:
                       "(what the paper computed: Eq. 24 as printed, mu_boundary calibrated to "
                       "its theory, load-dependent losses only). The physical profile does not "
                       "yet predict the paper's experiment (README, Two profiles).")
+    seals: str = _f("lip", "-", "Shaft seals: 'lip' (a radial lip seal on the input and on the "
+                    "output shaft, model_core.drag PL_seal) or 'none'. **Choice**: 'lip', what a "
+                    "production reducer has to keep its grease in (and the behaviour before the "
+                    "field existed). The paper's laboratory prototype is shown without seal "
+                    "data; its calibration (preset mackic-rig) keeps only about 2 % of the "
+                    "catalogue idle losses, which is consistent with 'none'.")
     losses: str = _f("all", "-", "Losses that enter: 'load_dependent' (the paper's model) or "
                      "'all' (adds the load-independent losses of model_core.drag). The paper "
                      "profile always uses 'load_dependent'.")
@@ -307,6 +367,7 @@ class DriveDesign:
     lubricant: Lubricant = field(default_factory=Lubricant)
     friction: Friction = field(default_factory=Friction)
     extra: ExtraPhysics = field(default_factory=ExtraPhysics)
+    calibration: Calibration = field(default_factory=Calibration)
 
     def __post_init__(self):
         validate_design(self)
@@ -377,6 +438,17 @@ def validate_design(d: DriveDesign) -> None:
     _check_finite(d.lubricant, "lubricant.")
     _check_finite(d.friction, "friction.")
     _check_finite(d.extra, "extra.")
+    _check_finite(d.calibration, "calibration.")
+    if any((ord(c) < 0x20 and c not in "\n\t") or ord(c) == 0x7f for c in d.calibration.source):
+        raise CycloidInputError("calibration.source", d.calibration.source[:40],
+                                "must be text without control characters (line breaks and tabs "
+                                "are allowed)")
+    for name, (lo, hi) in (("mesh_loss_k", MESH_LOSS_K_BOUNDS),
+                           ("idle_loss_scale", IDLE_LOSS_SCALE_BOUNDS)):
+        v = getattr(d.calibration, name)
+        if not lo <= v <= hi:
+            raise CycloidInputError("calibration." + name, v, f"must lie between {lo:g} and "
+                                    f"{hi:g} (model_core.design.{name.upper()}_BOUNDS)")
     for name in ("stribeck_speed", "thermal_tau", "viscosity_tau", "torque_in_zero_tau"):
         if not getattr(d.extra, name) > 0:
             raise CycloidInputError("extra." + name, getattr(d.extra, name), "must be positive")
@@ -452,7 +524,7 @@ def validate_design(d: DriveDesign) -> None:
         raise CycloidInputError("d_m2", d.d_m2, "the holes reach beyond the root of the teeth")
     for name, allowed in (("ring_rollers", ROLLER_KINDS), ("disc_rollers", ROLLER_KINDS),
                           ("profile_modification", PROFILE_MODIFICATIONS),
-                          ("contact_law", CONTACT_LAWS),
+                          ("contact_law", CONTACT_LAWS), ("seals", SEAL_KINDS),
                           ("disc_pin_sliding", DISC_PIN_SLIDING)):
         if getattr(d, name) not in allowed:
             raise CycloidInputError(name, getattr(d, name), f"must be one of {', '.join(allowed)}")
@@ -494,6 +566,10 @@ def validate_design(d: DriveDesign) -> None:
 
 # -- design files -----------------------------------------------------------------------------
 _SECTIONS = (("geometry", None), ("lubricant", "lubricant"), ("friction", "friction"))
+#: the nested sections of DriveDesign
+_NESTED = ("lubricant", "friction", "extra", "calibration")
+#: the sections of a design file
+SECTIONS = ("model", "geometry", "lubricant", "friction", "extra", "calibration")
 
 
 def _to_si(v: float, scale) -> float:
@@ -519,7 +595,7 @@ def _toml_key(f) -> str:
 def _section_to_dict(obj, only=None, skip=()) -> dict:
     out = {}
     for f in dataclasses.fields(obj):
-        if f.name in ("lubricant", "friction", "extra") or f.name in skip:
+        if f.name in _NESTED or f.name in skip:
             continue
         if only is not None and f.name not in only:
             continue
@@ -535,7 +611,7 @@ def _section_to_dict(obj, only=None, skip=()) -> dict:
 
 def _section_from_dict(cls, data: dict, section: str, only=None, skip=()) -> dict:
     keys = {_toml_key(f): f for f in dataclasses.fields(cls)
-            if f.name not in ("lubricant", "friction", "extra") and f.name not in skip
+            if f.name not in _NESTED and f.name not in skip
             and (only is None or f.name in only)}
     kwargs = {}
     for key, value in data.items():
@@ -564,7 +640,8 @@ def design_to_dict(design: DriveDesign) -> dict:
             "geometry": _section_to_dict(design, skip=MODEL_FIELDS),
             "lubricant": _section_to_dict(design.lubricant),
             "friction": _section_to_dict(design.friction),
-            "extra": _section_to_dict(design.extra)}
+            "extra": _section_to_dict(design.extra),
+            "calibration": _section_to_dict(design.calibration)}
 
 
 def design_from_dict(data: dict) -> DriveDesign:
@@ -572,10 +649,10 @@ def design_from_dict(data: dict) -> DriveDesign:
     if not isinstance(data, dict):
         raise CycloidInputError("design", data, "must be a table")
     for section in data:
-        if section not in ("model", "geometry", "lubricant", "friction", "extra"):
+        if section not in SECTIONS:
             raise CycloidInputError(f"[{section}]", "...", "unknown section in design file "
-                                    "(known: model, geometry, lubricant, friction, extra)")
-    for section in ("model", "geometry", "lubricant", "friction", "extra"):
+                                    f"(known: {', '.join(SECTIONS)})")
+    for section in SECTIONS:
         if not isinstance(data.get(section, {}), dict):
             raise CycloidInputError(f"[{section}]", data[section], "must be a table")
     lub = Lubricant(**_section_from_dict(Lubricant, data.get("lubricant", {}), "lubricant"))
@@ -583,12 +660,30 @@ def design_from_dict(data: dict) -> DriveDesign:
     geo = _section_from_dict(DriveDesign, data.get("geometry", {}), "geometry", skip=MODEL_FIELDS)
     geo.update(_section_from_dict(DriveDesign, data.get("model", {}), "model", only=MODEL_FIELDS))
     ex = ExtraPhysics(**_section_from_dict(ExtraPhysics, data.get("extra", {}), "extra"))
-    return DriveDesign(lubricant=lub, friction=fr, extra=ex, **geo)
+    cal = Calibration(**_section_from_dict(Calibration, data.get("calibration", {}),
+                                           "calibration"))
+    return DriveDesign(lubricant=lub, friction=fr, extra=ex, calibration=cal, **geo)
 
 
 def _toml_value(v) -> str:
     if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        # a TOML basic string: backslash, quote and control characters escaped (a calibration
+        # source may span lines)
+        out = []
+        for ch in v:
+            if ch == "\\":
+                out.append("\\\\")
+            elif ch == '"':
+                out.append('\\"')
+            elif ch == "\n":
+                out.append("\\n")
+            elif ch == "\t":
+                out.append("\\t")
+            elif ord(ch) < 0x20 or ord(ch) == 0x7f:
+                out.append(f"\\u{ord(ch):04x}")
+            else:
+                out.append(ch)
+        return '"' + "".join(out) + '"'
     if isinstance(v, bool):
         return "true" if v else "false"
     return repr(v)

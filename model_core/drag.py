@@ -13,7 +13,8 @@ theory and experiment on these (Section 5). Each is a named partial loss in W:
   e |w2 - wS| the gear's translation speed relative to the disc (Petroff's film argument; the
   eccentric bearings' own viscous rolling loss is already in PL1 through SKF's M_rr, and SKF
   neglects M_drag for grease lubrication).
-- ``PL_seal``: radial lip seals on the input and output shafts, frictional power
+- ``PL_seal``: radial lip seals on the input and output shafts (design ``seals = "lip"``, the
+  default; zero with ``"none"``), frictional power
   P = SEAL_POWER_COEFF d^2 n [W; d mm, n r/min] (the rule of thumb of the seal makers'
   catalogues, e.g. Freudenberg Simrit, Technical Manual, radial shaft seals, frictional power
   chart, for a greased seal on a ground steel shaft).
@@ -111,7 +112,7 @@ def idle_torques(design, speeds, nu):
         sign = drag_sign(w)
         sup[shaft] = zero + 2 * M0 * 1e-3 * sign
         seal[shaft] = zero + (SEAL_POWER_COEFF * (SEAL_DIAMETERS[shaft] * 1e3) ** 2
-                              * rad_s_to_rpm(1.0) * sign)
+                              * rad_s_to_rpm(1.0) * sign) * (design.seals == "lip")
     w_rel = np.asarray(speeds["S"], float) - np.asarray(speeds["2"], float)
     # face area of a gear: an annulus from the eccentric bearing's seat to the tooth root
     r_out = design.r_p - design.e - design.d_v1 / 2

@@ -33,7 +33,7 @@ import numpy as np
 
 from . import kinematics
 from .errors import CycloidInputError
-from .losses import LOSS_NAMES, PartialLosses, partial_losses
+from .losses import LOSS_NAMES, MESH_LOSS_NAME, PartialLosses, partial_losses
 
 #: on g(eta0) = f(eta0) - eta0 [1]. T1 depends on eta0 through 1/(i0 eta0 - 1) in the modes
 #: with S driving (i0 = 14/15: about 10 times amplified, without bound near the locking limit
@@ -216,7 +216,9 @@ def _inverse_interpolation(U, G):
 
 #: rows of the secant's history (see _secant): eta0, f, u, G, T1, then the partial losses
 _X, _F, _U, _G, _T1, _L = range(6)
-_ROWS = _L + len(LOSS_NAMES)
+#: the gear's partial losses the fixed point carries: LOSS_NAMES and the calibrated mesh loss
+_GEAR_NAMES = LOSS_NAMES + (MESH_LOSS_NAME,)
+_ROWS = _L + len(_GEAR_NAMES)
 
 
 def _secant(evaluate, H, lo, inv, companion=False):
@@ -325,8 +327,8 @@ def _regula_falsi(eta0_from, sel, a, ga, gb, x_last, g_last, T1, Ls, converged):
         better = np.abs(gm) < np.abs(gs[i])
         j = i[better]
         xs[j], fs[j], Ts[j], gs[j] = m[better], fm[better], Tm[better], gm[better]
-        for arr, name in zip(Ls, LOSS_NAMES):
-            arr[j] = getattr(Lm, name)[better]
+        for arr, name in zip(Ls, _GEAR_NAMES):
+            arr[j] = np.broadcast_to(getattr(Lm, name), m.shape)[better]
         up = gm >= 0
         a[i] = np.where(up, m, a[i])
         b[i] = np.where(up, b[i], m)
@@ -337,6 +339,49 @@ def _regula_falsi(eta0_from, sel, a, ga, gb, x_last, g_last, T1, Ls, converged):
         done = (np.abs(gm) <= _FIXED_POINT_TOL) & converged(fm, Tm, sel[i])
         live[i] = (gm != 0) & (b[i] - a[i] > _BRACKET_RTOL * b[i]) & ~done
     return xs, fs, Ts, Ls
+
+
+def mesh_loss(eta0_model, x, wdir, mesh_power, k, losses=None):
+    r"""The calibrated additional mesh loss: a loss element of efficiency 1 - k in series with
+    the mechanism, on its disc side (design ``[calibration] mesh_loss_k``).
+
+    .. math:: \eta_0 = \eta_{0,m} (1 - k)
+
+    in both relative flow directions, with eta0_m the basic efficiency of the modelled losses.
+    Where the ring drives (w = +1) the element takes k of the power the mechanism passes on,
+    k eta0_m |T1 w1'|; where the disc drives (w = -1) k of the power it receives,
+    k (1 + x) |T1 w1'| / (1 - k). The energy balance holds exactly: the gear's loss
+    |T1 w1'| (1 - eta0) (w = +1) or |T1 w1'| (1/eta0 - 1) (w = -1) is the modelled losses plus
+    this one.
+
+    Parameters
+    ----------
+    eta0_model : array_like
+        Basic efficiency from the modelled losses [1].
+    x : array_like
+        Modelled gear losses over the relative ring power, P_L / |T1 w1'| [1].
+    wdir : array_like
+        +1 where the ring drives in the relative motion, -1 where it is driven.
+    mesh_power : array_like
+        |T1 w1'|, the ring's power in the relative motion [W].
+    k : float
+        Additional loss fraction [1], 0 <= k < 1.
+    losses : PartialLosses, optional
+        The modelled partial losses; returned with ``PL_mesh`` set.
+
+    Returns
+    -------
+    eta0 : ndarray
+        eta0_model (1 - k) [1].
+    losses : PartialLosses or ndarray
+        ``losses`` with PL_mesh [W], or PL_mesh itself without ``losses``.
+    """
+    from dataclasses import replace as _replace
+    eta0_model = np.asarray(eta0_model, float)
+    P = np.where(np.asarray(wdir) > 0, k * eta0_model, k / (1.0 - k) * (1.0 + np.asarray(x))) \
+        * mesh_power
+    eta0 = eta0_model * (1.0 - k)
+    return eta0, (P if losses is None else _replace(losses, PL_mesh=P))
 
 
 def shaft_drag(design, speeds, shape=()):
@@ -365,6 +410,9 @@ def shaft_drag(design, speeds, shape=()):
     if design.profile == "physical" and design.losses == "all":
         from . import drag, thermal
         idle_t = drag.idle_torques(design, speeds, thermal.lubricant_viscosity(design))
+        scale = design.calibration.idle_loss_scale
+        if scale != 1.0:   # calibrated (design [calibration] idle_loss_scale)
+            idle_t = {name: {x: scale * v for x, v in t.items()} for name, t in idle_t.items()}
 
         def shaped(v):   # (np.broadcast_to costs more than the sums where it changes nothing)
             return v if np.shape(v) == shape else np.broadcast_to(v, shape)
@@ -430,6 +478,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         return np.where(wd < 0, np.maximum(eta0, i0 * (1 + 1e-9)), eta0)
 
     state = {}   # warm start of the contact solutions between iterations
+    k_mesh = design.calibration.mesh_loss_k   # calibrated additional mesh loss (0: none)
 
     def eta0_from(eta0, sel=None):
         """f(eta0): the basic efficiency the losses give at the ring torque that eta0 implies,
@@ -457,7 +506,10 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
             _state_update(state, sub, sel, T_flat.size)
         num = L.total
         x = np.divide(num, np.abs(T1) * pick(base), out=np.zeros_like(num), where=T1 != 0)
-        return np.where(wd > 0, 1.0 - x, 1.0 / (1.0 + x)), L, T1
+        f = np.where(wd > 0, 1.0 - x, 1.0 / (1.0 + x))
+        if k_mesh:
+            f, L = mesh_loss(f, x, wd, np.abs(T1) * pick(base), k_mesh, L)
+        return f, L, T1
 
     # the secant on the fixed point eta0 = f(eta0) (_secant), started from the frictionless
     # point; u = 1/eta0 where the ring is driven relatively
@@ -472,7 +524,8 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         E[_X], E[_F], E[_T1] = eta0, f, T1
         E[_U] = np.where(iv, 1.0 / eta0, eta0)
         E[_G] = np.where(iv, 1.0 / f, f) - E[_U]
-        E[_L:] = [getattr(L, k) for k in LOSS_NAMES]
+        E[_L:-1] = [getattr(L, k) for k in LOSS_NAMES]
+        E[-1] = L.PL_mesh   # (a scalar 0 uncalibrated)
         return E
 
     if n <= _PAIR_START_MAX:
@@ -516,7 +569,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         # without a steady solution: the values at the bracket's lower end (torques and losses
         # are reported NaN below, eta0 is the basic efficiency the losses give there)
         x1[bad], f1[bad], T1[bad] = lo_b, f_lo, T1_lo
-        for arr, name in zip(L, LOSS_NAMES):
+        for arr, name in zip(L, _GEAR_NAMES):
             arr[bad] = getattr(L_lo, name)
         keep = g_lo >= 0
         bad = bad[keep]
@@ -534,7 +587,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
             x1[bad], f1[bad], T1[bad] = xs, fs, Ts
             for arr, ls in zip(L, Ls):
                 arr[bad] = ls
-    L = PartialLosses(*(arr.reshape(shape) for arr in L))
+    L = PartialLosses(**{name: arr.reshape(shape) for name, arr in zip(_GEAR_NAMES, L)})
     f1, T1, solvable = f1.reshape(shape), T1.reshape(shape), solvable.reshape(shape)
     wdir = wdir.reshape(shape)
 
@@ -559,7 +612,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
             return np.array(v, float)
     # the gear's torques plus what the outside spends on the shafts' drag
     torques = {k: blank(v) + T_drag[k] for k, v in torques.items()}
-    L = PartialLosses(*(blank(getattr(L, n)) for n in LOSS_NAMES),
+    L = PartialLosses(*(blank(getattr(L, n)) for n in LOSS_NAMES), PL_mesh=blank(L.PL_mesh),
                       P_extra=blank(T_extra * w[a]), **{k: blank(v) for k, v in idle.items()})
     p_a, p_b = torques[a] * w[a], torques[b] * w[b]
     p_in = np.where(forward, p_a, p_b)

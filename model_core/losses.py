@@ -35,6 +35,10 @@ LOSS_DESCRIPTIONS = {
     "PL5": "ring rollers rolling on the teeth",
     "PL6": "ring rollers sliding on their pins",
 }
+#: the calibrated additional mesh loss (design [calibration] mesh_loss_k), booked on its own
+MESH_LOSS_NAME = "PL_mesh"
+MESH_LOSS_DESCRIPTION = ("additional mesh loss, a fraction mesh_loss_k of the mesh power "
+                         "(calibrated)")
 # physical profile, plain rollers: a skidding roller's sliding at the tooth (hole) is booked on
 # PL5 (PL2), where its rolling loss would be; its pin loss PL6 (PL3) is then zero
 
@@ -52,6 +56,8 @@ class PartialLosses:
     PL_support: np.ndarray = 0.0  # W, load-independent (model_core.drag, losses = "all")
     PL_seal: np.ndarray = 0.0
     PL_churn: np.ndarray = 0.0
+    #: W, the calibrated additional mesh loss (design.calibration.mesh_loss_k; 0 uncalibrated)
+    PL_mesh: np.ndarray = 0.0
 
     @property
     def idle(self) -> np.ndarray:
@@ -60,7 +66,8 @@ class PartialLosses:
 
     @property
     def total(self) -> np.ndarray:
-        return self.PL1 + self.PL2 + self.PL3 + self.PL5 + self.PL6 + self.P_extra + self.idle
+        return (self.PL1 + self.PL2 + self.PL3 + self.PL5 + self.PL6 + self.P_extra + self.idle
+                + self.PL_mesh)
 
     def as_dict(self) -> dict:
         return {name: getattr(self, name) for name in LOSS_NAMES}

@@ -21,18 +21,21 @@ import numpy as np
 from . import kinematics
 from .efficiency import operating_point, shaft_drag
 from .drag import IDLE_NAMES
-from .losses import LOSS_NAMES
+from .losses import LOSS_NAMES, MESH_LOSS_NAME
 
-#: the partial losses a map carries: the load-dependent ones, then the load-independent ones
-MAP_LOSS_NAMES = LOSS_NAMES + IDLE_NAMES
+#: the partial losses a map carries: the load-dependent ones, the load-independent ones, then
+#: the calibrated additional mesh loss (design [calibration] mesh_loss_k; zero uncalibrated)
+MAP_LOSS_NAMES = LOSS_NAMES + IDLE_NAMES + (MESH_LOSS_NAME,)
 
-#: version of the map's layout (the drag at the shafts kept over the speed alone: 2)
-MAP_LAYOUT = 2
+#: version of the map's layout (the drag at the shafts kept over the speed alone: 2; the
+#: calibrated mesh loss's share as the table's last column: 3)
+MAP_LAYOUT = 3
 
 _SHAFT_INDEX = {"1": 0, "2": 1, "S": 2}
 _N_GEAR = len(LOSS_NAMES)
 _N_IDLE = len(IDLE_NAMES)
-# ModeMap.solve writes its rows out: eta0 and five shares, three losses and three drags
+# ModeMap.solve writes its rows out: eta0, five shares and the mesh loss's share, three
+# losses and three drags
 if (_N_GEAR, _N_IDLE) != (5, 3):
     raise ImportError("lossmap.ModeMap.solve is written for 5 load-dependent and 3 "
                       "load-independent partial losses")
@@ -90,8 +93,9 @@ class ModeMap:
             op = operating_point(design, self.mode, WW,
                                  T_out=(-sign_b if forward else sign_b) * TT + D_b, dedup=dedup)
             shares = np.stack([np.broadcast_to(getattr(op.losses, n), WW.shape)
-                               for n in LOSS_NAMES], -1)
-            # shares of the gear's PL1..PL6: they sum to its loss, which eta0 carries exactly
+                               for n in LOSS_NAMES + (MESH_LOSS_NAME,)], -1)
+            # shares of the gear's PL1..PL6 and PL_mesh: they sum to its loss, which eta0
+            # carries exactly
             shares = shares / np.maximum(shares.sum(-1, keepdims=True), 1e-300)
             table = np.concatenate([op.eta0[..., None], shares], -1)
             # below the lightest load that runs (the gear's losses above its power, or locked
@@ -106,7 +110,7 @@ class ModeMap:
                 ref = table[j] if good.size else table[valid.any(1)][0]
                 idx = np.clip(np.searchsorted(src, np.arange(table.shape[1])), 0, src.size - 1)
                 table[j] = np.where(valid[j][:, None], table[j], ref[src[idx]])
-            self._tables[forward] = table.tolist()          # [j_speed][i_torque][0: eta0, 1..: shares]
+            self._tables[forward] = table.tolist()   # [j_speed][i_torque][0: eta0, 1..6: shares]
             self._arrays = getattr(self, "_arrays", {})
             self._arrays[forward] = table
             w1p = (self.ratio[0] - self.ratio[2]) * WW
@@ -152,7 +156,7 @@ class ModeMap:
                 g * a[3] + fw * b[3], g * a[4] + fw * b[4], g * a[5] + fw * b[5])
 
     def _interp(self, table, t, w, j, fw):
-        """Bilinear in (ln t, ln w) of the table's six columns (eta0 and the five shares), at
+        """Bilinear in (ln t, ln w) of the table's seven columns (eta0 and the six shares), at
         the speed located by ``_locate_speed``; clamped at the grid's edges, counted in
         ``out_of_range`` where t or w lies beyond them."""
         gt, gw = self._lt, self._lw
@@ -174,7 +178,8 @@ class ModeMap:
                 u * p[2] + v * q[2] + x * r[2] + y * z[2],
                 u * p[3] + v * q[3] + x * r[3] + y * z[3],
                 u * p[4] + v * q[4] + x * r[4] + y * z[4],
-                u * p[5] + v * q[5] + x * r[5] + y * z[5])
+                u * p[5] + v * q[5] + x * r[5] + y * z[5],
+                u * p[6] + v * q[6] + x * r[6] + y * z[6])
 
     def solve(self, w_in: float, tau_out: float):
         """Steady state at driving speed w_in (rad/s) and load torque tau_out (N*m, applied by
@@ -207,7 +212,7 @@ class ModeMap:
         gear = (T1, T1 * c2, T1 * c[2])
         p_gear = gear[0] * speeds[0] + gear[1] * speeds[1] + gear[2] * speeds[2]
         losses = [row[1] * p_gear, row[2] * p_gear, row[3] * p_gear, row[4] * p_gear,
-                  row[5] * p_gear, q[0] * w_abs, q[1] * w_abs, q[2] * w_abs]
+                  row[5] * p_gear, q[0] * w_abs, q[1] * w_abs, q[2] * w_abs, row[6] * p_gear]
         torques = (gear[0] + drag[0], gear[1] + drag[1], gear[2] + drag[2])
         a = _SHAFT_INDEX[self.a]
         p_a, p_b = torques[a] * speeds[a], torques[k] * speeds[k]

@@ -15,9 +15,9 @@ import pytest
 from cyclo_fmu.diagnosis import Diagnoser, DiagnosisError, ljung_box_p, updated_design
 from cyclo_fmu.synth import DEFAULT_EFFECTS, SynthSettings, paper_like, synthesize
 from model_core import DriveDesign
-from model_core.effects import EFFECTS
+from model_core.effects import DEFAULT_CANDIDATES, EFFECTS
 
-LIBRARY = [e for e in EFFECTS if e not in ("none", "friction_miscalibrated")]
+LIBRARY = [e for e in DEFAULT_CANDIDATES if e not in ("none", "friction_miscalibrated")]
 #: the plan under which each effect is identifiable: a transducer gain error needs back-driven
 #: segments (in forward driving it looks like a friction level error)
 PLAN = {"torque_sensor_gain": "four_quadrant"}
@@ -81,13 +81,13 @@ def _single(effect, seed, closure=False):
     return d
 
 
-@pytest.mark.parametrize("effect", list(EFFECTS))
+@pytest.mark.parametrize("effect", list(DEFAULT_CANDIDATES))
 def test_names_the_hidden_effect(effect):
     _single(effect, 11 if effect != "viscosity_drift" else 12)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("effect", list(EFFECTS))
+@pytest.mark.parametrize("effect", list(DEFAULT_CANDIDATES))
 @pytest.mark.parametrize("seed", [12, 13, 14])
 def test_names_the_hidden_effect_over_seeds(effect, seed):
     _single(effect, seed, closure=True)

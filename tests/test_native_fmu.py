@@ -33,7 +33,7 @@ pytestmark = pytest.mark.skipif(GCC is None, reason="no C compiler")
 
 OUT = ("w_out", "tau_in", "tau_housing", "P_loss", "PL1", "PL2", "PL3", "PL5", "PL6", "eta",
        "eta0", "P_extra", "P_stored", "PL_support", "PL_seal", "PL_churn", "torque_out",
-       "tau_in_static", "J_load", "J_load_dec")
+       "tau_in_static", "J_load", "J_load_dec", "PL_mesh")
 #: agreement required with the Python FMU (issue 7)
 RTOL = 1e-9
 #: absolute floor for values that are zero in one FMU and a rounding residue in the other [W,
@@ -188,7 +188,7 @@ def test_model_description_metadata(native, fmu):
     for name in ("tau_in", "P_loss", "eta"):     # drag_exponent acts in Initialization Mode
         assert "drag_exponent" in init[name], name
     assert {"J_out", "alpha_ref"} <= init["J_load"]
-    assert len(out) == len(init) == 21       # 20 Real outputs and locked
+    assert len(out) == len(init) == 22       # 21 Real outputs (PL_mesh at 52) and locked
 
 
 # -- the C host ------------------------------------------------------------------------------
@@ -376,7 +376,7 @@ class CExtra(ctypes.Structure):
 
 class CSolution(ctypes.Structure):
     _fields_ = [("speeds", ctypes.c_double * 3), ("torques", ctypes.c_double * 3),
-                ("losses", ctypes.c_double * 8), ("eta", ctypes.c_double),
+                ("losses", ctypes.c_double * 9), ("eta", ctypes.c_double),
                 ("eta0", ctypes.c_double), ("locked", ctypes.c_int),
                 ("forward", ctypes.c_int), ("out_of_range", ctypes.c_int)]
 
@@ -517,6 +517,93 @@ def test_two_designs_in_one_process_do_not_interfere(native, tmp_path):
     assert alone[rough][0]["tau_in"] == pytest.approx(mm.solve(w, t)[1][2], rel=RTOL)
     a.close()
     b.close()
+
+
+#: a calibrated design (design [calibration]): both FMUs built with it by the build command
+CALIBRATED_TOML = """
+[model]
+profile = "physical"
+[calibration]
+mesh_loss_k = 0.04
+idle_loss_scale = 0.3
+source = "test: made-up values"
+"""
+
+
+@pytest.fixture(scope="module")
+def calibrated_fmus(tmp_path_factory, fmu):
+    """CycloidDrive.fmu and CycloidDriveNative.fmu built by ``cyclo-fmu build --design`` with
+    a calibrated design (after the session's default FMUs: pythonfmu cannot build a Python FMU
+    in a process that has loaded one of the same bundle)."""
+    tmp = tmp_path_factory.mktemp("calibrated")
+    toml = tmp / "calibrated.toml"
+    toml.write_text(CALIBRATED_TOML)
+    dest = tmp / "fmus"
+    r = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "build", "--design", str(toml),
+                        "--dest", str(dest), "CycloidDrive", "CycloidDriveNative"],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    return str(dest / "CycloidDriveNative.fmu"), str(dest / "CycloidDrive.fmu")
+
+
+@pytest.mark.parametrize("mode", ["S1", "S2", "1S"])
+def test_calibrated_design_python_and_native_fmus_agree(calibrated_fmus, mode):
+    """The calibration reaches both FMUs (the native one through its map, the Python one
+    through the design it ships), they agree in all four quadrants, the mesh loss is booked as
+    PL_mesh, and the partial losses add up to P_loss."""
+    native, python = calibrated_fmus
+    from model_core.design import design_from_toml
+    d = design_from_toml(CALIBRATED_TOML)
+    n, p = Inst(native, mode=mode), Inst(python, mode=mode)
+    mm = ModeMap(d, mode, 30.0, 350.0)
+    seen_mesh = 0
+    for w, t in quadrant_points(mode, 80, np.random.default_rng(12)):
+        a, b = n.step(w, t), p.step(w, t)
+        assert_same(a, b, (mode, w, t))
+        # the native FMU interpolates the calibrated design's map
+        assert a["tau_in"] == pytest.approx(mm.solve(w, t)[1][{"1": 0, "2": 1, "S": 2}[mode[0]]],
+                                            rel=RTOL, abs=ATOL)
+        parts = sum(a[k] for k in ("PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal",
+                                   "PL_churn", "PL_mesh"))
+        assert parts == pytest.approx(a["P_loss"], rel=1e-9, abs=1e-9)
+        seen_mesh += a["PL_mesh"] > 0
+    assert seen_mesh > 40
+    n.close()
+    p.close()
+    md = read_model_description(native)
+    consts = {v.name: v.start for v in md.modelVariables}
+    assert float(consts["mesh_loss_k"]) == 0.04 and float(consts["idle_loss_scale"]) == 0.3
+    assert consts["calibration_source"] == "test: made-up values"
+    assert "CALIBRATED" in md.description
+
+
+def test_build_design_changes_every_reducer_fmu(calibrated_fmus, native, fmu):
+    """``cyclo-fmu build --design`` builds the Python FMU with the design too (it used to stay
+    on the default design): at the same operating point each FMU built with the calibrated
+    design differs from its default build, by what the core gives for the two designs."""
+    from model_core.design import design_from_toml
+    from model_core import operating_point
+    cal_native, cal_python = calibrated_fmus
+    w, t = 250.0, -6.0
+    outs = {}
+    for key, path in (("native", native), ("python", fmu), ("native_cal", cal_native),
+                      ("python_cal", cal_python)):
+        i = Inst(path, mode="S1")
+        outs[key] = i.step(w, t)
+        i.close()
+    for kind in ("native", "python"):
+        a, b = outs[kind], outs[kind + "_cal"]
+        assert b["PL_mesh"] > 0 and a["PL_mesh"] == 0
+        assert b["tau_in"] > a["tau_in"] * 1.05           # the mesh loss k = 0.04
+        core = {d: float(operating_point(dd, "S1", w, T_out=t).torques["S"])
+                for d, dd in (("default", DriveDesign()),
+                              ("cal", design_from_toml(CALIBRATED_TOML)))}
+        assert a["tau_in"] == pytest.approx(core["default"], rel=2e-3)
+        assert b["tau_in"] == pytest.approx(core["cal"], rel=2e-3)
+    # the Python FMU's parameters start at the design's values
+    md = read_model_description(cal_python)
+    start = {v.name: v.start for v in md.modelVariables}
+    assert float(start["mesh_loss_k"]) == 0.04 and float(start["idle_loss_scale"]) == 0.3
 
 
 def test_bad_input_gives_fmi2error_with_a_message(native):

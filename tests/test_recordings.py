@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from model_core.effects import EFFECTS
+from model_core.effects import DEFAULT_CANDIDATES
 from cyclo_fmu.bench import RECORDING_COLUMNS, write_recording
 from cyclo_fmu.recordings import (Exclusion, Recording, RecordingError, parse_column_map,
                                   read_recording, recording_from_arrays)
@@ -276,7 +276,7 @@ def test_cli_synth_and_diagnose(tmp_path):
         assert key in out
     assert out["effect"] == json.loads(truth.read_text())["effect"] == "torque_sensor_offset"
     assert out["parameters"]["offset"]["unit"] == "N*m"
-    assert len(out["evidence"]) == len(EFFECTS) and "statement" in out["located"]
+    assert len(out["evidence"]) == len(DEFAULT_CANDIDATES) and "statement" in out["located"]
     for key in ("effects", "unexplained", "checks", "excluded"):
         assert key in out
     assert out["effects"][0]["id"] == out["effect"] and out["unexplained"]["present"] is False

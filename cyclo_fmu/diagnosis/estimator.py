@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from model_core import DriveDesign
-from model_core.effects import EFFECTS, SENSOR_EFFECTS
+from model_core.effects import CALIBRATION_EFFECTS, DEFAULT_CANDIDATES, EFFECTS, SENSOR_EFFECTS
 from model_core.kinematics import parse_mode, speed_ratio
 
 from . import residual as R
@@ -160,19 +160,24 @@ class Diagnoser:
     n_folds : int
         Time-ordered folds of the cross-validation.
     candidates : sequence of str, optional
-        Effect ids to consider (default: all of ``EFFECTS``).
+        Effect ids to consider (default: ``DEFAULT_CANDIDATES``, and with ``calibrate`` the
+        ``CALIBRATION_EFFECTS`` too).
+    calibrate : bool
+        Also fit the calibration effects (mesh loss k, idle-loss scale: model_core.effects).
     progress : bool
         A progress bar over the fit's stages on stderr (terminals only).
     """
 
     def __init__(self, design: DriveDesign = None, mode: str = "S1", bandwidth: float = 1000.0,
-                 block: float = 0.01, n_folds: int = 5, candidates=None, progress=False):
+                 block: float = 0.01, n_folds: int = 5, candidates=None, progress=False,
+                 calibrate=False):
         self.design = design or DriveDesign()
         self.mode = "".join(parse_mode(mode)[:2])
         self.bandwidth = bandwidth
         self.block = block
         self.n_folds = n_folds
-        self.candidates = tuple(c for c in (candidates or EFFECTS) if c != "none")
+        self.candidates = tuple(c for c in (candidates or DEFAULT_CANDIDATES + (
+            CALIBRATION_EFFECTS if calibrate else ())) if c != "none")
         self.progress = progress
         self._bar = None
 

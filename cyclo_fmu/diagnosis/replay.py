@@ -4,9 +4,9 @@ The replay drives the reducer model the FMU carries (``model_core.lossmap.ModeMa
 measured input speed and output torque and returns the input torque the model predicts, the
 design's own extra physics included (after an earlier diagnosis), read through the transducer
 corrections the design carries. The sensitivities of that torque to the model's uncertain
-parameters (the friction level ln mu_boundary, the lubricant's ln viscosity) are central
-finite differences of the full model: the columns of the candidates that act through the
-model's own parameters.
+parameters (the friction level ln mu_boundary, the lubricant's ln viscosity; the calibration's
+mesh loss k and idle-loss scale) are finite differences of the full model: the columns of the
+candidates that act through the model's own parameters.
 """
 from __future__ import annotations
 
@@ -27,6 +27,16 @@ SENSITIVITY_STEP = 0.05
 #: 36 x 28; a sensitivity is smooth over the map, and both sides of its difference share the
 #: grid, so their interpolation errors cancel to first order
 SENSITIVITY_GRID = (18, 14)
+#: steps of the calibration's sensitivities (on SENSITIVITY_GRID; k forward from the design's
+#: value, as k >= 0; the scale central where it can be). k [1] 0.002: the input torque is not
+#: linear in k (S2: 1/eta_S2 grows as 1/(1 - k), the slope's relative curvature about 2 per
+#: unit k), so a forward secant over h misjudges a change dk by about (h - dk) relative: 0.2 %
+#: at h = 0.002 for the changes of a few thousandths a recording resolves best; a larger dk
+#: (the paper's 0.027: about 2.5 %) is finished by re-diagnosing with design_updated.toml (a
+#: Gauss-Newton step). Idle-loss scale [1] 0.5: the idle torques are linear in it (the gear's
+#: losses respond through the driven shaft's drag, smoothly)
+MESH_LOSS_STEP = 0.002
+IDLE_SCALE_STEP = 0.5
 #: [s] window of the moving mean of the measured speed before it is differentiated (20 ms:
 #: the transducer noise of a 0.1 r/min encoder differentiated at 1 kHz would swamp J dw/dt)
 SPEED_SMOOTHING = 0.02
@@ -47,6 +57,37 @@ def block_means(x, m):
     """Means over consecutive blocks of ``m`` samples along axis 0 (a partial tail dropped)."""
     n = (len(x) // m) * m
     return x[:n].reshape(-1, m, *x.shape[1:]).mean(1)
+
+
+def calibration_sensitivities(design, mode, w_in, tau_out):
+    """d T_in_model / d mesh_loss_k and / d idle_loss_scale along a recording [N*m], finite
+    differences on SENSITIVITY_GRID (k forward, backward at its upper bound; the scale central,
+    one-sided at its bounds); the second None where the
+    design has no load-independent losses (paper profile, losses = "load_dependent")."""
+    from model_core.design import IDLE_LOSS_SCALE_BOUNDS, MESH_LOSS_K_BOUNDS
+    from dataclasses import replace as _replace
+    g = SENSITIVITY_GRID
+    cal = design.calibration
+
+    def T(grid=g, **changes):
+        d = _replace(design, calibration=_replace(cal, **changes)) if changes else design
+        return replay_input_torque(d, mode, w_in, tau_out, grid)[0]
+    base = T()
+    hk = MESH_LOSS_STEP if cal.mesh_loss_k + MESH_LOSS_STEP <= MESH_LOSS_K_BOUNDS[1] \
+        else -MESH_LOSS_STEP
+    sens_k = (T(mesh_loss_k=cal.mesh_loss_k + hk) - base) / hk
+    sens_idle = None
+    if design.profile == "physical" and design.losses == "all":
+        # central where both sides lie in the bounds (the fit moves the scale either way)
+        s0, h = cal.idle_loss_scale, IDLE_SCALE_STEP
+        lo, hi = IDLE_LOSS_SCALE_BOUNDS
+        up, dn = min(s0 + h, hi), max(s0 - h, lo)
+        # on the base replay's grid: the drag is kept over the speed alone, and its
+        # interpolation between SENSITIVITY_GRID's fewer speed nodes is off by ~0.2 %
+        T_up = T(None, idle_loss_scale=up)
+        T_dn = T(None, idle_loss_scale=dn)
+        sens_idle = (T_up - T_dn) / (up - dn)
+    return sens_k, sens_idle
 
 
 def _scaled(design, mu=1.0, nu=1.0):
@@ -74,7 +115,8 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
     ``bandwidth`` [Hz]: the speed transducer's first-order bandwidth; the shaft angle is
     advanced by its group delay 1/(2 pi f_c) (at the roller-pass order of 2800 r/min the
     0.16 ms of a 1 kHz transducer are 0.65 rad of phase). ``sensitivities``: (sens_mu,
-    sens_nu) of an earlier replay to reuse (a re-linearised replay at a nearby design)."""
+    sens_nu) or (sens_mu, sens_nu, sens_k, sens_idle) of an earlier replay to reuse (a
+    re-linearised replay at a nearby design; with two, the calibration's are computed)."""
     t, w_in, T_out = rec.time, rec.speed_in, rec.torque_out
     tau_out = -T_out
     T_in, loss = replay_input_torque(design, mode, w_in, tau_out)
@@ -90,13 +132,18 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
                     - replay_input_torque(_scaled(design, **dn), mode, w_in, tau_out, g)[0]) / dln
         sens_mu = diff(mu=1)
         sens_nu = diff(nu=1)
-    else:
+        sens_k, sens_idle = calibration_sensitivities(design, mode, w_in, tau_out)
+    elif len(sensitivities) == 2:
         sens_mu, sens_nu = sensitivities
+        sens_k, sens_idle = calibration_sensitivities(design, mode, w_in, tau_out)
+    else:
+        sens_mu, sens_nu, sens_k, sens_idle = sensitivities
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
     from scipy.ndimage import uniform_filter1d
     w_s = uniform_filter1d(w_in, max(1, int(round(SPEED_SMOOTHING / dt))), mode="nearest")
     sig = effect_signals(t, w_s, loss, mode, design.z1, getattr(rec, "temperature", None),
-                         T_in_model=T_in, sens_mu=sens_mu, sens_nu=sens_nu)
+                         T_in_model=T_in, sens_mu=sens_mu, sens_nu=sens_nu, sens_k=sens_k,
+                         sens_idle=sens_idle)
     if bandwidth > 0:
         sig["theta_in"] = sig["theta_in"] + w_s / (2 * math.pi * bandwidth)
     T_true = T_in + extra_torque(design.extra, sig)

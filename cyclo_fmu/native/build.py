@@ -168,7 +168,11 @@ def design_constants(design: DriveDesign):
             ("mu_full_film", "Real", design.friction.mu_full_film, "1",
              "lower clamp of the Benedict-Kelley coefficient"),
             ("mu_rolling_disc", "Real", design.friction.rolling_disc, "1",
-             "rolling-resistance coefficient of the disc rollers (mu_rolling: the ring rollers)"))
+             "rolling-resistance coefficient of the disc rollers (mu_rolling: the ring rollers)"),
+            ("seals", "String", design.seals, None, "shaft seals: lip or none"),
+            ("calibration_source", "String", design.calibration.source, None,
+             "what the calibration (mesh_loss_k, idle_loss_scale) was fitted to; empty: not "
+             "calibrated"))
     names = {o[0] for o in out}
     out += [m for m in more if m[0] not in names]
     return out
@@ -219,7 +223,8 @@ def _hex(x: float) -> str:
 
 
 def _c_string(s: str) -> str:
-    return '"' + str(s).replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return ('"' + str(s).replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n")
+            .replace("\t", "\\t").replace("\r", "\\r") + '"')
 
 
 def _vr_tables(constants):
@@ -326,6 +331,10 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
         sv(name, 10 + k, "output", "continuous", desc,
            f'<Real {_real_attrs(unit, quantity, display="%" if unit == "1" else None)}/>',
            "calculated")
+        if name == "J_load_dec":   # after the outputs at 10..29
+            sv("PL_mesh", 52, "output", "continuous", "partial loss PL_mesh: additional mesh "
+               "loss, a fraction mesh_loss_k of the mesh power (calibrated; 0 uncalibrated)",
+               f'<Real {_real_attrs("W", "Power")}/>', "calculated")
         if name == "eta0":
             sv("locked", 10, "output", "discrete", "self-locking back-drive holds: the driving "
                "shaft must push although the load drives", "<Boolean/>", "calculated")
@@ -384,7 +393,7 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
         deps[name] = (both, both + mode_p + steady + inertia
                       + (["alpha_ref"] if name == "tau_in_static" else []))
     for name in ("PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal",
-                 "PL_churn", "eta0", "locked", "torque_out"):
+                 "PL_churn", "PL_mesh", "eta0", "locked", "torque_out"):
         deps[name] = (both, both + mode_p + inertia)
     for name in ("J_load", "J_load_dec"):
         deps[name] = (both, both + mode_p + inertia + ["alpha_ref"])
@@ -516,8 +525,11 @@ def build_native_fmu(design: DriveDesign | None = None, dest="dist", *,
         digest.update((HERE / f).read_bytes())
     guid = "{" + str(uuid.UUID(bytes=digest.digest()[:16], version=4)) + "}"
     data_c = body.replace(placeholder, guid)
+    cal = design.calibration
+    calibrated = ("" if cal.is_default else f", CALIBRATED mesh_loss_k = {cal.mesh_loss_k:.4g}, "
+                  f"idle_loss_scale = {cal.idle_loss_scale:.4g}")
     desc = (f"Constrained cycloid drive (z1 = {design.z1}, mu_boundary = "
-            f"{design.friction.mu_boundary:g}): load-dependent losses and efficiency "
+            f"{design.friction.mu_boundary:g}{calibrated}): load-dependent losses and efficiency "
             "(Mackic et al.), quasi-static, all six modes and four quadrants; native C, the "
             "design's loss map built in")
     md = model_description(design, constants, guid, torque_max, speed_max, desc)
@@ -601,7 +613,8 @@ native C (no Python). The loss map of the design below is built in: |tau_out| fr
 rad/s, log-spaced; outside, eta0 is held at the edge (the losses keep scaling with the power).</p>
 <p>Ports as Modelica flanges: a torque is what the outside applies on the reducer's shaft, so
 the power into the reducer at a shaft is tau*w. Inputs w_in, tau_out; outputs w_out, tau_in,
-tau_housing, P_loss, PL1..PL6, PL_support, PL_seal, PL_churn, eta, eta0, locked, P_extra.</p>
+tau_housing, P_loss, PL1..PL6, PL_support, PL_seal, PL_churn, PL_mesh, eta, eta0, locked,
+P_extra.</p>
 <h2>Design (fixed at build time)</h2><pre>{escape(design_to_toml(design))}</pre>
 <p>License: MIT (cyclo-fmu). The FMI headers in sources/ are the Modelica Association's,
 2-clause BSD.</p>

@@ -134,6 +134,7 @@ void cd_solve(const CDMap *map, int mode, double w_in, double tau_out, CDSolutio
     p_gear = gear[0] * out->speeds[0] + gear[1] * out->speeds[1] + gear[2] * out->speeds[2];
     for (i = 0; i < CD_N_GEAR; i++) out->losses[i] = row[1 + i] * p_gear;
     for (i = 0; i < 3; i++) out->losses[CD_N_GEAR + i] = q[i] * w_abs;
+    out->losses[CD_N_GEAR + 3] = row[1 + CD_N_GEAR] * p_gear;   /* PL_mesh */
     for (i = 0; i < 3; i++) out->torques[i] = gear[i] + drag[i];
     p_a = out->torques[m->a] * out->speeds[m->a];
     p_b = out->torques[k] * out->speeds[k];

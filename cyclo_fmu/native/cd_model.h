@@ -12,9 +12,11 @@
 #define CD_MODEL_H
 
 #define CD_N_MODES 6
-#define CD_N_LOSSES 8          /* PL1, PL2, PL3, PL5, PL6, PL_support, PL_seal, PL_churn */
+#define CD_N_LOSSES 9          /* PL1, PL2, PL3, PL5, PL6, PL_support, PL_seal, PL_churn,
+                                  PL_mesh */
 #define CD_N_GEAR 5            /* the gear's own partial losses PL1..PL6 */
-#define CD_N_COLS (1 + CD_N_GEAR)     /* eta0, then the shares of the gear's partial losses */
+#define CD_N_COLS (2 + CD_N_GEAR)     /* eta0, the shares of the gear's partial losses PL1..PL6,
+                                         then the share of the calibrated mesh loss PL_mesh */
 #define CD_N_IDLE 6            /* drag row: PL_support, PL_seal, PL_churn over |w_in| (N*m),
                                   then the torque spent on the drag at shafts 1, 2, S (N*m) */
 

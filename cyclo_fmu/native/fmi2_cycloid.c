@@ -11,6 +11,7 @@
  *            10..29 outputs, in the order of OUT_NAMES
  *            30..40 extra physics parameters, in the order of CDExtra
  *            50 J_out, 51 alpha_ref (parameters of the output inertia)
+ *            52 PL_mesh (output: the calibrated mesh loss; out[O_PL_MESH])
  *            100.. constants of the design (generated table)
  *   Integer  0 mode_number; 100.. constants
  *   Boolean  10 locked
@@ -29,7 +30,8 @@
 #define VR_TAU_OUT 1
 #define VR_ALPHA_IN 2
 #define VR_OUT0 10
-#define N_OUT 20
+#define N_OUT 20               /* outputs at value references 10..29 */
+#define VR_PL_MESH 52          /* one more output, beyond them */
 #define VR_EXTRA0 30
 #define VR_J_OUT 50
 #define VR_ALPHA_REF 51
@@ -45,7 +47,7 @@
 
 enum { O_W_OUT, O_TAU_IN, O_TAU_HOUSING, O_P_LOSS, O_PL1, O_PL2, O_PL3, O_PL5, O_PL6, O_ETA,
        O_ETA0, O_P_EXTRA, O_P_STORED, O_PL_SUPPORT, O_PL_SEAL, O_PL_CHURN, O_TORQUE_OUT,
-       O_TAU_IN_STATIC, O_J_LOAD, O_J_LOAD_DEC };
+       O_TAU_IN_STATIC, O_J_LOAD, O_J_LOAD_DEC, O_PL_MESH };
 
 static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "drag_torque", "stribeck_torque", "stribeck_speed", "input_inertia", "ripple_1x",
@@ -55,7 +57,7 @@ static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
 enum { PH_INSTANTIATED = 1, PH_INIT, PH_STEP, PH_TERMINATED };
 
 #define STATE_MAGIC 0x43444e53u   /* "CDNS" */
-#define STATE_VERSION 2u
+#define STATE_VERSION 3u
 
 /* Everything that defines the instance's behaviour from here on: inputs, parameters,
  * outputs and the dynamic state. Plain data: copied and serialised as it is. */
@@ -67,7 +69,7 @@ typedef struct {
     int mode;              /* index of the String parameter "mode" (0..5) */
     int mode_number;       /* 0 = use mode, 1..6 */
     CDExtra extra;
-    double out[N_OUT];
+    double out[N_OUT + 1];     /* the outputs at 10..29, then PL_mesh */
     int locked;
     int mode_eff;          /* resolved at exitInitializationMode */
     double theta;          /* angle of the driving shaft since the start, rad */
@@ -261,6 +263,7 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     s->out[O_PL_SUPPORT] = r.losses[5];
     s->out[O_PL_SEAL] = r.losses[6];
     s->out[O_PL_CHURN] = r.losses[7];
+    s->out[O_PL_MESH] = r.losses[8];
     if (steady) tau_in += cd_steady_torque(&s->extra, w_in);
     double inertia = 0.0;   /* input_inertia's torque: stored in the shaft, not reacted */
     if (dynamic) {
@@ -503,12 +506,12 @@ FMI2_Export fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference 
         else if (r == VR_ALPHA_IN) value[i] = c->s.alpha_in;
         else if (r == VR_J_OUT) value[i] = c->s.J_out;
         else if (r == VR_ALPHA_REF) value[i] = c->s.alpha_ref;
-        else if (r >= VR_OUT0 && r < VR_OUT0 + N_OUT) {
+        else if ((r >= VR_OUT0 && r < VR_OUT0 + N_OUT) || r == VR_PL_MESH) {
             if (!refreshed) {
                 if (!refresh(c)) return nonfinite(c, "fmi2GetReal");
                 refreshed = 1;
             }
-            value[i] = c->s.out[r - VR_OUT0];
+            value[i] = c->s.out[r == VR_PL_MESH ? O_PL_MESH : (int)(r - VR_OUT0)];
         } else if (r >= VR_EXTRA0 && r < VR_EXTRA0 + CD_N_EXTRA)
             value[i] = *extra_field(&c->s.extra, (int)(r - VR_EXTRA0));
         else if ((k = const_index_real(r)) >= 0) value[i] = CD_CONST_REAL[k].value;
@@ -624,7 +627,7 @@ FMI2_Export fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference 
             } else {
                 *extra_field(&c->s.extra, k) = v;
             }
-        } else if (r >= VR_OUT0 && r < VR_OUT0 + N_OUT) {
+        } else if ((r >= VR_OUT0 && r < VR_OUT0 + N_OUT) || r == VR_PL_MESH) {
             logmsg(c, fmi2Error, "fmi2SetReal: value reference %u is an output", r);
             status = fmi2Error;
         } else if (const_index_real(r) >= 0) {

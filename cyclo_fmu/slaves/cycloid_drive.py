@@ -93,6 +93,12 @@ DESIGN_PARAMETERS = [
      "profile always uses load_dependent)", String),
     ("operating_temperature", None, "operating_temperature", "K",
      "grease temperature (physical profile; sets the viscosity by Walther's law)", Real),
+    # what the model learned from a measurement (design [calibration]); last, so that the
+    # value references above stay
+    ("mesh_loss_k", "calibration", "mesh_loss_k", "1", "calibrated additional mesh loss, a "
+     "fraction k of the mesh power: eta0 -> eta0 (1 - k) (0: as derived; 0 to 0.5)", Real),
+    ("idle_loss_scale", "calibration", "idle_loss_scale", "1", "calibrated scale on the "
+     "load-independent losses (1: as derived; 0 to 10)", Real),
 ]
 
 #: min/max of the parameters (the modelDescription's; checked at initialization). Lengths,
@@ -109,13 +115,18 @@ PARAMETER_LIMITS = dict(
     mu_boundary=(0.0, 1.0), mu_rolling=(0.0, 1.0), thermal_loss_change=(-1.0, None),
     mode_number=(0, 6), map_torque_max=(sys.float_info.min, None),
     map_speed_max=(sys.float_info.min, None),
-    operating_temperature=(0.0, None))
+    operating_temperature=(0.0, None), mesh_loss_k=(0.0, 0.5), idle_loss_scale=(0.0, 10.0))
 
 #: partial losses with an output each: the paper's load-dependent ones, then the physical
 #: profile's load-independent ones (zero with losses = "load_dependent"); they sum to P_loss
 #: less P_extra
-OUTPUT_LOSSES = ("PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal", "PL_churn")
-_LOSS_TEXT = {**core.losses.LOSS_DESCRIPTIONS, **core.drag.IDLE_DESCRIPTIONS}
+OUTPUT_LOSSES = ("PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal", "PL_churn",
+                 "PL_mesh")
+_LOSS_TEXT = {**core.losses.LOSS_DESCRIPTIONS, **core.drag.IDLE_DESCRIPTIONS,
+              core.losses.MESH_LOSS_NAME: core.losses.MESH_LOSS_DESCRIPTION}
+#: the design an FMU was built with (``cyclo-fmu build --design``), in its resources next to
+#: this package's modules; without it the paper's test drive
+DESIGN_FILE = "design.toml"
 #: rad/s^2, default of ``alpha_ref``: the bench's regulator ramps the stator frequency at
 #: 25 Hz/s, which on the two-pole motor is 2 pi 25 = 157 rad/s^2 of the synchronous speed
 ALPHA_REF = 2 * math.pi * 25.0
@@ -138,14 +149,27 @@ def _map_key(design, mode, torque_max, speed_max):
     return (repr(design), mode, float(torque_max), float(speed_max), core.lossmap.MAP_LAYOUT)
 
 
-def write_shipped_maps(folder, modes=SHIPPED_MAP_MODES):
-    """Solve the default design's maps for ``modes`` and store them in ``folder`` (at build)."""
+def base_design(folder=None):
+    """The design this FMU was built with: ``folder``/DESIGN_FILE if there is one (written by
+    ``cyclo-fmu build --design``), else the paper's test drive. Its values are the design
+    parameters' start values, and the fields the FMU does not expose as parameters come
+    from it."""
+    if folder is not None:
+        path = Path(folder) / DESIGN_FILE
+        if path.is_file():
+            return core.design.design_from_toml(path.read_text(encoding="utf-8"))
+    return core.DriveDesign()
+
+
+def write_shipped_maps(folder, modes=SHIPPED_MAP_MODES, design=None):
+    """Solve ``design``'s maps (default: the paper's test drive) for ``modes`` and store them
+    in ``folder`` (at build)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     import warnings
 
     import numpy as np
-    design = core.DriveDesign()
+    design = design or core.DriveDesign()
     for mode in modes:
         # quiet as at an FMU's initialization: the map handles the points that do not run
         with warnings.catch_warnings(), np.errstate(all="ignore"):
@@ -179,7 +203,15 @@ class CycloidDrive(UnitSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        default = core.DriveDesign()
+        # the design built in (build --design), read from this FMU's own resources (the FMUs
+        # of a bench share the first-loaded copy of this package)
+        self._base_error = None
+        try:
+            self._base = default = base_design(self._package_folder())
+        except (core.CycloidInputError, OSError) as exc:
+            # reported at initialization as fmi2Error (an FMU must not crash its host)
+            self._base_error = str(exc)
+            self._base = default = core.DriveDesign()
         self.parameter("mode", "S1", None, "operating mode: driving shaft, driven shaft "
                        "(12, 21, 1S, S1, 2S, S2; 1 ring, 2 disc, S eccentric)", String)
         self.parameter("mode_number", 0, None, "the mode as a number for importers that cannot "
@@ -235,10 +267,12 @@ class CycloidDrive(UnitSlave):
         self.output("P_stored", 0.0, "W", "power into stored energy at the driving shaft: "
                     "kinetic energy of input_inertia and the ripples' zero-mean exchange (part "
                     "of P_extra, not a loss)", depends=both)
-        for n in OUTPUT_LOSSES[5:]:      # after the older outputs: their value references stay
+        for n in OUTPUT_LOSSES[5:8]:     # after the older outputs: their value references stay
             self.output(n, 0.0, "W", f"partial loss {n}: {_LOSS_TEXT[n]}", depends=both)
         self.output("J_load_dec", 0.0, "kg.m2", "J_out as the driving shaft feels it through the "
                     "reducer while it slows down (|w_in| falling)", depends=both)
+        self.output("PL_mesh", 0.0, "W", f"partial loss PL_mesh: {_LOSS_TEXT['PL_mesh']}",
+                    depends=both)
         self._theta = 0.0
         self._slope_key = None
         self._w_last = None
@@ -250,23 +284,34 @@ class CycloidDrive(UnitSlave):
 
     # -- life cycle ---------------------------------------------------------------------------
     def _build_design(self):
-        changes, lub, fr, ex = {}, {}, {}, {}
+        changes, lub, fr, ex, cal = {}, {}, {}, {}, {}
         for name, section, field, unit, desc, kind in DESIGN_PARAMETERS:
             v = getattr(self, name)
-            {None: changes, "lubricant": lub, "friction": fr, "extra": ex}[section][field] = v
-        fr["rolling_disc"] = fr["rolling_ring"]
-        base = core.DriveDesign()
+            {None: changes, "lubricant": lub, "friction": fr, "extra": ex,
+             "calibration": cal}[section][field] = v
+        base = self._base
+        if fr["rolling_ring"] != base.friction.rolling_ring:   # one parameter sets both
+            fr["rolling_disc"] = fr["rolling_ring"]
         return dataclasses.replace(base, lubricant=dataclasses.replace(base.lubricant, **lub),
                                    friction=dataclasses.replace(base.friction, **fr),
-                                   extra=dataclasses.replace(base.extra, **ex), **changes)
+                                   extra=dataclasses.replace(base.extra, **ex),
+                                   calibration=dataclasses.replace(base.calibration, **cal),
+                                   **changes)
+
+    def _package_folder(self):
+        """This FMU's copy of the slaves' package under its resources, or None."""
+        if self.resources:
+            folder = Path(self.resources) / __package__
+            if folder.is_dir():
+                return folder
+        return None
 
     def _map_folder(self):
         """This FMU's shipped maps: under its own resources (the FMUs of a bench share the
         first-loaded copy of this package, whose folder may belong to another FMU)."""
-        if self.resources:
-            folder = Path(self.resources) / __package__ / "_maps"
-            if folder.is_dir():
-                return folder
+        pkg = self._package_folder()
+        if pkg is not None and (pkg / "_maps").is_dir():
+            return pkg / "_maps"
         return _MAP_DIR
 
     #: the dynamic state besides the variables (fmi2GetFMUstate)
@@ -277,6 +322,8 @@ class CycloidDrive(UnitSlave):
 
     def _setup(self):
         try:
+            if self._base_error:
+                raise core.CycloidInputError(DESIGN_FILE, "(built in)", self._base_error)
             self.check_limits()
             mode = self.mode
             if self.mode_number:

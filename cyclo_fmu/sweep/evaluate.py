@@ -67,8 +67,13 @@ def evaluate_design(spec, design_id: int, values: dict) -> list:
         return [{**base, "mode": m, "error": str(exc)} for m in spec.modes]
     stiff = stiffness_columns(design)
     env = spec.envelope
+    # a calibrated design says so, with what it was fitted to (design [calibration])
+    cal = {} if design.calibration.is_default else {
+        "calibrated": True, "calibration_mesh_loss_k": design.calibration.mesh_loss_k,
+        "calibration_idle_loss_scale": design.calibration.idle_loss_scale,
+        "calibration_source": design.calibration.source}
     for mode in spec.modes:
-        row = {**base, "mode": mode, **stiff}
+        row = {**base, "mode": mode, **stiff, **cal}
         try:
             m = efficiency_map(design, mode, env.speeds(), env.torques())
         except CycloidInputError as exc:

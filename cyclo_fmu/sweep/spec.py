@@ -8,7 +8,7 @@ A spec is a TOML file::
     n = 200                   # lhs: number of designs
     seed = 1                  # lhs: sampler seed
     modes = ["S1", "S2"]      # operating modes evaluated (default: S1 and S2, the bench's)
-    base = "design.toml"      # optional base design (default: the paper's test drive)
+    base = "design.toml"      # optional base design file or preset name (default: the paper's test drive)
     table = "designs.csv"     # table: one design per row, columns named like the fields
 
     [envelope]                # optional: model_core.paper.BenchEnvelope fields
@@ -40,6 +40,15 @@ METHODS = ("grid", "lhs", "table")
 #: Largest number of designs one spec may ask for [1]: each costs about 40 ms for two modes on
 #: the 8 x 8 envelope, so 10^6 designs are about half a day on 2 cores; more is a mistake.
 MAX_DESIGNS = 1_000_000
+
+
+def _base_design(path, base):
+    """The sweep's base design: a design file next to the spec, or a preset name."""
+    from model_core.presets import load_design, preset_names
+    f = path.parent / str(base)
+    if not f.exists() and str(base) in preset_names():
+        return load_design(str(base))
+    return design_from_toml(f)
 
 
 @dataclasses.dataclass
@@ -122,7 +131,7 @@ def load_spec(path) -> SweepSpec:
     method = sw.get("method", "grid")
     if method not in METHODS:
         raise CycloidInputError("sweep.method", method, f"must be one of {', '.join(METHODS)}")
-    base_design = (design_from_toml(path.parent / sw["base"]) if "base" in sw else DriveDesign())
+    base_design = _base_design(path, sw["base"]) if "base" in sw else DriveDesign()
     base = design_to_dict(base_design)
     modes = sw.get("modes", ["S1", "S2"])
     from model_core.kinematics import parse_mode
