@@ -40,10 +40,10 @@ COMPONENTS = {
                                ("torque_out", "output"), ("tau_housing", "output"),
                                ("P_loss", "output"), ("eta", "output")]),
     "brake": ("FeltBrake", [("w", "input"), ("tau_out", "output"), ("torque_shaft", "output")]),
-    "t_in": ("Transducer", [("x", "input"), ("y", "output")]),
-    "n_in": ("Transducer", [("x", "input"), ("y", "output")]),
-    "t_out": ("Transducer", [("x", "input"), ("y", "output")]),
-    "n_out": ("Transducer", [("x", "input"), ("y", "output")]),
+    "t_in": ("TorqueTransducer", [("x", "input"), ("y", "output")]),
+    "n_in": ("SpeedTransducer", [("x", "input"), ("y", "output")]),
+    "t_out": ("TorqueTransducer", [("x", "input"), ("y", "output")]),
+    "n_out": ("SpeedTransducer", [("x", "input"), ("y", "output")]),
 }
 CONNECTIONS = [
     ("motor", "w", "drive", "w_in"),
@@ -214,11 +214,51 @@ def _ssv(params: dict) -> str:
             + "\n  </ssv:Parameters>\n</ssv:ParameterSet>\n")
 
 
-def _ssd(stop_time: float, bound: set) -> str:
+#: OMSimulator's vendor annotation (namespace as OMSimulator writes it): its command line
+#: builds a system only from an SSD that names its master; other importers skip annotations
+OMS_NS = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
+
+
+def _fmu_units(fmu_dir) -> tuple:
+    """(unit of every bench connector {(fmu, connector): unit or None}, the units' definitions
+    {unit: BaseUnit}) read from the FMUs' model descriptions, so that the SSD states what the
+    FMUs declare."""
+    from fmpy import read_model_description
+    units, defs = {}, {}
+    for fmu in sorted({f for f, _ in COMPONENTS.values()}):
+        md = read_model_description(str(Path(fmu_dir) / f"{fmu}.fmu"))
+        var = {v.name: v for v in md.modelVariables}
+        for _, cons in (c for c in COMPONENTS.values() if c[0] == fmu):
+            for c, _k in cons:
+                if c not in var:
+                    raise ValueError(f"{fmu}.fmu has no variable {c!r} (bench connector)")
+                units[(fmu, c)] = var[c].unit
+        for u in md.unitDefinitions:
+            defs[u.name] = u.baseUnit
+    for a, b, c, d in CONNECTIONS:   # OMSimulator refuses what we would not notice otherwise
+        ua, ub = units[(COMPONENTS[a][0], b)], units[(COMPONENTS[c][0], d)]
+        if ua != ub:
+            raise ValueError(f"{c}.{d}: unit {ub!r} differs from {a}.{b}'s {ua!r}")
+    return units, {u: defs[u] for u in sorted({u for u in units.values() if u})}
+
+
+def _base_unit(b) -> str:
+    at = [f'{k}="{getattr(b, k)}"' for k in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+          if getattr(b, k)]
+    if b.factor != 1.0:
+        at.append(f'factor="{b.factor!r}"')
+    if b.offset != 0.0:
+        at.append(f'offset="{b.offset!r}"')
+    return f'<ssc:BaseUnit {" ".join(at)}/>'
+
+
+def _ssd(stop_time: float, bound: set, units: dict, unit_defs: dict, step: float) -> str:
     comps = []
     for name, (fmu, connectors) in COMPONENTS.items():
-        cons = "\n".join(f'          <ssd:Connector name="{c}" kind="{k}"><ssc:Real/></ssd:Connector>'
-                         for c, k in connectors)
+        cons = "\n".join(
+            f'          <ssd:Connector name="{c}" kind="{k}"><ssc:Real'
+            + (f' unit="{units[(fmu, c)]}"' if units.get((fmu, c)) else "")
+            + '/></ssd:Connector>' for c, k in connectors)
         binding = (f'        <ssd:ParameterBindings>\n          <ssd:ParameterBinding '
                    f'source="resources/{name}.ssv"/>\n        </ssd:ParameterBindings>\n'
                    if name in bound else "")
@@ -227,23 +267,53 @@ def _ssd(stop_time: float, bound: set) -> str:
                      f'        </ssd:Connectors>\n{binding}      </ssd:Component>')
     conns = "\n".join(f'      <ssd:Connection startElement="{a}" startConnector="{b}" '
                       f'endElement="{c}" endConnector="{d}"/>' for a, b, c, d in CONNECTIONS)
+    unit_xml = "\n".join(f'    <ssc:Unit name="{u}">{_base_unit(b)}</ssc:Unit>'
+                         for u, b in unit_defs.items())
     return ('<?xml version="1.0" encoding="UTF-8"?>\n'
             '<ssd:SystemStructureDescription '
             'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" '
             'xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
+            f'xmlns:oms="{OMS_NS}" '
             'version="1.0" name="TestBench">\n'
             '  <ssd:System name="TestBench">\n'
             '    <ssd:Elements>\n' + "\n".join(comps) + '\n    </ssd:Elements>\n'
             '    <ssd:Connections>\n' + conns + '\n    </ssd:Connections>\n'
+            '    <ssd:Annotations>\n'
+            '      <ssc:Annotation type="org.openmodelica">\n'
+            '        <oms:Annotations>\n'
+            '          <oms:SimulationInformation>\n'
+            f'            <oms:FixedStepMaster description="oms-ma" stepSize="{step!r}" '
+            'absoluteTolerance="0.0001" relativeTolerance="0.0001"/>\n'
+            '          </oms:SimulationInformation>\n'
+            '        </oms:Annotations>\n'
+            '      </ssc:Annotation>\n'
+            '    </ssd:Annotations>\n'
             '  </ssd:System>\n'
-            f'  <ssd:DefaultExperiment startTime="0.0" stopTime="{stop_time}"/>\n'
+            + (f'  <ssd:Units>\n{unit_xml}\n  </ssd:Units>\n' if unit_xml else "")
+            + f'  <ssd:DefaultExperiment startTime="0.0" stopTime="{stop_time!r}">\n'
+            # without this annotation OMSimulator warns "Wrong/deprecated content"
+            '    <ssd:Annotations>\n'
+            '      <ssc:Annotation type="org.openmodelica">\n'
+            '        <oms:Annotations>\n'
+            '          <oms:SimulationInformation resultFile="TestBench_res.mat"/>\n'
+            '        </oms:Annotations>\n'
+            '      </ssc:Annotation>\n'
+            '    </ssd:Annotations>\n'
+            '  </ssd:DefaultExperiment>\n'
             '</ssd:SystemStructureDescription>\n')
 
 
 def build_ssp(path, fmu_dir, sc: Scenario, sensors: Sensors = Sensors(),
-              design: DriveDesign = None) -> Path:
+              design: DriveDesign = None, step: float = 1e-3) -> Path:
     """Write TestBench.ssp with the FMUs from ``fmu_dir`` (built by build_fmu); ``design``
-    sets the reducer's parameters (default: the FMU's, the paper's drive)."""
+    sets the reducer's parameters (default: the FMU's, the paper's drive). ``step`` (s) is
+    the communication step the SSD proposes to OMSimulator (its FixedStepMaster).
+
+    The SSD is standard SSP 1.0 (fmpy, libcosim) with OMSimulator's vendor annotation, a unit
+    on every connector as the FMUs declare it (connected units agree) and the parameters bound
+    per component (resources/<component>.ssv, applied by libcosim and OMSimulator) and as one
+    set (resources/TestBench.ssv, which ``run_ssp`` hands to fmpy)."""
+    import os
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     params = bench_parameters(sc, sensors, design)
@@ -251,16 +321,26 @@ def build_ssp(path, fmu_dir, sc: Scenario, sensors: Sensors = Sensors(),
     for key, value in params.items():
         comp, var = key.split(".", 1)
         per_component.setdefault(comp, {})[var] = value
-    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
-        z.writestr("SystemStructure.ssd", _ssd(sc.stop_time, set(per_component)))
-        # one parameter set for fmpy (names 'component.variable', passed as parameter_set;
-        # fmpy does not apply ParameterBindings) and one per component, bound in the .ssd,
-        # for SSP importers that apply bindings (libcosim)
-        z.writestr("resources/TestBench.ssv", _ssv(params))
-        for comp, values in per_component.items():
-            z.writestr(f"resources/{comp}.ssv", _ssv(values))
-        for fmu in sorted({f for f, _ in COMPONENTS.values()}):
-            z.write(Path(fmu_dir) / f"{fmu}.fmu", f"resources/{fmu}.fmu")
+    units, unit_defs = _fmu_units(fmu_dir)
+    partial = path.with_name(f".{path.name}.partial-{os.getpid()}")
+    try:
+        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
+            z.writestr("SystemStructure.ssd", _ssd(sc.stop_time, set(per_component), units,
+                                                   unit_defs, step))
+            # one parameter set for fmpy (names 'component.variable', passed as parameter_set;
+            # fmpy does not apply ParameterBindings) and one per component, bound in the .ssd,
+            # for SSP importers that apply bindings (libcosim, OMSimulator)
+            z.writestr("resources/TestBench.ssv", _ssv(params))
+            for comp, values in per_component.items():
+                z.writestr(f"resources/{comp}.ssv", _ssv(values))
+            for fmu in sorted({f for f, _ in COMPONENTS.values()}):
+                # FMUs are compressed already
+                z.write(Path(fmu_dir) / f"{fmu}.fmu", f"resources/{fmu}.fmu",
+                        compress_type=zipfile.ZIP_STORED)
+        os.replace(partial, path)
+    finally:
+        if partial.exists():
+            partial.unlink()
     return path
 
 

@@ -22,7 +22,8 @@ BUNDLE = "cyclofmu_" + __version__.replace(".", "_") + "_slaves"
 
 #: model name -> module in cyclo_fmu/slaves
 SLAVES = {"CycloidDrive": "cycloid_drive", "InductionMotor": "motor", "FeltBrake": "brake",
-          "Transducer": "transducer"}
+          "Transducer": "transducer", "TorqueTransducer": "transducer",
+          "SpeedTransducer": "transducer"}
 #: FMUs in C (cyclo_fmu.native), built with the machine's C compiler
 NATIVE = ("CycloidDriveNative",)
 #: everything ``build`` writes by default
