@@ -321,8 +321,8 @@ def _bench_step(text) -> float:
 
 
 def cmd_bench(args) -> int:
-    from .bench import Sensors, run_bench, scenario
-    from .fmu_build import SLAVES, build_fmu
+    from .bench import COMPONENTS, Sensors, run_bench, scenario
+    from .fmu_cache import fmus_into
     mode = "".join(parse_mode(args.mode)[:2])
     if mode not in ("S1", "S2"):
         raise CycloidInputError("mode", args.mode, "the bench drives the eccentric shaft S: "
@@ -336,12 +336,12 @@ def cmd_bench(args) -> int:
                                 "loadstep, reversal") from exc
     design = _load_design(args.design, args.profile)
     with _staged_dir("out", args.out) as out:
-        fmu_dir = out / "fmus"
-        for name in SLAVES:
-            build_fmu(name, fmu_dir)
+        # the FMUs built once per version and sources (cyclo_fmu.fmu_cache), copied here
+        fmu_dir = fmus_into(out / "fmus", sorted({f for f, _ in COMPONENTS.values()}))
         try:
             run = run_bench(sc, fmu_dir, out, Sensors(ideal=args.ideal_sensors, seed=args.seed),
-                            step=step, design=design, progress=_progress_on(args))
+                            step=step, design=design, progress=_progress_on(args),
+                            plot=args.plot)
         except CycloidInputError:
             raise
         except ValueError as exc:
@@ -591,6 +591,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "recording's rate); 'steady': the step the convergence check chose for "
                        "steady scenarios (README)")
     bench.add_argument("--quiet", action="store_true", help="no progress bar")
+    bench.add_argument("--plot", action="store_true", help="also draw bench_<mode>_<scenario>.png "
+                       "(signals, window efficiencies; matplotlib, about 0.8 s)")
     bench.add_argument("--design", help="design file (TOML) for the reducer, e.g. the "
                        "design_updated.toml a diagnosis wrote")
     _add_profile(bench)
