@@ -28,23 +28,53 @@ from model_core.kinematics import parse_mode
 
 RPM_PER_RAD_S = 30 / math.pi
 
-#: component name -> (FMU, connectors [(name, kind)])
-COMPONENTS = {
-    "motor": ("InductionMotor", [("tau_shaft", "input"), ("J_load", "input"),
-                                 ("J_load_dec", "input"), ("w", "output"),
-                                 ("alpha", "output"), ("T_em", "output"), ("frequency", "output")]),
-    "drive": ("CycloidDrive", [("w_in", "input"), ("tau_out", "input"), ("alpha_in", "input"),
-                               ("w_out", "output"), ("tau_in", "output"),
-                               ("tau_in_static", "output"), ("J_load", "output"),
-                               ("J_load_dec", "output"),
-                               ("torque_out", "output"), ("tau_housing", "output"),
-                               ("P_loss", "output"), ("eta", "output")]),
-    "brake": ("FeltBrake", [("w", "input"), ("tau_out", "output"), ("torque_shaft", "output")]),
-    "t_in": ("TorqueTransducer", [("x", "input"), ("y", "output")]),
-    "n_in": ("SpeedTransducer", [("x", "input"), ("y", "output")]),
-    "t_out": ("TorqueTransducer", [("x", "input"), ("y", "output")]),
-    "n_out": ("SpeedTransducer", [("x", "input"), ("y", "output")]),
+#: component name -> connectors [(name, kind)]
+CONNECTORS = {
+    "motor": [("tau_shaft", "input"), ("J_load", "input"), ("J_load_dec", "input"),
+              ("w", "output"), ("alpha", "output"), ("T_em", "output"), ("frequency", "output")],
+    "drive": [("w_in", "input"), ("tau_out", "input"), ("alpha_in", "input"),
+              ("w_out", "output"), ("tau_in", "output"), ("tau_in_static", "output"),
+              ("J_load", "output"), ("J_load_dec", "output"), ("torque_out", "output"),
+              ("tau_housing", "output"), ("P_loss", "output"), ("eta", "output")],
+    "brake": [("w", "input"), ("tau_out", "output"), ("torque_shaft", "output")],
+    "t_in": [("x", "input"), ("y", "output")],
+    "n_in": [("x", "input"), ("y", "output")],
+    "t_out": [("x", "input"), ("y", "output")],
+    "n_out": [("x", "input"), ("y", "output")],
 }
+#: the FMU of every component, per FMU set: "python" (pythonfmu slaves: need Python in the
+#: host) and "native" (C, no Python: any host; cyclo-fmu bench's default). The native ones
+#: are the Python ones' twins, tested equal to 1e-9 on the bench scenarios
+FMU_SETS = {
+    "python": {"motor": "InductionMotor", "drive": "CycloidDrive", "brake": "FeltBrake",
+               "t_in": "TorqueTransducer", "n_in": "SpeedTransducer",
+               "t_out": "TorqueTransducer", "n_out": "SpeedTransducer"},
+}
+FMU_SETS["native"] = {c: f + "Native" for c, f in FMU_SETS["python"].items()}
+
+
+def components(fmus: str = "python") -> dict:
+    """component name -> (FMU, connectors) of the FMU set ``fmus``."""
+    if fmus not in FMU_SETS:
+        raise ValueError(f"fmus = {fmus!r}: must be one of {', '.join(FMU_SETS)}")
+    return {c: (FMU_SETS[fmus][c], cons) for c, cons in CONNECTORS.items()}
+
+
+def fmu_set(fmu_dir, fmus=None) -> str:
+    """``fmus``, or when None the set ``fmu_dir`` holds: native when all its FMUs are there."""
+    if fmus is not None:
+        components(fmus)
+        return fmus
+    have = all((Path(fmu_dir) / f"{f}.fmu").is_file() for f in FMU_SETS["native"].values())
+    return "native" if have else "python"
+
+
+def fmu_names(fmus: str = "python") -> list:
+    return sorted(set(FMU_SETS[fmus].values()))
+
+
+#: component name -> (FMU, connectors [(name, kind)]) of the Python set
+COMPONENTS = components("python")
 CONNECTIONS = [
     ("motor", "w", "drive", "w_in"),
     ("motor", "alpha", "drive", "alpha_in"),
@@ -153,8 +183,11 @@ def drive_parameters(design: DriveDesign) -> dict:
     return out
 
 
-def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDesign = None) -> dict:
-    """Parameter values 'component.variable' -> value for the SSV."""
+def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDesign = None,
+                     fmus: str = "python") -> dict:
+    """Parameter values 'component.variable' -> value for the SSV. With the native set the
+    design is the one the native reducer was built for (its map is compiled in), so only the
+    Python reducer takes the design as parameters."""
     if sc.mode not in MODES:
         raise ValueError(f"mode = {sc.mode!r}: must be one of {', '.join(MODES)}")
     # Python types decide the SSV types: float -> Real, int -> Integer, bool -> Boolean
@@ -178,7 +211,7 @@ def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDe
     if sc.torque_schedule:
         p.update(schedule_parameters("brake.", parse_schedule(sc.torque_schedule,
                                                                "torque_schedule")))
-    if design is not None:
+    if design is not None and fmus == "python":
         p.update(drive_parameters(design))
     for name, scale, noise, res, gain, off in (
             ("t_in", 1.0, sensors.torque_noise, sensors.torque_resolution,
@@ -219,16 +252,16 @@ def _ssv(params: dict) -> str:
 OMS_NS = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
 
 
-def _fmu_units(fmu_dir) -> tuple:
+def _fmu_units(fmu_dir, comps=COMPONENTS) -> tuple:
     """(unit of every bench connector {(fmu, connector): unit or None}, the units' definitions
     {unit: BaseUnit}) read from the FMUs' model descriptions, so that the SSD states what the
     FMUs declare."""
     from fmpy import read_model_description
     units, defs = {}, {}
-    for fmu in sorted({f for f, _ in COMPONENTS.values()}):
+    for fmu in sorted({f for f, _ in comps.values()}):
         md = read_model_description(str(Path(fmu_dir) / f"{fmu}.fmu"))
         var = {v.name: v for v in md.modelVariables}
-        for _, cons in (c for c in COMPONENTS.values() if c[0] == fmu):
+        for _, cons in (c for c in comps.values() if c[0] == fmu):
             for c, _k in cons:
                 if c not in var:
                     raise ValueError(f"{fmu}.fmu has no variable {c!r} (bench connector)")
@@ -236,7 +269,7 @@ def _fmu_units(fmu_dir) -> tuple:
         for u in md.unitDefinitions:
             defs[u.name] = u.baseUnit
     for a, b, c, d in CONNECTIONS:   # OMSimulator refuses what we would not notice otherwise
-        ua, ub = units[(COMPONENTS[a][0], b)], units[(COMPONENTS[c][0], d)]
+        ua, ub = units[(comps[a][0], b)], units[(comps[c][0], d)]
         if ua != ub:
             raise ValueError(f"{c}.{d}: unit {ub!r} differs from {a}.{b}'s {ua!r}")
     return units, {u: defs[u] for u in sorted({u for u in units.values() if u})}
@@ -252,9 +285,10 @@ def _base_unit(b) -> str:
     return f'<ssc:BaseUnit {" ".join(at)}/>'
 
 
-def _ssd(stop_time: float, bound: set, units: dict, unit_defs: dict, step: float) -> str:
+def _ssd(stop_time: float, bound: set, units: dict, unit_defs: dict, step: float,
+         components_=COMPONENTS) -> str:
     comps = []
-    for name, (fmu, connectors) in COMPONENTS.items():
+    for name, (fmu, connectors) in components_.items():
         cons = "\n".join(
             f'          <ssd:Connector name="{c}" kind="{k}"><ssc:Real'
             + (f' unit="{units[(fmu, c)]}"' if units.get((fmu, c)) else "")
@@ -304,7 +338,7 @@ def _ssd(stop_time: float, bound: set, units: dict, unit_defs: dict, step: float
 
 
 def build_ssp(path, fmu_dir, sc: Scenario, sensors: Sensors = Sensors(),
-              design: DriveDesign = None, step: float = 1e-3) -> Path:
+              design: DriveDesign = None, step: float = 1e-3, fmus: str = None) -> Path:
     """Write TestBench.ssp with the FMUs from ``fmu_dir`` (built by build_fmu); ``design``
     sets the reducer's parameters (default: the FMU's, the paper's drive). ``step`` (s) is
     the communication step the SSD proposes to OMSimulator (its FixedStepMaster).
@@ -312,34 +346,55 @@ def build_ssp(path, fmu_dir, sc: Scenario, sensors: Sensors = Sensors(),
     The SSD is standard SSP 1.0 (fmpy, libcosim) with OMSimulator's vendor annotation, a unit
     on every connector as the FMUs declare it (connected units agree) and the parameters bound
     per component (resources/<component>.ssv, applied by libcosim and OMSimulator) and as one
-    set (resources/TestBench.ssv, which ``run_ssp`` hands to fmpy)."""
+    set (resources/TestBench.ssv, which ``run_ssp`` hands to fmpy). ``fmus``: the FMU set
+    (``fmu_set``: native when ``fmu_dir`` holds it)."""
     import os
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    params = bench_parameters(sc, sensors, design)
+    fmus = fmu_set(fmu_dir, fmus)
+    comps = components(fmus)
+    if fmus == "native":
+        check_native_design(fmu_dir, design)
+    params = bench_parameters(sc, sensors, design, fmus)
     per_component = {}
     for key, value in params.items():
         comp, var = key.split(".", 1)
         per_component.setdefault(comp, {})[var] = value
-    units, unit_defs = _fmu_units(fmu_dir)
+    units, unit_defs = _fmu_units(fmu_dir, comps)
     partial = path.with_name(f".{path.name}.partial-{os.getpid()}")
     try:
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("SystemStructure.ssd", _ssd(sc.stop_time, set(per_component), units,
-                                                   unit_defs, step))
+                                                   unit_defs, step, comps))
             # one parameter set for fmpy (names 'component.variable', passed as parameter_set;
             # fmpy does not apply ParameterBindings) and one per component, bound in the .ssd,
             # for SSP importers that apply bindings (libcosim, OMSimulator)
             z.writestr("resources/TestBench.ssv", _ssv(params))
             for comp, values in per_component.items():
                 z.writestr(f"resources/{comp}.ssv", _ssv(values))
-            for fmu in sorted({f for f, _ in COMPONENTS.values()}):
+            for fmu in sorted({f for f, _ in comps.values()}):
                 z.write(Path(fmu_dir) / f"{fmu}.fmu", f"resources/{fmu}.fmu")
         os.replace(partial, path)
     finally:
         if partial.exists():
             partial.unlink()
     return path
+
+
+def check_native_design(fmu_dir, design: DriveDesign = None):
+    """The native reducer in ``fmu_dir`` carries ``design`` (default: the paper's drive), or
+    ValueError: its map is compiled in, so a bench of another design needs its own build (its
+    documentation holds the design's TOML)."""
+    from html import escape
+
+    from model_core.design import design_to_toml
+    fmu = Path(fmu_dir) / f"{FMU_SETS['native']['drive']}.fmu"
+    with zipfile.ZipFile(fmu) as z:
+        doc = z.read("documentation/index.html").decode()
+    if f"<pre>{escape(design_to_toml(design or DriveDesign()))}</pre>" not in doc:
+        raise ValueError(f"design: {fmu.name} in {fmu_dir} was built for another design; build "
+                         "it for this one (cyclo-fmu build CycloidDriveNative --design FILE) or "
+                         "run the Python set (fmus='python')")
 
 
 def run_ssp(ssp_path, stop_time: float, step: float = 1e-3):
@@ -367,7 +422,7 @@ COUPLINGS = ("gauss-seidel", "jacobi")
 
 
 def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progress=False,
-             coupling: str = "gauss-seidel"):
+             coupling: str = "gauss-seidel", fmus: str = None):
     """The bench of ``run_ssp`` (components, connections, parameters, fixed step, all connector
     values starting at 0, rows holding post-step values) run by a lean master that calls the
     FMUs' C functions over value references and buffers resolved once, and that can also set
@@ -378,6 +433,7 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
     the values of one instant (the reducer and the transducers are quasi-static); ``"jacobi"``
     steps all components from the previous step's outputs, as fmpy's SSP master does (the same
     numbers to 1e-9, a test), which delays every signal by one step per connection it passes.
+    ``fmus``: the FMU set (``fmu_set``: native when ``fmu_dir`` holds it).
     Returns a structured array with the same fields as ``run_ssp``."""
     import ctypes
 
@@ -386,6 +442,7 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
 
     if coupling not in COUPLINGS:
         raise ValueError(f"coupling = {coupling!r}: must be one of {', '.join(COUPLINGS)}")
+    COMPONENTS = components(fmu_set(fmu_dir, fmus))
     unknown = sorted({k.split(".", 1)[0] for k in params} - set(COMPONENTS))
     if unknown:
         raise ValueError(f"{unknown[0]}: no such bench component ({', '.join(COMPONENTS)})")
@@ -698,26 +755,31 @@ MASTERS = ("lean", "fmpy")
 
 def run_bench(sc: Scenario, fmu_dir, out_dir=None, sensors: Sensors = Sensors(),
               step: float = 1e-3, design: DriveDesign = None, master: str = "lean",
-              progress=False, plot: bool = False) -> BenchRun:
+              progress=False, plot: bool = False, fmus: str = None) -> BenchRun:
     """Build the SSP, simulate it, and (with ``out_dir``) write the SSP, the recording and the
     windows, and with ``plot`` the figure ``bench_<mode>_<scenario>.png`` (matplotlib: about
     0.8 s, so opt-in).
 
     ``master``: ``"lean"`` runs the SSP's components, connections and parameters in this
     package's fixed-step Jacobi master (``run_fmus``: cached value references, direct FMI
-    calls; the same numbers as fmpy's SSP master, a test), ``"fmpy"`` in fmpy's SSP master."""
+    calls; the same numbers as fmpy's SSP master, a test), ``"fmpy"`` in fmpy's SSP master.
+    ``fmus``: "native" or "python" (default: native when ``fmu_dir`` holds the native set; a
+    native reducer must have been built for ``design``)."""
     parse_mode(sc.mode)
+    fmus = fmu_set(fmu_dir, fmus)
     if master not in MASTERS:
         raise ValueError(f"master = {master!r}: must be one of {', '.join(MASTERS)}")
     out = Path(out_dir) if out_dir else None
     if master == "fmpy" or out is not None:     # the SSP is an output, or what fmpy runs
         ssp = build_ssp((out or Path(fmu_dir)) / "TestBench.ssp", fmu_dir, sc, sensors, design,
-                        step)
+                        step, fmus)
     if master == "fmpy":
         result = run_ssp(ssp, sc.stop_time, step)
     else:
-        result = run_fmus(fmu_dir, bench_parameters(sc, sensors, design), sc.stop_time, step,
-                          progress=progress)
+        if fmus == "native":
+            check_native_design(fmu_dir, design)
+        result = run_fmus(fmu_dir, bench_parameters(sc, sensors, design, fmus), sc.stop_time,
+                          step, progress=progress, fmus=fmus)
     rec = recording_from_result(result)
     windows = steady_windows(rec, sc, design or DriveDesign())
     run = BenchRun(sc, rec, windows, result)

@@ -321,7 +321,7 @@ def _bench_step(text) -> float:
 
 
 def cmd_bench(args) -> int:
-    from .bench import COMPONENTS, Sensors, run_bench, scenario
+    from .bench import Sensors, fmu_names, run_bench, scenario
     from .fmu_cache import fmus_into
     mode = "".join(parse_mode(args.mode)[:2])
     if mode not in ("S1", "S2"):
@@ -337,11 +337,11 @@ def cmd_bench(args) -> int:
     design = _load_design(args.design, args.profile)
     with _staged_dir("out", args.out) as out:
         # the FMUs built once per version and sources (cyclo_fmu.fmu_cache), copied here
-        fmu_dir = fmus_into(out / "fmus", sorted({f for f, _ in COMPONENTS.values()}))
+        fmu_dir = fmus_into(out / "fmus", fmu_names(args.fmu_set), design)
         try:
             run = run_bench(sc, fmu_dir, out, Sensors(ideal=args.ideal_sensors, seed=args.seed),
                             step=step, design=design, progress=_progress_on(args),
-                            plot=args.plot)
+                            plot=args.plot, fmus=args.fmu_set)
         except CycloidInputError:
             raise
         except ValueError as exc:
@@ -591,6 +591,9 @@ def build_parser() -> argparse.ArgumentParser:
                        "recording's rate); 'steady': the step the convergence check chose for "
                        "steady scenarios (README)")
     bench.add_argument("--quiet", action="store_true", help="no progress bar")
+    bench.add_argument("--fmus", dest="fmu_set", default="native", choices=("native", "python"),
+                       help="the bench's FMUs: native (C, default: runs in any host, no Python) "
+                       "or python (the pythonfmu slaves)")
     bench.add_argument("--plot", action="store_true", help="also draw bench_<mode>_<scenario>.png "
                        "(signals, window efficiencies; matplotlib, about 0.8 s)")
     bench.add_argument("--design", help="design file (TOML) for the reducer, e.g. the "

@@ -24,8 +24,12 @@ BUNDLE = "cyclofmu_" + __version__.replace(".", "_") + "_slaves"
 SLAVES = {"CycloidDrive": "cycloid_drive", "InductionMotor": "motor", "FeltBrake": "brake",
           "Transducer": "transducer", "TorqueTransducer": "transducer",
           "SpeedTransducer": "transducer"}
-#: FMUs in C (cyclo_fmu.native), built with the machine's C compiler
-NATIVE = ("CycloidDriveNative",)
+#: FMUs in C (cyclo_fmu.native), built with the machine's C compiler: the reducer (its design
+#: compiled in) and the bench components (cyclo_fmu.native.rig_build: the twins of the slaves)
+DESIGN_FMUS = ("CycloidDriveNative",)
+RIG_NATIVE = ("InductionMotorNative", "FeltBrakeNative", "TransducerNative",
+              "TorqueTransducerNative", "SpeedTransducerNative")
+NATIVE = DESIGN_FMUS + RIG_NATIVE
 #: everything ``build`` writes by default
 ALL_FMUS = tuple(SLAVES) + NATIVE
 
@@ -152,9 +156,12 @@ def _install_status_shim(fmu: Path, name: str) -> None:
 def build_any(name: str, dest="dist", design=None) -> Path:
     """Build one FMU by name: a Python FMU (SLAVES) or the native one (for ``design``, default
     the paper's test drive; the Python FMUs take the design as parameters instead)."""
-    if name in NATIVE:
+    if name in DESIGN_FMUS:
         from .native import build_native_fmu
         return build_native_fmu(design, dest)
+    if name in RIG_NATIVE:
+        from .native.rig_build import build_rig_fmu
+        return build_rig_fmu(name, dest)
     return build_fmu(name, dest)
 
 

@@ -104,8 +104,8 @@ def cached_fmu(name: str, design=None, build=None) -> Path:
     ``design``: for the native reducer (the Python FMUs take the design as parameters, so
     theirs is None). ``build(name, dest, design) -> Path`` builds it (default
     ``fmu_build.build_any``)."""
-    from .fmu_build import NATIVE, build_any
-    if name not in NATIVE:
+    from .fmu_build import DESIGN_FMUS, build_any
+    if name not in DESIGN_FMUS:
         design = None
     build = build or build_any
     entry = cache_root() / fmu_key(name, design)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 
 from . import core
 from .base import Boolean, Integer, UnitSlave
@@ -64,9 +63,10 @@ class Transducer(UnitSlave):
         x = self.x
         if not math.isfinite(x):
             self.require_finite(x=x)
-        # the same first draws at every evaluation: standard-normal samples drawn in blocks
-        self._rng = np.random.default_rng(int(self.seed))
-        self._noise, self._next = [], 0
+        # the same first draws at every evaluation: standard-normal samples of the counter-
+        # based stream of ``seed`` (model_core.rig.normal_samples, as the native transducer),
+        # drawn in blocks
+        self._noise, self._next, self._block = [], 0, 0
         self._filtered = self.scale * x
         self._dt, self._a = None, 0.0
         self._read()
@@ -77,7 +77,9 @@ class Transducer(UnitSlave):
             return
         k = self._next
         if k >= len(self._noise):
-            self._noise, k = self._rng.standard_normal(_NOISE_BLOCK).tolist(), 0
+            self._noise = core.rig.normal_samples(int(self.seed), self._block * _NOISE_BLOCK,
+                                                  _NOISE_BLOCK).tolist()
+            self._block, k = self._block + 1, 0
         self._next = k + 1
         self.y = self._model.reading(self._filtered, self._noise[k])
 
