@@ -252,14 +252,44 @@ def _ssv(params: dict) -> str:
 OMS_NS = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
 
 
+_MODEL_DESCRIPTIONS = {}
+
+
+def model_description(path):
+    """fmpy's model description of the FMU at ``path``, parsed once per file version (path,
+    size, modification time) in a process: the bench reads each FMU's twice."""
+    from fmpy import read_model_description
+    st = Path(path).stat()
+    key = (str(Path(path).resolve()), st.st_size, st.st_mtime_ns)
+    if key not in _MODEL_DESCRIPTIONS:
+        _MODEL_DESCRIPTIONS[key] = read_model_description(str(path))
+    return _MODEL_DESCRIPTIONS[key]
+
+
+def _extract(path) -> str:
+    """Unpack an FMU for running it: everything, except that an FMU without resources/ (the
+    native ones) needs only its model description and this platform's binaries (not the
+    sources and documentation: fewer files to write and delete)."""
+    import tempfile
+    from fmpy import extract, platform
+    with zipfile.ZipFile(path) as z:
+        names = z.namelist()
+        if any(n.startswith("resources/") for n in names):
+            return extract(str(path))
+        tmp = tempfile.mkdtemp(prefix="cyclofmu_run_")
+        keep = [n for n in names if n == "modelDescription.xml"
+                or n.startswith(f"binaries/{platform}/")]
+        z.extractall(tmp, members=keep)
+    return tmp
+
+
 def _fmu_units(fmu_dir, comps=COMPONENTS) -> tuple:
     """(unit of every bench connector {(fmu, connector): unit or None}, the units' definitions
     {unit: BaseUnit}) read from the FMUs' model descriptions, so that the SSD states what the
     FMUs declare."""
-    from fmpy import read_model_description
     units, defs = {}, {}
     for fmu in sorted({f for f, _ in comps.values()}):
-        md = read_model_description(str(Path(fmu_dir) / f"{fmu}.fmu"))
+        md = model_description(Path(fmu_dir) / f"{fmu}.fmu")
         var = {v.name: v for v in md.modelVariables}
         for _, cons in (c for c in comps.values() if c[0] == fmu):
             for c, _k in cons:
@@ -437,7 +467,6 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
     Returns a structured array with the same fields as ``run_ssp``."""
     import ctypes
 
-    from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave, fmi2Real, fmi2ValueReference
 
     if coupling not in COUPLINGS:
@@ -465,7 +494,7 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
         for name, (fmu, connectors) in COMPONENTS.items():
             path = str(Path(fmu_dir) / f"{fmu}.fmu")
             if path not in unpacked:     # one extraction per FMU, shared by its instances
-                unpacked[path] = (read_model_description(path), extract(path))
+                unpacked[path] = (model_description(path), _extract(path))
             md, unzipped = unpacked[path]
             var = {v.name: v for v in md.modelVariables}
             f = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,

@@ -55,9 +55,9 @@ def _slave_xml(slave: str) -> ET.Element:
     return cls(instance_name="native-build").to_xml()
 
 
-def interface(name: str):
+def interface(name: str, slave: str = None):
     """(model description root edited for the native FMU, variables [(sv, type element)])."""
-    slave, _ = COMPONENTS[name]
+    slave = slave or COMPONENTS[name][0]
     root = _slave_xml(slave)
     mv = root.find("ModelVariables")
     svs = list(mv)
@@ -185,19 +185,26 @@ def compile_rig(src: Path, sources, out: Path, cc=None) -> None:
         raise CycloidInputError("C compiler", cc, f"failed on {out.name}: {first[:300]}")
 
 
-def build_rig_fmu(name: str, dest="dist", cc=None) -> Path:
-    """Build ``dest/<name>.fmu`` (a native bench component) and return its path."""
-    if name not in COMPONENTS:
+def build_rig_fmu(name: str, dest="dist", cc=None, *, slave: str = None,
+                  physics: Path = None) -> Path:
+    """Build ``dest/<name>.fmu`` (a native bench component) and return its path.
+
+    ``slave`` and ``physics`` replace the interface (a Python slave's name) and the component
+    source (a C file implementing rig_model.h): for measurements such as a trivial floor."""
+    if name not in COMPONENTS and (slave is None or physics is None):
         raise ValueError(f"unknown native component {name!r}; known: {', '.join(COMPONENTS)}")
-    slave, comp_src = COMPONENTS[name]
+    slave = slave or COMPONENTS[name][0]
+    physics = Path(physics) if physics else HERE / COMPONENTS[name][1]
+    comp_src = physics.name
     cc = cc or find_compiler()
     headers = fmi_header_dir()
-    root, svs = interface(name)
+    root, svs = interface(name, slave)
     sources = SHARED + (comp_src,)
     # GUID: a digest of the interface and the sources, stable from build to build
     digest = hashlib.sha256(ET.tostring(root) + name.encode())
-    for f in sources + HEADERS:
+    for f in SHARED + HEADERS:
         digest.update((HERE / f).read_bytes())
+    digest.update(physics.read_bytes())
     guid = "{" + str(uuid.UUID(bytes=digest.digest()[:16], version=4)) + "}"
     md = model_description(name, root, guid, sources)
     dest = Path(dest)
@@ -206,8 +213,9 @@ def build_rig_fmu(name: str, dest="dist", cc=None) -> Path:
         stage = Path(tmp) / "fmu"
         src = stage / "sources"
         src.mkdir(parents=True)
-        for f in sources + HEADERS:
+        for f in SHARED + HEADERS:
             shutil.copyfile(HERE / f, src / f)
+        shutil.copyfile(physics, src / comp_src)
         for f in FMI_HEADERS:
             shutil.copyfile(headers / f, src / f)
         for f, text in zip(GENERATED, generate_header(name, svs, guid)):
