@@ -8,6 +8,7 @@ hosts with the preload of ``cyclo_fmu.hosts.python_fmu_environment``; the native
 plain environment.
 """
 import csv
+import os
 import re
 import subprocess
 import sys
@@ -16,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cyclo_fmu.bench import Scenario, Sensors, build_ssp, run_bench, steady_windows
+from cyclo_fmu.bench import Scenario, build_ssp, paper_scenario, run_bench, steady_windows
 from cyclo_fmu.fmu_build import ALL_FMUS, NATIVE, SLAVES
 from cyclo_fmu.hosts import hosts_dir, python_fmu_environment
 
@@ -52,13 +53,22 @@ def python_env():
 
 
 @pytest.fixture(scope="module")
-def all_fmus(fmu_dir, tmp_path_factory):
+def native_cache(tmp_path_factory):
+    """An FMU cache for this module: the native FMUs are built once, for the tests here and for
+    the ``cyclo-fmu bench`` they run."""
+    return tmp_path_factory.mktemp("fmu_cache")
+
+
+@pytest.fixture(scope="module")
+def all_fmus(fmu_dir, native_cache, tmp_path_factory):
     """Every FMU ``cyclo-fmu build`` makes: the Python ones of the session plus the native."""
-    from cyclo_fmu.fmu_build import build_any
+    from cyclo_fmu.fmu_cache import fmus_into
     d = tmp_path_factory.mktemp("native")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("CYCLOFMU_CACHE", str(native_cache))
+        fmus_into(d, NATIVE)
     paths = {name: fmu_dir / f"{name}.fmu" for name in SLAVES}
-    for name in NATIVE:
-        paths[name] = build_any(name, d)
+    paths.update({name: d / f"{name}.fmu" for name in NATIVE})
     assert set(paths) == set(ALL_FMUS)
     return paths
 
@@ -70,7 +80,7 @@ def all_fmus(fmu_dir, tmp_path_factory):
 #: FMU that aborts *after* a complete, clean report is recorded as this known failure
 PYTHONFMU_EXIT_ABORT = ("pythonfmu 0.7 use-after-free at interpreter shutdown: the checker "
                         "aborted at exit after a clean report (issue 20)")
-FAST_CHECK = ("CycloidDriveNative", "TorqueTransducer")
+FAST_CHECK = NATIVE + ("TorqueTransducer",)
 
 
 @pytest.mark.parametrize("name", [n if n in FAST_CHECK else pytest.param(n, marks=pytest.mark.slow)
@@ -86,6 +96,8 @@ def test_fmucheck_reports_no_error(name, all_fmus, tmp_path):
     report = re.search(r"Checker reported:\s*(\d+) Warning\(s\)\s*(\d+) Error\(s\)", text)
     assert report is not None, text[-2000:]
     assert int(report.group(2)) == 0, text[-3000:]
+    if name in NATIVE:
+        assert int(report.group(1)) == 0, text[-3000:]      # not even a warning
     # the simulation ran to its end (2 s; the checker writes 500 output points)
     rows = out.read_text().strip().splitlines()
     assert float(rows[-1].split(",")[0]) == pytest.approx(2.0), rows[-1]
@@ -221,6 +233,37 @@ def test_omsimulator_command_line_runs_the_ssp_as_shipped(short_bench, tmp_path)
     for bad in ("error:", "warning:", "Unit mismatch", "internal error"):
         assert bad not in text, text[-3000:]
     assert_windows_agree(oms_recording(tmp_path / "r.csv"), SHORT, reference.windows)
+
+
+@pytest.fixture(scope="module")
+def native_paper(all_fmus, native_cache, tmp_path_factory):
+    """``cyclo-fmu bench --scenario paper`` as a user runs it (native FMUs, the default)."""
+    d = tmp_path_factory.mktemp("native_paper")
+    r = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "bench", "--scenario", "paper",
+                        "--out", str(d / "out"), "--quiet"], capture_output=True, text=True,
+                       timeout=900, env=dict(os.environ, CYCLOFMU_CACHE=str(native_cache)))
+    assert r.returncode == 0, r.stderr
+    with (d / "out" / "efficiency_S1_paper.csv").open() as f:
+        windows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+    return d / "out" / "TestBench.ssp", windows
+
+
+def test_omsimulator_runs_the_native_bench_with_a_plain_environment(native_paper, tmp_path):
+    """The acceptance of issue 20: OMSimulator's command line runs TestBench.ssp as
+    ``cyclo-fmu bench`` wrote it, with no Python in the environment (not even HOME), and every
+    steady window agrees with the command's within 0.001 percentage points."""
+    oms = tool("omsimulator/bin/OMSimulator")
+    ssp, windows = native_paper
+    sc = paper_scenario()
+    r = subprocess.run([str(oms), str(ssp), f"--stopTime={sc.stop_time}", "--stepSize=1e-3",
+                        "--resultFile=r.csv", f"--tempDir={tmp_path / 'tmp'}"], cwd=tmp_path,
+                       capture_output=True, text=True, timeout=900,
+                       env={"PATH": "/usr/bin:/bin", "HOME": str(tmp_path)})
+    text = r.stdout + r.stderr
+    assert r.returncode == 0, text[-3000:]
+    for bad in ("error:", "warning:", "Unit mismatch", "internal error"):
+        assert bad not in text, text[-3000:]
+    assert_windows_agree(oms_recording(tmp_path / "r.csv"), sc, windows)
 
 
 OMS_PYTHON_API = """
