@@ -231,3 +231,20 @@ def test_native_fmus_carry_their_sources_and_pass_fmpys_validation(both):
         for f in ("sources/buildDescription.xml", "sources/rig_fmi2.c", "sources/rig_vars.h",
                   f"binaries/linux64/{name}.so"):
             assert f in names, (name, f)
+
+
+def test_the_native_ssp_runs_in_fmpy_and_libcosim_alike(both, tmp_path):
+    """TestBench.ssp with the native set: fmpy's SSP master and libcosim (a second importer,
+    FMI Library) give the same physics."""
+    pytest.importorskip("libcosimpy")
+    from test_bench import libcosim_last_values
+
+    from cyclo_fmu.bench import build_ssp, run_ssp
+    _, d = both
+    sc = Scenario("short", mode="S2", f_first=30, f_last=30, f_count=1, T_first=5, T_last=5,
+                  T_count=1, hold=1.5, duration=1.5)
+    ssp = build_ssp(tmp_path / "TestBench.ssp", d, sc, Sensors(ideal=True), fmus="native")
+    fm = run_ssp(ssp, 1.5)
+    names = (("drive", "tau_in"), ("drive", "eta"), ("motor", "w"), ("brake", "tau_out"))
+    for (comp, var), value in zip(names, libcosim_last_values(ssp, 1.5, names)):
+        assert value == pytest.approx(fm[f"{comp}.{var}"][-1], rel=1e-9, abs=1e-12), (comp, var)
