@@ -26,7 +26,7 @@ SLAVES = {"CycloidDrive": "cycloid_drive", "InductionMotor": "motor", "FeltBrake
           "SpeedTransducer": "transducer"}
 #: FMUs in C (cyclo_fmu.native), built with the machine's C compiler: the reducer (its design
 #: compiled in) and the bench components (cyclo_fmu.native.rig_build: the twins of the slaves)
-DESIGN_FMUS = ("CycloidDriveNative",)
+DESIGN_FMUS = ("CycloidDriveNative", "CycloidDriveNative3")    # FMI 2.0, FMI 3.0
 RIG_NATIVE = ("InductionMotorNative", "FeltBrakeNative", "TransducerNative",
               "TorqueTransducerNative", "SpeedTransducerNative")
 NATIVE = DESIGN_FMUS + RIG_NATIVE
@@ -156,6 +156,9 @@ def _install_status_shim(fmu: Path, name: str) -> None:
 def build_any(name: str, dest="dist", design=None) -> Path:
     """Build one FMU by name: a Python FMU (SLAVES) or the native one (for ``design``, default
     the paper's test drive; the Python FMUs take the design as parameters instead)."""
+    if name == "CycloidDriveNative3":
+        from .native.fmi3_build import build_fmi3_reducer
+        return build_fmi3_reducer(design, dest)
     if name in DESIGN_FMUS:
         from .native import build_native_fmu
         return build_native_fmu(design, dest)
@@ -168,7 +171,7 @@ def build_any(name: str, dest="dist", design=None) -> Path:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="build_fmu", description="Build the cyclo-fmu FMUs.")
     p.add_argument("--dest", default="dist", help="output folder (default: dist)")
-    p.add_argument("--design", help="design file (TOML) for CycloidDriveNative")
+    p.add_argument("--design", help="design file (TOML) for CycloidDriveNative(3)")
     p.add_argument("names", nargs="*", default=list(ALL_FMUS), help="FMUs to build")
     args = p.parse_args(argv)
     design = None

@@ -79,6 +79,8 @@ def fmu_key(name: str, design=None) -> str:
     h.update((os.environ.get("CC") or "").encode())
     if os.environ.get("CYCLOFMU_NO_SHIM"):
         h.update(b"no-shim")
+    from .native.cross import cache_tag      # with or without binaries/win64
+    h.update(cache_tag().encode())
     return h.hexdigest()[:32]
 
 

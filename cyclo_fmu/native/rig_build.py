@@ -26,6 +26,7 @@ from pathlib import Path
 from xml.etree import ElementTree as ET
 
 from .. import __version__
+from .cross import compile_win64
 from .build import CFLAGS, FMI_HEADERS, MIT_LICENSE, _fmi_license, find_compiler, fmi_header_dir
 
 HERE = Path(__file__).resolve().parent
@@ -234,6 +235,7 @@ def build_rig_fmu(name: str, dest="dist", cc=None, *, slave: str = None,
             f"{slave}.fmu: the same variables, units and physics (tested equal to 1e-9), "
             "no Python needed in the host.</p></body></html>\n")
         compile_rig(src, sources, stage / "binaries" / "linux64" / f"{name}.so", cc)
+        compile_win64(src, sources, stage / "binaries" / "win64" / f"{name}.dll")
         out = dest / f"{name}.fmu"
         partial = dest / f".{name}.fmu.partial-{os.getpid()}"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
