@@ -413,18 +413,15 @@ def build_ssp(path, fmu_dir, sc: Scenario, sensors: Sensors = Sensors(),
 
 def check_native_design(fmu_dir, design: DriveDesign = None):
     """The native reducer in ``fmu_dir`` carries ``design`` (default: the paper's drive), or
-    ValueError: its map is compiled in, so a bench of another design needs its own build (its
-    documentation holds the design's TOML)."""
-    from html import escape
-
-    from model_core.design import design_to_toml
+    ValueError naming the first differing value: its map is compiled in, so a bench of another
+    design needs its own build."""
+    from .native.design_check import fmu_design_mismatch
     fmu = Path(fmu_dir) / f"{FMU_SETS['native']['drive']}.fmu"
-    with zipfile.ZipFile(fmu) as z:
-        doc = z.read("documentation/index.html").decode()
-    if f"<pre>{escape(design_to_toml(design or DriveDesign()))}</pre>" not in doc:
-        raise ValueError(f"design: {fmu.name} in {fmu_dir} was built for another design; build "
-                         "it for this one (cyclo-fmu build CycloidDriveNative --design FILE) or "
-                         "run the Python set (fmus='python')")
+    why = fmu_design_mismatch(fmu, design)
+    if why is not None:
+        raise ValueError(f"design: {fmu.name} in {fmu_dir} was built for another design "
+                         f"({why}); build it for this one (cyclo-fmu build CycloidDriveNative "
+                         "--design FILE) or run the Python set (fmus='python')")
 
 
 def run_ssp(ssp_path, stop_time: float, step: float = 1e-3):

@@ -248,3 +248,15 @@ def test_the_native_ssp_runs_in_fmpy_and_libcosim_alike(both, tmp_path):
     names = (("drive", "tau_in"), ("drive", "eta"), ("motor", "w"), ("brake", "tau_out"))
     for (comp, var), value in zip(names, libcosim_last_values(ssp, 1.5, names)):
         assert value == pytest.approx(fm[f"{comp}.{var}"][-1], rel=1e-9, abs=1e-12), (comp, var)
+
+
+def test_the_native_reducer_in_a_folder_is_checked_against_the_design(both):
+    """A bench of another design than the native reducer was built for is refused, naming
+    the value that differs (its map is compiled in)."""
+    from cyclo_fmu.bench import check_native_design
+    from model_core import DriveDesign
+    _, d = both
+    check_native_design(d, DriveDesign())
+    check_native_design(d, None)
+    with pytest.raises(ValueError, match="profile"):
+        check_native_design(d, DriveDesign(profile="paper"))

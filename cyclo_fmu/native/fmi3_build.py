@@ -137,22 +137,10 @@ BUILD_DESCRIPTION = '''<?xml version="1.0" encoding="UTF-8"?>
 
 
 def _fmi2_for(design, folder: Path):
-    """``folder/CycloidDriveNative.fmu`` when it was built for ``design`` (its documentation
-    holds the design's TOML), else None."""
-    from html import escape
-
-    from model_core import DriveDesign
-    from model_core.design import design_to_toml
+    """``folder/CycloidDriveNative.fmu`` when it was built for ``design``, else None."""
+    from .design_check import fmu_carries_design
     path = Path(folder) / "CycloidDriveNative.fmu"
-    if not path.is_file():
-        return None
-    try:
-        with zipfile.ZipFile(path) as z:
-            doc = z.read("documentation/index.html").decode()
-    except (KeyError, zipfile.BadZipFile):
-        return None
-    want = f"<pre>{escape(design_to_toml(design or DriveDesign()))}</pre>"
-    return path if want in doc else None
+    return path if fmu_carries_design(path, design) else None
 
 
 def build_fmi3_reducer(design=None, dest="dist", cc=None) -> Path:
