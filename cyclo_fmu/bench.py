@@ -641,17 +641,34 @@ def _compile_loop():
     if os.environ.get("CYCLOFMU_PYTHON_LOOP"):
         return None
     source = _LOOP_SOURCE.read_bytes()
-    tag = hashlib.sha256(source + sys.platform.encode()).hexdigest()[:16]
+    cc = find_compiler()
+    flags = ["-O2", "-shared", "-fPIC", "-fstack-protector-strong", "-D_FORTIFY_SOURCE=2",
+             "-Wl,-z,relro,-z,now"]
+    # keyed by everything the library is made of; loaded only while its digest matches the
+    # one recorded when it was built (a truncated or replaced file is rebuilt, never loaded)
+    tag = hashlib.sha256(b"\0".join([source, sys.platform.encode(), cc.encode(),
+                                      " ".join(flags).encode()])).hexdigest()[:16]
     cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "cyclo-fmu"
     lib_path = cache / f"bench_loop_{tag}.so"
-    if not lib_path.is_file():
+    side = lib_path.with_name(lib_path.name + ".sha256")
+
+    def digest(path):
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    try:
+        valid = lib_path.is_file() and side.read_text().strip() == digest(lib_path)
+    except OSError:
+        valid = False
+    if not valid:
         cache.mkdir(parents=True, exist_ok=True)
         tmp = lib_path.with_suffix(f".{os.getpid()}.tmp")
-        r = subprocess.run([find_compiler(), "-O2", "-shared", "-fPIC", "-o", str(tmp),
-                            str(_LOOP_SOURCE)], capture_output=True, text=True)
+        r = subprocess.run([cc, *flags, "-o", str(tmp), str(_LOOP_SOURCE)],
+                           capture_output=True, text=True)
         if r.returncode != 0:
             raise RuntimeError(f"cc failed: {r.stderr.strip()[:200]}")
+        tmp_side = side.with_suffix(f".{os.getpid()}.tmp")
+        tmp_side.write_text(digest(tmp) + "\n")
         os.replace(tmp, lib_path)
+        os.replace(tmp_side, side)
     # PyDLL: the GIL stays held through the loop, as the pythonfmu slaves it calls need it
     fn = ctypes.PyDLL(str(lib_path)).bench_loop
     fn.restype = ctypes.c_long

@@ -71,3 +71,26 @@ def test_fmus_into_copies_the_cached_files(cache, tmp_path):
     assert len(calls) == 2
     assert (tmp_path / "again" / "FeltBrake.fmu").read_bytes() == \
         (out / "FeltBrake.fmu").read_bytes()
+
+
+def test_the_cached_bench_loop_is_rebuilt_when_its_file_changed(tmp_path):
+    """bench._compile_loop loads the cached C loop only while its digest matches the one
+    recorded at its build: a replaced library is rebuilt, not loaded (each load in its own
+    process, as a library once loaded stays mapped)."""
+    import os
+    import subprocess
+    import sys
+    env = dict(os.environ, XDG_CACHE_HOME=str(tmp_path))
+    env.pop("CYCLOFMU_PYTHON_LOOP", None)
+    code = "from cyclo_fmu import bench; assert bench._compile_loop() is not None"
+
+    def load():
+        r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                           text=True, timeout=300)
+        assert r.returncode == 0, r.stderr
+    load()
+    (lib,) = (tmp_path / "cyclo-fmu").glob("bench_loop_*.so")
+    built = lib.read_bytes()
+    lib.write_bytes(b"\x7fELF not the library we built")
+    load()
+    assert lib.read_bytes() == built
