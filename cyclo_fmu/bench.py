@@ -51,6 +51,9 @@ FMU_SETS = {
                "t_out": "TorqueTransducer", "n_out": "SpeedTransducer"},
 }
 FMU_SETS["native"] = {c: f + "Native" for c, f in FMU_SETS["python"].items()}
+#: the native set as FMI 3.0 co-simulation FMUs (the same C code behind an FMI 3 adapter), for
+#: SSP hosts that run FMI 3.0 (OMSimulator); the lean master and fmpy's SSP master run FMI 2.0
+FMU_SETS["native3"] = {c: f + "3" for c, f in FMU_SETS["native"].items()}
 
 
 def components(fmus: str = "python") -> dict:
@@ -383,8 +386,8 @@ def build_ssp(path, fmu_dir, sc: Scenario, sensors: Sensors = Sensors(),
     path.parent.mkdir(parents=True, exist_ok=True)
     fmus = fmu_set(fmu_dir, fmus)
     comps = components(fmus)
-    if fmus == "native":
-        check_native_design(fmu_dir, design)
+    if fmus != "python":
+        check_native_design(fmu_dir, design, fmus)
     params = bench_parameters(sc, sensors, design, fmus)
     per_component = {}
     for key, value in params.items():
@@ -411,12 +414,12 @@ def build_ssp(path, fmu_dir, sc: Scenario, sensors: Sensors = Sensors(),
     return path
 
 
-def check_native_design(fmu_dir, design: DriveDesign = None):
+def check_native_design(fmu_dir, design: DriveDesign = None, fmus: str = "native"):
     """The native reducer in ``fmu_dir`` carries ``design`` (default: the paper's drive), or
     ValueError naming the first differing value: its map is compiled in, so a bench of another
     design needs its own build."""
     from .native.design_check import fmu_design_mismatch
-    fmu = Path(fmu_dir) / f"{FMU_SETS['native']['drive']}.fmu"
+    fmu = Path(fmu_dir) / f"{FMU_SETS[fmus]['drive']}.fmu"
     why = fmu_design_mismatch(fmu, design)
     if why is not None:
         raise ValueError(f"design: {fmu.name} in {fmu_dir} was built for another design "
@@ -468,7 +471,11 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
 
     if coupling not in COUPLINGS:
         raise ValueError(f"coupling = {coupling!r}: must be one of {', '.join(COUPLINGS)}")
-    COMPONENTS = components(fmu_set(fmu_dir, fmus))
+    fmus = fmu_set(fmu_dir, fmus)
+    if fmus == "native3":
+        raise ValueError("fmus = 'native3': this master runs FMI 2.0 FMUs; run the FMI 3.0 set "
+                         "as an SSP in an FMI 3.0 host (build_ssp(..., fmus='native3'))")
+    COMPONENTS = components(fmus)
     unknown = sorted({k.split(".", 1)[0] for k in params} - set(COMPONENTS))
     if unknown:
         raise ValueError(f"{unknown[0]}: no such bench component ({', '.join(COMPONENTS)})")

@@ -29,7 +29,10 @@ SLAVES = {"CycloidDrive": "cycloid_drive", "InductionMotor": "motor", "FeltBrake
 DESIGN_FMUS = ("CycloidDriveNative", "CycloidDriveNative3")    # FMI 2.0, FMI 3.0
 RIG_NATIVE = ("InductionMotorNative", "FeltBrakeNative", "TransducerNative",
               "TorqueTransducerNative", "SpeedTransducerNative")
-NATIVE = DESIGN_FMUS + RIG_NATIVE
+#: the bench components as FMI 3.0 co-simulation FMUs (the same C code behind an FMI 3 adapter)
+RIG_NATIVE3 = ("InductionMotorNative3", "FeltBrakeNative3", "TorqueTransducerNative3",
+               "SpeedTransducerNative3")
+NATIVE = DESIGN_FMUS + RIG_NATIVE + RIG_NATIVE3
 #: everything ``build`` writes by default
 ALL_FMUS = tuple(SLAVES) + NATIVE
 
@@ -165,6 +168,9 @@ def build_any(name: str, dest="dist", design=None) -> Path:
     if name in RIG_NATIVE:
         from .native.rig_build import build_rig_fmu
         return build_rig_fmu(name, dest)
+    if name in RIG_NATIVE3:
+        from .native.fmi3_build import build_fmi3_component
+        return build_fmi3_component(name, dest)
     return build_fmu(name, dest)
 
 

@@ -177,3 +177,67 @@ def test_without_a_cross_compiler_the_build_notes_it_and_goes_on(tmp_path):
     names = zipfile.ZipFile(tmp_path / "FeltBrakeNative.fmu").namelist()
     assert "binaries/linux64/FeltBrakeNative.so" in names
     assert not any(n.startswith("binaries/win64/") for n in names)
+
+
+@pytest.fixture(scope="module")
+def native3(tmp_path_factory):
+    """The bench's native set as FMI 3.0 FMUs."""
+    from cyclo_fmu.bench import FMU_SETS
+    d = tmp_path_factory.mktemp("native3")
+    build_any("CycloidDriveNative", d)          # reused by the FMI 3 reducer's build
+    for name in sorted(set(FMU_SETS["native3"].values())):
+        build_any(name, d)
+    return d
+
+
+def test_fmi3_bench_components_validate_and_equal_their_fmi2_twins(native3):
+    from fmpy import simulate_fmu
+    from fmpy.validation import validate_fmu
+    from cyclo_fmu.bench import FMU_SETS
+    for name in sorted(set(FMU_SETS["native3"].values())):
+        assert validate_fmu(str(native3 / f"{name}.fmu")) == [], name
+    w = np.array([(0.0, 20.0), (1.0, 20.0)], dtype=[("time", float), ("w", float)])
+    kw = dict(stop_time=0.5, output_interval=1e-3, input=w, output=["tau_out"],
+              start_values={"J_out": 2e-3, "T_first": 4.0})
+    a = simulate_fmu(str(build_any("FeltBrakeNative", native3 / "x")), **kw)
+    b = simulate_fmu(str(native3 / "FeltBrakeNative3.fmu"), **kw)
+    np.testing.assert_array_equal(a["tau_out"], b["tau_out"])
+
+
+def test_the_fmi3_bench_runs_in_omsimulator(native3, tmp_path):
+    """TestBench.ssp of FMI 3.0 FMUs (build_ssp(..., fmus='native3')) in OMSimulator's
+    command line, plain environment: the steady windows of the FMI 2.0 lean bench."""
+    import csv as csv_
+    from cyclo_fmu.bench import Scenario, build_ssp, run_bench, steady_windows
+    oms = hosts_dir(ROOT) / "omsimulator" / "bin" / "OMSimulator"
+    if not oms.is_file():
+        pytest.skip(f"OMSimulator not found in {oms.parent}")
+    sc = Scenario("fmi3", f_first=20, f_last=20, f_count=1, T_first=3.0, T_last=8.0,
+                  T_count=2, hold=3.0, settle=1.5)
+    ssp = build_ssp(tmp_path / "TestBench.ssp", native3, sc, fmus="native3")
+    ref_dir = tmp_path / "fmi2"
+    for name in ("InductionMotorNative", "FeltBrakeNative", "TorqueTransducerNative",
+                 "SpeedTransducerNative"):
+        build_any(name, ref_dir)
+    shutil.copyfile(native3 / "CycloidDriveNative.fmu", ref_dir / "CycloidDriveNative.fmu")
+    reference = run_bench(sc, ref_dir, fmus="native").windows
+    r = subprocess.run([str(oms), str(ssp), f"--stopTime={sc.stop_time}", "--stepSize=1e-3",
+                        "--resultFile=r.csv", f"--tempDir={tmp_path / 'tmp'}"], cwd=tmp_path,
+                       capture_output=True, text=True, timeout=600,
+                       env={"PATH": "/usr/bin:/bin", "HOME": str(tmp_path)})
+    if "error while loading shared libraries" in r.stderr:
+        pytest.skip(f"OMSimulator cannot start: {r.stderr.strip()[:200]}")
+    text = r.stdout + r.stderr
+    assert r.returncode == 0 and "error:" not in text, text[-3000:]
+    rows = list(csv_.reader((tmp_path / "r.csv").open()))
+    head = [h.strip().strip('"') for h in rows[0]]
+    data = np.array([[float(v) for v in row] for row in rows[1:]])
+    data = data[np.r_[data[1:, 0] != data[:-1, 0], True]]
+    col = {s: data[:, next(i for i, h in enumerate(head) if h.endswith(s))]
+           for s in (".n_in.y", ".t_in.y", ".n_out.y", ".t_out.y")}
+    rec = {"time_s": data[:, 0], "speed_in_rpm": col[".n_in.y"], "torque_in_Nm": col[".t_in.y"],
+           "speed_out_rpm": col[".n_out.y"], "torque_out_Nm": col[".t_out.y"]}
+    win = steady_windows(rec, sc)
+    assert len(win) == len(reference) == 2
+    for a, b in zip(win, reference):
+        assert abs(100 * (a["eta"] - b["eta"])) < 1e-3, (a, b)

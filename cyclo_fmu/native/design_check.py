@@ -23,9 +23,15 @@ def fmu_design_mismatch(path, design) -> str | None:
     with zipfile.ZipFile(path) as z:
         root = ET.fromstring(z.read("modelDescription.xml"))
     starts = {}
-    for sv in root.iter("ScalarVariable"):
+    for sv in root.iter("ScalarVariable"):          # FMI 2.0
         el = sv[0]
         starts[sv.get("name")] = (el.tag, el.get("start"))
+    mv = root.find("ModelVariables") if root.get("fmiVersion", "").startswith("3") else None
+    for v in mv if mv is not None else ():         # FMI 3.0: start attribute or <Start value>
+        start = v.get("start")
+        if start is None and v.find("Start") is not None:
+            start = v.find("Start").get("value")
+        starts[v.get("name")] = (v.tag, start)
     want = [(name, kind, value) for name, kind, value, _unit, _desc in design_constants(design)]
     want += [(name, "Real", getattr(design.extra, name)) for name, *_ in EXTRA]
     for name, kind, value in want:

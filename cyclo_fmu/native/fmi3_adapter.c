@@ -1,7 +1,9 @@
 /* FMI 3.0 co-simulation on top of the FMI 2.0 front compiled into the same binary: the same
  * C core, the same value handling and checks, reached through FMI 3 calls. Value references:
- * FMI 3 needs them unique across types, so Int32 = FMI 2 Integer + 1000000, Boolean + 2000000,
- * String + 3000000 (Float64 keeps the FMI 2 Real's); 4000000 is the independent variable time.
+ * FMI 3 needs them unique across types; here each is the variable's 1-based position in the
+ * model description (the independent variable time is 1), and the generated table
+ * fmi3_vrmap.c gives its FMI 2 type and value reference. (Positions, because OMSimulator reads
+ * FMI 3 dependencies as positions; with value references equal to them both readings agree.)
  * Functions of FMI 3 this FMU does not provide are in the generated fmi3_stubs.c and answer
  * fmi3Error. Written for cyclo-fmu (MIT license); FMI headers: Modelica Association (BSD). */
 #include <stdlib.h>
@@ -10,11 +12,13 @@
 #include "fmi2Functions.h"
 #include "fmi3Functions.h"
 
-#define OFF_INT32 1000000u
-#define OFF_BOOLEAN 2000000u
-#define OFF_STRING 3000000u
-#define VR_TIME 4000000u
 #define MAX_BATCH 256
+
+/* fmi3_vrmap.c: by FMI 3 value reference, the FMI 2 type ('R', 'I', 'B', 'S'; 'T' time; 0
+ * none) and value reference */
+extern const unsigned int FMI3_N_VR;
+extern const char FMI3_VR_TYPE[];
+extern const unsigned int FMI3_VR2[];
 
 typedef struct {
     fmi2Component c2;
@@ -116,7 +120,7 @@ FORWARD(fmi3Terminate, fmi2Terminate)
 FORWARD(fmi3Reset, fmi2Reset)
 
 /* value references of one FMI 3 type back to FMI 2's, at most MAX_BATCH a call */
-static int map_vrs(Adapter *a, const fmi3ValueReference vr[], size_t n, unsigned int offset,
+static int map_vrs(Adapter *a, const fmi3ValueReference vr[], size_t n, char type,
                    fmi2ValueReference out[], const char *fn)
 {
     size_t k;
@@ -125,11 +129,11 @@ static int map_vrs(Adapter *a, const fmi3ValueReference vr[], size_t n, unsigned
         return 0;
     }
     for (k = 0; k < n; k++) {
-        if (vr[k] < offset || vr[k] - offset >= 1000000u) {
+        if (vr[k] >= FMI3_N_VR || FMI3_VR_TYPE[vr[k]] != type) {
             log3(a, "unknown value reference for this variable type");
             return 0;
         }
-        out[k] = vr[k] - offset;
+        out[k] = FMI3_VR2[vr[k]];
     }
     return 1;
 }
@@ -144,8 +148,8 @@ FMI3_Export fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueRefe
     for (k = 0; k < nvr; k++) {
         fmi2Status s;
         fmi2ValueReference r;
-        if (vr[k] == VR_TIME) { values[k] = a->time; continue; }
-        if (!map_vrs(a, &vr[k], 1, 0, &r, "fmi3GetFloat64")) return fmi3Error;
+        if (vr[k] < FMI3_N_VR && FMI3_VR_TYPE[vr[k]] == 'T') { values[k] = a->time; continue; }
+        if (!map_vrs(a, &vr[k], 1, 'R', &r, "fmi3GetFloat64")) return fmi3Error;
         s = fmi2GetReal(a->c2, &r, 1, &values[k]);
         if (s > fmi2Warning) return (fmi3Status)s;
     }
@@ -158,7 +162,7 @@ FMI3_Export fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueRefe
     Adapter *a = (Adapter *)instance;
     fmi2ValueReference r[MAX_BATCH];
     if (a == NULL || nValues != nvr || (nvr && values == NULL)) return fmi3Error;
-    if (!map_vrs(a, vr, nvr, 0, r, "fmi3SetFloat64: too many or NULL value references"))
+    if (!map_vrs(a, vr, nvr, 'R', r, "fmi3SetFloat64: too many or NULL value references"))
         return fmi3Error;
     return (fmi3Status)fmi2SetReal(a->c2, r, nvr, values);
 }
@@ -172,7 +176,7 @@ FMI3_Export fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueRefere
     fmi2Status s;
     size_t k;
     if (a == NULL || nValues != nvr || (nvr && values == NULL)) return fmi3Error;
-    if (!map_vrs(a, vr, nvr, OFF_INT32, r, "fmi3GetInt32: too many or NULL value references"))
+    if (!map_vrs(a, vr, nvr, 'I', r, "fmi3GetInt32: too many or NULL value references"))
         return fmi3Error;
     s = fmi2GetInteger(a->c2, r, nvr, v);
     for (k = 0; k < nvr && s <= fmi2Warning; k++) values[k] = v[k];
@@ -187,7 +191,7 @@ FMI3_Export fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueRefere
     fmi2Integer v[MAX_BATCH];
     size_t k;
     if (a == NULL || nValues != nvr || (nvr && values == NULL)) return fmi3Error;
-    if (!map_vrs(a, vr, nvr, OFF_INT32, r, "fmi3SetInt32: too many or NULL value references"))
+    if (!map_vrs(a, vr, nvr, 'I', r, "fmi3SetInt32: too many or NULL value references"))
         return fmi3Error;
     for (k = 0; k < nvr; k++) v[k] = values[k];
     return (fmi3Status)fmi2SetInteger(a->c2, r, nvr, v);
@@ -202,7 +206,7 @@ FMI3_Export fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueRefe
     fmi2Status s;
     size_t k;
     if (a == NULL || nValues != nvr || (nvr && values == NULL)) return fmi3Error;
-    if (!map_vrs(a, vr, nvr, OFF_BOOLEAN, r, "fmi3GetBoolean: too many or NULL value references"))
+    if (!map_vrs(a, vr, nvr, 'B', r, "fmi3GetBoolean: too many or NULL value references"))
         return fmi3Error;
     s = fmi2GetBoolean(a->c2, r, nvr, v);
     for (k = 0; k < nvr && s <= fmi2Warning; k++) values[k] = v[k] != fmi2False;
@@ -217,7 +221,7 @@ FMI3_Export fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueRefe
     fmi2Boolean v[MAX_BATCH];
     size_t k;
     if (a == NULL || nValues != nvr || (nvr && values == NULL)) return fmi3Error;
-    if (!map_vrs(a, vr, nvr, OFF_BOOLEAN, r, "fmi3SetBoolean: too many or NULL value references"))
+    if (!map_vrs(a, vr, nvr, 'B', r, "fmi3SetBoolean: too many or NULL value references"))
         return fmi3Error;
     for (k = 0; k < nvr; k++) v[k] = values[k] ? fmi2True : fmi2False;
     return (fmi3Status)fmi2SetBoolean(a->c2, r, nvr, v);
@@ -229,7 +233,7 @@ FMI3_Export fmi3Status fmi3GetString(fmi3Instance instance, const fmi3ValueRefer
     Adapter *a = (Adapter *)instance;
     fmi2ValueReference r[MAX_BATCH];
     if (a == NULL || nValues != nvr || (nvr && values == NULL)) return fmi3Error;
-    if (!map_vrs(a, vr, nvr, OFF_STRING, r, "fmi3GetString: too many or NULL value references"))
+    if (!map_vrs(a, vr, nvr, 'S', r, "fmi3GetString: too many or NULL value references"))
         return fmi3Error;
     return (fmi3Status)fmi2GetString(a->c2, r, nvr, values);
 }
@@ -240,7 +244,7 @@ FMI3_Export fmi3Status fmi3SetString(fmi3Instance instance, const fmi3ValueRefer
     Adapter *a = (Adapter *)instance;
     fmi2ValueReference r[MAX_BATCH];
     if (a == NULL || nValues != nvr || (nvr && values == NULL)) return fmi3Error;
-    if (!map_vrs(a, vr, nvr, OFF_STRING, r, "fmi3SetString: too many or NULL value references"))
+    if (!map_vrs(a, vr, nvr, 'S', r, "fmi3SetString: too many or NULL value references"))
         return fmi3Error;
     return (fmi3Status)fmi2SetString(a->c2, r, nvr, values);
 }

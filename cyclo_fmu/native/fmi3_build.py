@@ -3,11 +3,14 @@
 The same C core and the same FMI 2.0 front as ``CycloidDriveNative.fmu`` (built first, for the
 same design), with ``fmi3_adapter.c`` on top: FMI 3 calls reach the FMI 2 functions compiled
 into the same binary, so both FMUs compute with the same code and refuse the same misuse. The
-model description is translated from the FMI 2 one (variables, units, dependencies); value
-references become unique across types (FMI 3 asks for it): Float64 as FMI 2's Real, Int32 =
-Integer + 1000000, Boolean + 2000000, String + 3000000, and ``time`` (the independent variable
-FMI 3 declares) 4000000. Functions of FMI 3 the FMU does not provide (Model Exchange,
-Scheduled Execution, clocks, the other integer and float widths) answer fmi3Error.
+model description is translated from the FMI 2 one (variables, units, dependencies). FMI 3
+wants value references unique across types: each variable's is its 1-based position in the
+model description (``time``, the independent variable FMI 3 declares, is 1), and a generated
+table (``fmi3_vrmap.c``) maps it to the FMI 2 type and value reference. Positions, because
+OMSimulator reads FMI 3 dependencies as positions (its FMI 2 code path); with value
+references equal to positions, a host that reads them either way reads them right. Functions
+of FMI 3 the FMU does not provide (Model Exchange, Scheduled Execution, clocks, the other
+integer and float widths) answer fmi3Error.
 """
 from __future__ import annotations
 
@@ -29,9 +32,8 @@ NAME3 = "CycloidDriveNative3"
 FMI3_HEADERS = ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
 ADAPTER = "fmi3_adapter.c"
 STUBS = "fmi3_stubs.c"
-OFFSET = {"Real": 0, "Integer": 1_000_000, "Boolean": 2_000_000, "String": 3_000_000}
 TYPE3 = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "String": "String"}
-VR_TIME = 4_000_000
+VRMAP = "fmi3_vrmap.c"
 #: implemented in fmi3_adapter.c
 IMPLEMENTED = {"GetVersion", "SetDebugLogging", "InstantiateCoSimulation", "FreeInstance",
                "EnterInitializationMode", "ExitInitializationMode", "Terminate", "Reset",
@@ -64,8 +66,9 @@ def generate_stubs(header: Path) -> str:
     return "\n".join(out)
 
 
-def model_description3(md2: str) -> str:
-    """The FMI 3.0 model description of the FMI 2.0 one ``md2`` (text)."""
+def model_description3(md2: str, name3: str = NAME3):
+    """(the FMI 3.0 model description (model identifier ``name3``) of the FMI 2.0 one ``md2``,
+    the C table from its value references to the FMI 2 ones)."""
     r2 = ET.fromstring(md2)
     keep = ("modelName", "description", "author", "version", "copyright", "license",
             "variableNamingConvention")
@@ -73,12 +76,12 @@ def model_description3(md2: str) -> str:
     for k in keep:
         if r2.get(k) is not None:
             root.set(k, r2.get(k))
-    root.set("modelName", NAME3)
+    root.set("modelName", name3)
     root.set("instantiationToken", r2.get("guid"))
     root.set("generationTool", f"cyclo-fmu {__version__} (cyclo_fmu.native, FMI 3.0 adapter)")
     root.set("description", r2.get("description", "") + " (FMI 3.0 co-simulation)")
     ET.SubElement(root, "CoSimulation", {
-        "modelIdentifier": NAME3, "canHandleVariableCommunicationStepSize": "true",
+        "modelIdentifier": name3, "canHandleVariableCommunicationStepSize": "true",
         "canGetAndSetFMUState": "true", "canSerializeFMUState": "true",
         "providesDirectionalDerivatives": "false", "hasEventMode": "false",
         "providesIntermediateUpdate": "false", "canReturnEarlyAfterIntermediateUpdate": "false"})
@@ -87,15 +90,17 @@ def model_description3(md2: str) -> str:
         if el is not None:
             root.append(el)
     mv = ET.SubElement(root, "ModelVariables")
-    ET.SubElement(mv, "Float64", name="time", valueReference=str(VR_TIME),
+    ET.SubElement(mv, "Float64", name="time", valueReference="1",
                   causality="independent", variability="continuous",
                   description="simulation time")
-    vr3 = {}          # FMI 2 position (1-based) -> FMI 3 value reference
+    vr3 = {}          # FMI 2 position (1-based) -> FMI 3 value reference (its FMI 3 position)
+    table = [("0", "0"), ("'T'", "0")]      # by FMI 3 value reference: (type, FMI 2 vr)
     for pos, sv in enumerate(r2.find("ModelVariables"), 1):
         el = sv[0]
         kind = el.tag
-        vr = int(sv.get("valueReference")) + OFFSET[kind]
+        vr = pos + 1
         vr3[pos] = vr
+        table.append((f"'{kind[0]}'", f"{int(sv.get('valueReference'))}u"))
         attrs = {"name": sv.get("name"), "valueReference": str(vr)}
         for k in ("description", "causality", "variability", "initial"):
             if sv.get(k) is not None:
@@ -121,7 +126,13 @@ def model_description3(md2: str) -> str:
                     a["dependenciesKind"] = unk.get("dependenciesKind")
             ET.SubElement(ms, tag3, a)
     ET.indent(root, "  ")
-    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+    c = ["/* Generated by cyclo-fmu (cyclo_fmu/native/fmi3_build.py): FMI 3 value reference -> "
+         "FMI 2 type and value reference. Do not edit. */",
+         f"const unsigned int FMI3_N_VR = {len(table)}u;",
+         "const char FMI3_VR_TYPE[] = {" + ", ".join(t for t, _ in table) + "};",
+         "const unsigned int FMI3_VR2[] = {" + ", ".join(v for _, v in table) + "};", ""]
+    return ('<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode")
+            + "\n", "\n".join(c))
 
 
 BUILD_DESCRIPTION = '''<?xml version="1.0" encoding="UTF-8"?>
@@ -147,6 +158,23 @@ def build_fmi3_reducer(design=None, dest="dist", cc=None) -> Path:
     """Build ``dest/CycloidDriveNative3.fmu`` (FMI 3.0 co-simulation) for ``design``; an FMI
     2.0 ``CycloidDriveNative.fmu`` of the same design in ``dest`` is reused (its sources and
     model description), else one is built first."""
+    with tempfile.TemporaryDirectory(prefix="cyclofmu_fmi3_") as tmp:
+        fmu2 = _fmi2_for(design, Path(dest)) or build_native_fmu(design, Path(tmp))
+        return fmi3_from_fmi2(fmu2, NAME3, dest, cc)
+
+
+def build_fmi3_component(name3: str, dest="dist", cc=None) -> Path:
+    """Build ``dest/<name3>.fmu``, the FMI 3.0 twin of a native bench component
+    (``InductionMotorNative3`` from ``InductionMotorNative``, ...)."""
+    from .rig_build import build_rig_fmu
+    with tempfile.TemporaryDirectory(prefix="cyclofmu_fmi3_") as tmp:
+        fmu2 = build_rig_fmu(name3[:-1], tmp, cc)
+        return fmi3_from_fmi2(fmu2, name3, dest, cc)
+
+
+def fmi3_from_fmi2(fmu2: Path, name3: str, dest="dist", cc=None) -> Path:
+    """``dest/<name3>.fmu``: the native FMI 2.0 FMU ``fmu2`` (its sources) compiled with the
+    FMI 3 adapter, with the translated model description."""
     cc = cc or find_compiler()
     headers = fmi_header_dir()
     missing = [h for h in FMI3_HEADERS if not (headers / h).is_file()]
@@ -155,9 +183,7 @@ def build_fmi3_reducer(design=None, dest="dist", cc=None) -> Path:
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="cyclofmu_fmi3_") as tmp:
-        tmp = Path(tmp)
-        fmu2 = _fmi2_for(design, dest) or build_native_fmu(design, tmp / "fmi2")
-        stage = tmp / "fmu"
+        stage = Path(tmp) / "fmu"
         src = stage / "sources"
         src.mkdir(parents=True)
         with zipfile.ZipFile(fmu2) as z:
@@ -172,21 +198,23 @@ def build_fmi3_reducer(design=None, dest="dist", cc=None) -> Path:
             shutil.copyfile(headers / h, src / h)
         shutil.copyfile(HERE / ADAPTER, src / ADAPTER)
         (src / STUBS).write_text(generate_stubs(headers / "fmi3FunctionTypes.h"))
+        md3, vrmap = model_description3(md2, name3)
+        (src / VRMAP).write_text(vrmap)
         sources = [p.name for p in sorted(src.glob("*.c"))]
         files = "\n".join(f'      <SourceFile name="{f}"/>' for f in sources)
-        (src / "buildDescription.xml").write_text(BUILD_DESCRIPTION.format(name=NAME3,
+        (src / "buildDescription.xml").write_text(BUILD_DESCRIPTION.format(name=name3,
                                                                            files=files))
-        (stage / "modelDescription.xml").write_text(model_description3(md2))
-        so = stage / "binaries" / "x86_64-linux" / f"{NAME3}.so"
+        (stage / "modelDescription.xml").write_text(md3)
+        so = stage / "binaries" / "x86_64-linux" / f"{name3}.so"
         so.parent.mkdir(parents=True)
         r = subprocess.run([cc, *CFLAGS, f"-I{src}", "-o", str(so),
                             *[str(src / f) for f in sources], "-lm"],
                            capture_output=True, text=True)
         if r.returncode != 0:
-            raise RuntimeError(f"compiling {NAME3} failed: {r.stderr.strip()[:400]}")
-        compile_win64(src, sources, stage / "binaries" / "x86_64-windows" / f"{NAME3}.dll")
-        out = dest / f"{NAME3}.fmu"
-        partial = dest / f".{NAME3}.fmu.partial-{os.getpid()}"
+            raise RuntimeError(f"compiling {name3} failed: {r.stderr.strip()[:400]}")
+        compile_win64(src, sources, stage / "binaries" / "x86_64-windows" / f"{name3}.dll")
+        out = dest / f"{name3}.fmu"
+        partial = dest / f".{name3}.fmu.partial-{os.getpid()}"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
             for p in sorted(stage.rglob("*")):
                 if p.is_file():
