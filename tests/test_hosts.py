@@ -70,7 +70,7 @@ def all_fmus(fmu_dir, native_cache, tmp_path_factory):
     paths = {name: fmu_dir / f"{name}.fmu" for name in SLAVES}
     paths.update({name: d / f"{name}.fmu" for name in NATIVE})
     assert set(paths) == set(ALL_FMUS)
-    return paths
+    return {k: v for k, v in paths.items() if v.is_file()}
 
 
 # -- fmuCheck ---------------------------------------------------------------------------------
@@ -83,14 +83,12 @@ PYTHONFMU_EXIT_ABORT = ("pythonfmu 0.7 use-after-free at interpreter shutdown: t
 FAST_CHECK = NATIVE + ("TorqueTransducer",)
 
 
+# the FMI 3.0 FMUs are not listed: fmuCheck (FMI Library 2.0.3) reads FMI 1.0 and 2.0 only;
+# fmpy's validation, fmusim and OMSimulator check them (test_platforms.py)
 @pytest.mark.parametrize("name", [n if n in FAST_CHECK else pytest.param(n, marks=pytest.mark.slow)
-                                  for n in ALL_FMUS])
+                                  for n in ALL_FMUS if not n.endswith("Native3")])
 def test_fmucheck_reports_no_error(name, all_fmus, tmp_path):
     checker = tool("fmuCheck.linux64")
-    if name.endswith("Native3"):
-        pytest.skip("fmuCheck (FMI Library 2.0.3) reads FMI 1.0 and 2.0 only; the FMI 3.0 "
-                    "FMUs are checked by fmpy's validation, fmusim and OMSimulator "
-                    "(test_platforms.py)")
     env = None if name in NATIVE else python_env()
     out = tmp_path / "out.csv"
     r = subprocess.run([str(checker), "-h", "1e-3", "-s", "2", "-l", "4", "-o", str(out),
