@@ -28,6 +28,9 @@ def assert_twins(a, b):
         scale = np.maximum(1.0, np.abs(a[f]))
         worst = float(np.max(np.abs(a[f] - b[f]) / scale))
         assert worst <= TWIN_TOL, (f, worst)
+        # and the same signs of zero (a recording writes -0 and 0 differently)
+        zero = (a[f] == 0) & (b[f] == 0)
+        assert np.array_equal(np.signbit(a[f][zero]), np.signbit(b[f][zero])), f
 
 
 @pytest.mark.parametrize("name", ["loadstep", "reversal", pytest.param("paper",

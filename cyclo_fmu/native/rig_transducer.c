@@ -46,7 +46,13 @@ static void read_out(RigState *s)
         + s->r[R_noise] * rig_normal_sample((unsigned long long)s->i[I_seed],
                                             (unsigned long long)s->x[X_NEXT]);
     s->x[X_NEXT] += 1.0;
-    if (s->r[R_resolution] > 0) y = s->r[R_resolution] * nearbyint(y / s->r[R_resolution]);
+    if (s->r[R_resolution] > 0) {
+        /* Python's round() gives an integer (ties to even, as nearbyint here), which has no
+         * negative zero: a reading that rounds to zero is +0, not -0 */
+        double q = nearbyint(y / s->r[R_resolution]);
+        if (q == 0.0) q = 0.0;
+        y = s->r[R_resolution] * q;
+    }
     s->r[R_y] = y;
 }
 
