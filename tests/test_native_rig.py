@@ -263,3 +263,22 @@ def test_the_native_reducer_in_a_folder_is_checked_against_the_design(both):
     check_native_design(d, None)
     with pytest.raises(ValueError, match="profile"):
         check_native_design(d, DriveDesign(profile="paper"))
+
+
+@pytest.mark.slow
+def test_a_design_of_its_own_gives_the_same_bench_in_both_sets(fmu_dir, tmp_path):
+    """The paper profile: the Python reducer takes the design as parameters, the native one is
+    built for it (its map compiled in); the two benches are twins."""
+    from cyclo_fmu.bench import run_bench
+    from cyclo_fmu.native import build_native_fmu
+    from model_core import DriveDesign
+    design = DriveDesign(profile="paper")
+    for name in RIG_NATIVE:
+        build_any(name, tmp_path)
+    build_native_fmu(design, tmp_path)
+    sc = scenario("runup", "S2")
+    py = run_bench(sc, fmu_dir, design=design, fmus="python")
+    na = run_bench(sc, tmp_path, design=design, fmus="native")
+    assert_twins(py.result, na.result)
+    with pytest.raises(ValueError, match="another design"):
+        run_bench(sc, tmp_path, fmus="native")            # the default design is not this one
