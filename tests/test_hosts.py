@@ -334,3 +334,21 @@ def test_ssp_units_agree_on_every_connection(fmu_dir, tmp_path):
     # OMSimulator's vendor annotation names the fixed-step master
     assert root.find(".//{https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/"
                      "schema/oms.xsd}FixedStepMaster") is not None
+
+
+def test_omsimulator_python_api_runs_the_native_bench(native_paper, tmp_path):
+    """OMSimulator's Python API on the native paper bench as ``cyclo-fmu bench`` wrote it."""
+    lib = HOSTS / "omsimulator" / "lib"
+    if not (lib / "OMSimulator" / "__init__.py").is_file():
+        pytest.skip(f"OMSimulator's Python API not found in {lib}")
+    tool("omsimulator/bin/OMSimulator")
+    ssp, windows = native_paper
+    sc = paper_scenario()
+    r = subprocess.run([sys.executable, "-c", OMS_PYTHON_API, str(lib), str(ssp),
+                        str(sc.stop_time), str(tmp_path / "r.csv")], cwd=tmp_path,
+                       capture_output=True, text=True, timeout=900)
+    text = r.stdout + r.stderr
+    assert r.returncode == 0, text[-3000:]
+    for bad in ("error:", "warning:", "Unit mismatch"):
+        assert bad not in text, text[-3000:]
+    assert_windows_agree(oms_recording(tmp_path / "r.csv"), sc, windows)
