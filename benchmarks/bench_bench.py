@@ -1,33 +1,44 @@
-"""Speed of the bench: the paper scenario (48 s simulated, 7 FMUs) in simulated seconds per
-wall-clock second, next to the floor of the same master stepping seven trivial pythonfmu FMUs
-with the bench's connectors (no physics: do_step returns), measured in the same run.
+"""Speed of the bench: the paper scenario (48 s simulated, 7 FMUs), in simulated seconds per
+wall-clock second ("x real time"), every number next to a floor measured in the same run.
 
-Rows: the lean master behind ``run_bench`` (``run_fmus``: Gauss-Seidel, its C inner loop) at
-1 ms, fmpy's SSP master at 1 ms (the SSP file as written), and the lean master at the step
-chosen by the convergence check (``bench.converged_step``, run here on the paper scenario with
-ideal sensors). Wall times include the FMUs' unpacking, instantiation and initialization; the
-per-step cost without them is printed too (a 10 ms run measures the fixed part). Target
-(issue 9): the paper scenario at 1 ms at least 20x real time.
-Run: python benchmarks/bench_bench.py
+1. The whole command, ``cyclo-fmu bench --scenario paper`` (native FMUs, the default), on its
+   first run (FMUs built into an empty cache) and on later runs (FMUs from the cache): wall
+   time of the process, and its CPU time (user + system), which the machine's load does not
+   inflate. Target (issue 20): >= 50x real time on the second run.
+2. The stepping loop alone (``run_fmus``, the lean master's C loop, 1 ms), setup excluded (a
+   10 ms run measures it): the native set next to seven trivial native FMUs (the same FMI
+   front, no physics: the floor), and the Python set next to seven trivial pythonfmu FMUs.
+   Target: >= 500x real time with the native components.
+3. When the host tools are present (cyclo_fmu.hosts.hosts_dir): OMSimulator's command line
+   running the TestBench.ssp the command wrote, with a plain environment.
+
+Run: python benchmarks/bench_bench.py   (prints the machine's load average with the numbers)
 """
+import os
+import resource
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
 
-from cyclo_fmu.bench import (COMPONENTS, Sensors, bench_parameters, build_ssp, converged_step,
-                             paper_scenario, run_fmus, run_ssp, steady_step)
-from cyclo_fmu.fmu_build import SLAVES, build_fmu
+from cyclo_fmu.bench import (CONNECTORS, FMU_SETS, Sensors, bench_parameters, paper_scenario,
+                             run_fmus)
+from cyclo_fmu.fmu_build import build_any, build_fmu
+
+HERE = Path(__file__).resolve().parent
 
 
-def trivial_fmus(dest: Path):
-    """One trivial pythonfmu FMU per bench FMU, with the same connector names."""
+def trivial_pythonfmu(dest: Path):
+    """One trivial pythonfmu FMU per Python bench FMU, with the same connector names."""
     from pythonfmu.builder import FmuBuilder
-    for fmu in sorted({f for f, _ in COMPONENTS.values()}):
-        cons = next(c for f, c in COMPONENTS.values() if f == fmu)
+    for comp, fmu in FMU_SETS["python"].items():
+        if (dest / f"{fmu}.fmu").exists():
+            continue
         src = ["from pythonfmu import Fmi2Causality, Fmi2Slave, Real", "", "",
                f"class {fmu}(Fmi2Slave):", "    def __init__(self, **kwargs):",
                "        super().__init__(**kwargs)"]
-        for c, k in cons:
+        for c, k in CONNECTORS[comp]:
             src += [f"        self.{c} = 0.0",
                     f"        self.register_variable(Real({c!r}, causality=Fmi2Causality.{k}))"]
         src += ["", "    def do_step(self, t, dt):", "        return True", ""]
@@ -36,51 +47,95 @@ def trivial_fmus(dest: Path):
         FmuBuilder.build_FMU(script, dest=dest, needsExecutionTool="false")
 
 
-def timed(fn):
-    t = time.perf_counter()
+def trivial_native(dest: Path):
+    """Seven trivial native FMUs: the native front with a step that does nothing, each with
+    the interface of the Python slave it stands for."""
+    from cyclo_fmu.native.rig_build import build_rig_fmu
+    for comp, fmu in FMU_SETS["native"].items():
+        build_rig_fmu(fmu, dest, slave=FMU_SETS["python"][comp],
+                      physics=HERE / "trivial_component.c")
+
+
+def cpu_of(fn):
+    """(wall s, CPU s of this process) of fn()."""
+    t, c = time.perf_counter(), time.process_time()
     fn()
-    return time.perf_counter() - t
+    return time.perf_counter() - t, time.process_time() - c
+
+
+def command(args, env):
+    """(wall s, CPU s user + system) of a child process."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t = time.perf_counter()
+    r = subprocess.run(args, env=env, capture_output=True, text=True)
+    wall = time.perf_counter() - t
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if r.returncode != 0:
+        raise RuntimeError(r.stderr[-2000:])
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def row(label, wall, cpu, stop):
+    cpu_s = "" if cpu is None else f"{cpu:7.2f} s  {stop / cpu:8.1f}x"
+    print(f"  {label:<58} {wall:7.2f} s  {stop / wall:8.1f}x   {cpu_s}")
 
 
 def main():
     sc = paper_scenario("S1")
+    stop = sc.stop_time
+    print(f"paper scenario S1, {stop:.0f} s simulated; load average {os.getloadavg()[0]:.1f} "
+          f"on {os.cpu_count()} CPUs")
+    print(f"  {'':<58} {'wall':>9}  {'x real':>9}   {'CPU':>9}  {'x real':>9}")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        (tmp / "real").mkdir()
-        (tmp / "trivial").mkdir()
-        for name in SLAVES:
-            build_fmu(name, tmp / "real")
-        trivial_fmus(tmp / "trivial")
-        params = bench_parameters(sc, Sensors())
-        run_fmus(tmp / "real", params, 0.01, 1e-3)        # compiles the C loop once
-        floor_fixed = timed(lambda: run_fmus(tmp / "trivial", {}, 0.01, 1e-3))
-        floor = timed(lambda: run_fmus(tmp / "trivial", {}, sc.stop_time, 1e-3))
-        fixed = timed(lambda: run_fmus(tmp / "real", params, 0.01, 1e-3))
-        lean = timed(lambda: run_fmus(tmp / "real", params, sc.stop_time, 1e-3))
-        ssp = build_ssp(tmp / "TestBench.ssp", tmp / "real", sc)
-        fmpy_ssp = timed(lambda: run_ssp(ssp, sc.stop_time, 1e-3))
-        h = steady_step()
-        coarse = timed(lambda: run_fmus(tmp / "real", params, sc.stop_time, h))
-        chosen, report = converged_step(tmp / "real", sc)
-        n = sc.stop_time / 1e-3
-        print(f"paper scenario S1, {sc.stop_time:.0f} s simulated (measured under the machine's "
-              "current load):")
-        print(f"  {'':<55} {'wall':>8}  {'x real time':>12}  {'us/step':>8}  {'us/step w/o setup':>18}")
-        for label, wall, steps, setup in (
-                ("7 trivial pythonfmu FMUs, lean master, 1 ms (floor)", floor, n, floor_fixed),
-                ("bench, lean master (run_bench), 1 ms", lean, n, fixed),
-                ("bench, fmpy's SSP master, 1 ms", fmpy_ssp, n, None),
-                (f"bench, lean master, {h * 1e3:g} ms (steady_step)", coarse, sc.stop_time / h,
-                 fixed)):
-            net = "" if setup is None else f"{(wall - setup) / steps * 1e6:8.0f}"
-            print(f"  {label:<55} {wall:6.2f} s  {sc.stop_time / wall:10.1f}x  "
-                  f"{wall / steps * 1e6:8.0f}  {net:>18}")
-        print(f"  setup (unpack, instantiate, initialize): bench {fixed:.2f} s, floor "
-              f"{floor_fixed:.2f} s")
-        print(f"steady step chosen by converged_step on this scenario: {chosen * 1e3:g} ms "
-              f"(bench.STEADY_STEP = {h * 1e3:g} ms); largest differences to 1 ms "
-              "(efficiency, mean input speed r/min): "
-              + ", ".join(f"{k * 1e3:g} ms: {e:.1e}, {v:.2g}" for k, (e, v) in report.items()))
+        env = dict(os.environ, CYCLOFMU_CACHE=str(tmp / "cache"))
+        cmd = [sys.executable, "-m", "cyclo_fmu.cli", "bench", "--scenario", "paper",
+               "--out", str(tmp / "out"), "--quiet"]
+        print("1. the whole command (cyclo-fmu bench --scenario paper, native FMUs)")
+        wall, cpu = command(cmd, env)
+        row("first run (builds the FMUs into an empty cache)", wall, cpu, stop)
+        for k in (2, 3):
+            wall, cpu = command(cmd, env)
+            row(f"run {k} (FMUs from the cache)", wall, cpu, stop)
+        wall, cpu = command(cmd + ["--plot"], env)
+        row("with --plot (the figure)", wall, cpu, stop)
+        wall, cpu = command(cmd[:-2] + [str(tmp / "out_python"), "--quiet", "--fmus", "python"],
+                            env)
+        row("--fmus python (the pythonfmu slaves, cached)", wall, cpu, stop)
+
+        print("2. the stepping loop (run_fmus, C loop, 1 ms; setup of a 10 ms run subtracted)")
+        sets = {}
+        for label in ("native", "python", "trivial native", "trivial pythonfmu"):
+            d = tmp / label.replace(" ", "_")
+            d.mkdir()
+            sets[label] = d
+        for name in FMU_SETS["native"].values():
+            build_any(name, sets["native"])
+        for name in set(FMU_SETS["python"].values()):
+            build_fmu(name, sets["python"])
+        trivial_native(sets["trivial native"])
+        trivial_pythonfmu(sets["trivial pythonfmu"])
+        for label, d in sets.items():
+            fmus = "native" if "native" in label else "python"
+            params = {} if "trivial" in label else bench_parameters(sc, Sensors(), fmus=fmus)
+            run_fmus(d, params, 0.01, 1e-3, fmus=fmus)               # warm: C loop compiled
+            w0, c0 = cpu_of(lambda: run_fmus(d, params, 0.01, 1e-3, fmus=fmus))
+            w1, c1 = cpu_of(lambda: run_fmus(d, params, stop, 1e-3, fmus=fmus))
+            row(f"{label} set", w1 - w0, c1 - c0, stop)
+
+        from cyclo_fmu.hosts import hosts_dir
+        oms = hosts_dir(HERE.parent) / "omsimulator" / "bin" / "OMSimulator"
+        if oms.is_file():
+            print("3. OMSimulator's command line on the TestBench.ssp of the native runs (plain "
+                  "environment: no LD_PRELOAD, PYTHONHOME, PYTHONPATH)")
+            plain = {"PATH": "/usr/bin:/bin", "HOME": str(tmp)}
+            args = [str(oms), str(tmp / "out" / "TestBench.ssp"), f"--stopTime={stop}",
+                    "--stepSize=1e-3", f"--tempDir={tmp / 'oms'}"]
+            for rf in ("r.mat", "r.csv"):
+                wall, cpu = command(args + [f"--resultFile={tmp / rf}"], plain)
+                row(f"result file {rf}", wall, cpu, stop)
+        else:
+            print(f"3. OMSimulator not found ({oms}): skipped")
 
 
 if __name__ == "__main__":

@@ -28,23 +28,56 @@ from model_core.kinematics import parse_mode
 
 RPM_PER_RAD_S = 30 / math.pi
 
-#: component name -> (FMU, connectors [(name, kind)])
-COMPONENTS = {
-    "motor": ("InductionMotor", [("tau_shaft", "input"), ("J_load", "input"),
-                                 ("J_load_dec", "input"), ("w", "output"),
-                                 ("alpha", "output"), ("T_em", "output"), ("frequency", "output")]),
-    "drive": ("CycloidDrive", [("w_in", "input"), ("tau_out", "input"), ("alpha_in", "input"),
-                               ("w_out", "output"), ("tau_in", "output"),
-                               ("tau_in_static", "output"), ("J_load", "output"),
-                               ("J_load_dec", "output"),
-                               ("torque_out", "output"), ("tau_housing", "output"),
-                               ("P_loss", "output"), ("eta", "output")]),
-    "brake": ("FeltBrake", [("w", "input"), ("tau_out", "output"), ("torque_shaft", "output")]),
-    "t_in": ("Transducer", [("x", "input"), ("y", "output")]),
-    "n_in": ("Transducer", [("x", "input"), ("y", "output")]),
-    "t_out": ("Transducer", [("x", "input"), ("y", "output")]),
-    "n_out": ("Transducer", [("x", "input"), ("y", "output")]),
+#: component name -> connectors [(name, kind)]
+CONNECTORS = {
+    "motor": [("tau_shaft", "input"), ("J_load", "input"), ("J_load_dec", "input"),
+              ("w", "output"), ("alpha", "output"), ("T_em", "output"), ("frequency", "output")],
+    "drive": [("w_in", "input"), ("tau_out", "input"), ("alpha_in", "input"),
+              ("w_out", "output"), ("tau_in", "output"), ("tau_in_static", "output"),
+              ("J_load", "output"), ("J_load_dec", "output"), ("torque_out", "output"),
+              ("tau_housing", "output"), ("P_loss", "output"), ("eta", "output")],
+    "brake": [("w", "input"), ("tau_out", "output"), ("torque_shaft", "output")],
+    "t_in": [("x", "input"), ("y", "output")],
+    "n_in": [("x", "input"), ("y", "output")],
+    "t_out": [("x", "input"), ("y", "output")],
+    "n_out": [("x", "input"), ("y", "output")],
 }
+#: the FMU of every component, per FMU set: "python" (pythonfmu slaves: need Python in the
+#: host) and "native" (C, no Python: any host; cyclo-fmu bench's default). The native ones
+#: are the Python ones' twins, tested equal to 1e-9 on the bench scenarios
+FMU_SETS = {
+    "python": {"motor": "InductionMotor", "drive": "CycloidDrive", "brake": "FeltBrake",
+               "t_in": "TorqueTransducer", "n_in": "SpeedTransducer",
+               "t_out": "TorqueTransducer", "n_out": "SpeedTransducer"},
+}
+FMU_SETS["native"] = {c: f + "Native" for c, f in FMU_SETS["python"].items()}
+#: the native set as FMI 3.0 co-simulation FMUs (the same C code behind an FMI 3 adapter), for
+#: SSP hosts that run FMI 3.0 (OMSimulator); the lean master and fmpy's SSP master run FMI 2.0
+FMU_SETS["native3"] = {c: f + "3" for c, f in FMU_SETS["native"].items()}
+
+
+def components(fmus: str = "python") -> dict:
+    """component name -> (FMU, connectors) of the FMU set ``fmus``."""
+    if fmus not in FMU_SETS:
+        raise ValueError(f"fmus = {fmus!r}: must be one of {', '.join(FMU_SETS)}")
+    return {c: (FMU_SETS[fmus][c], cons) for c, cons in CONNECTORS.items()}
+
+
+def fmu_set(fmu_dir, fmus=None) -> str:
+    """``fmus``, or when None the set ``fmu_dir`` holds: native when all its FMUs are there."""
+    if fmus is not None:
+        components(fmus)
+        return fmus
+    have = all((Path(fmu_dir) / f"{f}.fmu").is_file() for f in FMU_SETS["native"].values())
+    return "native" if have else "python"
+
+
+def fmu_names(fmus: str = "python") -> list:
+    return sorted(set(FMU_SETS[fmus].values()))
+
+
+#: component name -> (FMU, connectors [(name, kind)]) of the Python set
+COMPONENTS = components("python")
 CONNECTIONS = [
     ("motor", "w", "drive", "w_in"),
     ("motor", "alpha", "drive", "alpha_in"),
@@ -153,8 +186,11 @@ def drive_parameters(design: DriveDesign) -> dict:
     return out
 
 
-def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDesign = None) -> dict:
-    """Parameter values 'component.variable' -> value for the SSV."""
+def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDesign = None,
+                     fmus: str = "python") -> dict:
+    """Parameter values 'component.variable' -> value for the SSV. With the native set the
+    design is the one the native reducer was built for (its map is compiled in), so only the
+    Python reducer takes the design as parameters."""
     if sc.mode not in MODES:
         raise ValueError(f"mode = {sc.mode!r}: must be one of {', '.join(MODES)}")
     # Python types decide the SSV types: float -> Real, int -> Integer, bool -> Boolean
@@ -178,7 +214,7 @@ def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDe
     if sc.torque_schedule:
         p.update(schedule_parameters("brake.", parse_schedule(sc.torque_schedule,
                                                                "torque_schedule")))
-    if design is not None:
+    if design is not None and fmus == "python":
         p.update(drive_parameters(design))
     for name, scale, noise, res, gain, off in (
             ("t_in", 1.0, sensors.torque_noise, sensors.torque_resolution,
@@ -214,11 +250,82 @@ def _ssv(params: dict) -> str:
             + "\n  </ssv:Parameters>\n</ssv:ParameterSet>\n")
 
 
-def _ssd(stop_time: float, bound: set) -> str:
+#: OMSimulator's vendor annotation (namespace as OMSimulator writes it): its command line
+#: builds a system only from an SSD that names its master; other importers skip annotations
+OMS_NS = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"
+
+
+_MODEL_DESCRIPTIONS = {}
+
+
+def model_description(path):
+    """fmpy's model description of the FMU at ``path``, parsed once per file version (path,
+    size, modification time) in a process: the bench reads each FMU's twice."""
+    from fmpy import read_model_description
+    st = Path(path).stat()
+    key = (str(Path(path).resolve()), st.st_size, st.st_mtime_ns)
+    if key not in _MODEL_DESCRIPTIONS:
+        _MODEL_DESCRIPTIONS[key] = read_model_description(str(path))
+    return _MODEL_DESCRIPTIONS[key]
+
+
+def _extract(path) -> str:
+    """Unpack an FMU for running it: everything, except that an FMU without resources/ (the
+    native ones) needs only its model description and this platform's binaries (not the
+    sources and documentation: fewer files to write and delete)."""
+    import tempfile
+    from fmpy import extract, platform
+    with zipfile.ZipFile(path) as z:
+        names = z.namelist()
+        if any(n.startswith("resources/") for n in names):
+            return extract(str(path))
+        tmp = tempfile.mkdtemp(prefix="cyclofmu_run_")
+        keep = [n for n in names if n == "modelDescription.xml"
+                or n.startswith(f"binaries/{platform}/")]
+        z.extractall(tmp, members=keep)
+    return tmp
+
+
+def _fmu_units(fmu_dir, comps=COMPONENTS) -> tuple:
+    """(unit of every bench connector {(fmu, connector): unit or None}, the units' definitions
+    {unit: BaseUnit}) read from the FMUs' model descriptions, so that the SSD states what the
+    FMUs declare."""
+    units, defs = {}, {}
+    for fmu in sorted({f for f, _ in comps.values()}):
+        md = model_description(Path(fmu_dir) / f"{fmu}.fmu")
+        var = {v.name: v for v in md.modelVariables}
+        for _, cons in (c for c in comps.values() if c[0] == fmu):
+            for c, _k in cons:
+                if c not in var:
+                    raise ValueError(f"{fmu}.fmu has no variable {c!r} (bench connector)")
+                units[(fmu, c)] = var[c].unit
+        for u in md.unitDefinitions:
+            defs[u.name] = u.baseUnit
+    for a, b, c, d in CONNECTIONS:   # OMSimulator refuses what we would not notice otherwise
+        ua, ub = units[(comps[a][0], b)], units[(comps[c][0], d)]
+        if ua != ub:
+            raise ValueError(f"{c}.{d}: unit {ub!r} differs from {a}.{b}'s {ua!r}")
+    return units, {u: defs[u] for u in sorted({u for u in units.values() if u})}
+
+
+def _base_unit(b) -> str:
+    at = [f'{k}="{getattr(b, k)}"' for k in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+          if getattr(b, k)]
+    if b.factor != 1.0:
+        at.append(f'factor="{b.factor!r}"')
+    if b.offset != 0.0:
+        at.append(f'offset="{b.offset!r}"')
+    return f'<ssc:BaseUnit {" ".join(at)}/>'
+
+
+def _ssd(stop_time: float, bound: set, units: dict, unit_defs: dict, step: float,
+         components_=COMPONENTS) -> str:
     comps = []
-    for name, (fmu, connectors) in COMPONENTS.items():
-        cons = "\n".join(f'          <ssd:Connector name="{c}" kind="{k}"><ssc:Real/></ssd:Connector>'
-                         for c, k in connectors)
+    for name, (fmu, connectors) in components_.items():
+        cons = "\n".join(
+            f'          <ssd:Connector name="{c}" kind="{k}"><ssc:Real'
+            + (f' unit="{units[(fmu, c)]}"' if units.get((fmu, c)) else "")
+            + '/></ssd:Connector>' for c, k in connectors)
         binding = (f'        <ssd:ParameterBindings>\n          <ssd:ParameterBinding '
                    f'source="resources/{name}.ssv"/>\n        </ssd:ParameterBindings>\n'
                    if name in bound else "")
@@ -227,41 +334,97 @@ def _ssd(stop_time: float, bound: set) -> str:
                      f'        </ssd:Connectors>\n{binding}      </ssd:Component>')
     conns = "\n".join(f'      <ssd:Connection startElement="{a}" startConnector="{b}" '
                       f'endElement="{c}" endConnector="{d}"/>' for a, b, c, d in CONNECTIONS)
+    unit_xml = "\n".join(f'    <ssc:Unit name="{u}">{_base_unit(b)}</ssc:Unit>'
+                         for u, b in unit_defs.items())
     return ('<?xml version="1.0" encoding="UTF-8"?>\n'
             '<ssd:SystemStructureDescription '
             'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" '
             'xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
+            f'xmlns:oms="{OMS_NS}" '
             'version="1.0" name="TestBench">\n'
             '  <ssd:System name="TestBench">\n'
             '    <ssd:Elements>\n' + "\n".join(comps) + '\n    </ssd:Elements>\n'
             '    <ssd:Connections>\n' + conns + '\n    </ssd:Connections>\n'
+            '    <ssd:Annotations>\n'
+            '      <ssc:Annotation type="org.openmodelica">\n'
+            '        <oms:Annotations>\n'
+            '          <oms:SimulationInformation>\n'
+            f'            <oms:FixedStepMaster description="oms-ma" stepSize="{step!r}" '
+            'absoluteTolerance="0.0001" relativeTolerance="0.0001"/>\n'
+            '          </oms:SimulationInformation>\n'
+            '        </oms:Annotations>\n'
+            '      </ssc:Annotation>\n'
+            '    </ssd:Annotations>\n'
             '  </ssd:System>\n'
-            f'  <ssd:DefaultExperiment startTime="0.0" stopTime="{stop_time}"/>\n'
+            + (f'  <ssd:Units>\n{unit_xml}\n  </ssd:Units>\n' if unit_xml else "")
+            + f'  <ssd:DefaultExperiment startTime="0.0" stopTime="{stop_time!r}">\n'
+            # without this annotation OMSimulator warns "Wrong/deprecated content"
+            '    <ssd:Annotations>\n'
+            '      <ssc:Annotation type="org.openmodelica">\n'
+            '        <oms:Annotations>\n'
+            '          <oms:SimulationInformation resultFile="TestBench_res.mat"/>\n'
+            '        </oms:Annotations>\n'
+            '      </ssc:Annotation>\n'
+            '    </ssd:Annotations>\n'
+            '  </ssd:DefaultExperiment>\n'
             '</ssd:SystemStructureDescription>\n')
 
 
 def build_ssp(path, fmu_dir, sc: Scenario, sensors: Sensors = Sensors(),
-              design: DriveDesign = None) -> Path:
+              design: DriveDesign = None, step: float = 1e-3, fmus: str = None) -> Path:
     """Write TestBench.ssp with the FMUs from ``fmu_dir`` (built by build_fmu); ``design``
-    sets the reducer's parameters (default: the FMU's, the paper's drive)."""
+    sets the reducer's parameters (default: the FMU's, the paper's drive). ``step`` (s) is
+    the communication step the SSD proposes to OMSimulator (its FixedStepMaster).
+
+    The SSD is standard SSP 1.0 (fmpy, libcosim) with OMSimulator's vendor annotation, a unit
+    on every connector as the FMUs declare it (connected units agree) and the parameters bound
+    per component (resources/<component>.ssv, applied by libcosim and OMSimulator) and as one
+    set (resources/TestBench.ssv, which ``run_ssp`` hands to fmpy). ``fmus``: the FMU set
+    (``fmu_set``: native when ``fmu_dir`` holds it)."""
+    import os
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    params = bench_parameters(sc, sensors, design)
+    fmus = fmu_set(fmu_dir, fmus)
+    comps = components(fmus)
+    if fmus != "python":
+        check_native_design(fmu_dir, design, fmus)
+    params = bench_parameters(sc, sensors, design, fmus)
     per_component = {}
     for key, value in params.items():
         comp, var = key.split(".", 1)
         per_component.setdefault(comp, {})[var] = value
-    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
-        z.writestr("SystemStructure.ssd", _ssd(sc.stop_time, set(per_component)))
-        # one parameter set for fmpy (names 'component.variable', passed as parameter_set;
-        # fmpy does not apply ParameterBindings) and one per component, bound in the .ssd,
-        # for SSP importers that apply bindings (libcosim)
-        z.writestr("resources/TestBench.ssv", _ssv(params))
-        for comp, values in per_component.items():
-            z.writestr(f"resources/{comp}.ssv", _ssv(values))
-        for fmu in sorted({f for f, _ in COMPONENTS.values()}):
-            z.write(Path(fmu_dir) / f"{fmu}.fmu", f"resources/{fmu}.fmu")
+    units, unit_defs = _fmu_units(fmu_dir, comps)
+    partial = path.with_name(f".{path.name}.partial-{os.getpid()}")
+    try:
+        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
+            z.writestr("SystemStructure.ssd", _ssd(sc.stop_time, set(per_component), units,
+                                                   unit_defs, step, comps))
+            # one parameter set for fmpy (names 'component.variable', passed as parameter_set;
+            # fmpy does not apply ParameterBindings) and one per component, bound in the .ssd,
+            # for SSP importers that apply bindings (libcosim, OMSimulator)
+            z.writestr("resources/TestBench.ssv", _ssv(params))
+            for comp, values in per_component.items():
+                z.writestr(f"resources/{comp}.ssv", _ssv(values))
+            for fmu in sorted({f for f, _ in comps.values()}):
+                z.write(Path(fmu_dir) / f"{fmu}.fmu", f"resources/{fmu}.fmu")
+        os.replace(partial, path)
+    finally:
+        if partial.exists():
+            partial.unlink()
     return path
+
+
+def check_native_design(fmu_dir, design: DriveDesign = None, fmus: str = "native"):
+    """The native reducer in ``fmu_dir`` carries ``design`` (default: the paper's drive), or
+    ValueError naming the first differing value: its map is compiled in, so a bench of another
+    design needs its own build."""
+    from .native.design_check import fmu_design_mismatch
+    fmu = Path(fmu_dir) / f"{FMU_SETS[fmus]['drive']}.fmu"
+    why = fmu_design_mismatch(fmu, design)
+    if why is not None:
+        raise ValueError(f"design: {fmu.name} in {fmu_dir} was built for another design "
+                         f"({why}); build it for this one (cyclo-fmu build CycloidDriveNative "
+                         "--design FILE) or run the Python set (fmus='python')")
 
 
 def run_ssp(ssp_path, stop_time: float, step: float = 1e-3):
@@ -289,7 +452,7 @@ COUPLINGS = ("gauss-seidel", "jacobi")
 
 
 def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progress=False,
-             coupling: str = "gauss-seidel"):
+             coupling: str = "gauss-seidel", fmus: str = None):
     """The bench of ``run_ssp`` (components, connections, parameters, fixed step, all connector
     values starting at 0, rows holding post-step values) run by a lean master that calls the
     FMUs' C functions over value references and buffers resolved once, and that can also set
@@ -300,14 +463,19 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
     the values of one instant (the reducer and the transducers are quasi-static); ``"jacobi"``
     steps all components from the previous step's outputs, as fmpy's SSP master does (the same
     numbers to 1e-9, a test), which delays every signal by one step per connection it passes.
+    ``fmus``: the FMU set (``fmu_set``: native when ``fmu_dir`` holds it).
     Returns a structured array with the same fields as ``run_ssp``."""
     import ctypes
 
-    from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave, fmi2Real, fmi2ValueReference
 
     if coupling not in COUPLINGS:
         raise ValueError(f"coupling = {coupling!r}: must be one of {', '.join(COUPLINGS)}")
+    fmus = fmu_set(fmu_dir, fmus)
+    if fmus == "native3":
+        raise ValueError("fmus = 'native3': this master runs FMI 2.0 FMUs; run the FMI 3.0 set "
+                         "as an SSP in an FMI 3.0 host (build_ssp(..., fmus='native3'))")
+    COMPONENTS = components(fmus)
     unknown = sorted({k.split(".", 1)[0] for k in params} - set(COMPONENTS))
     if unknown:
         raise ValueError(f"{unknown[0]}: no such bench component ({', '.join(COMPONENTS)})")
@@ -330,7 +498,7 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
         for name, (fmu, connectors) in COMPONENTS.items():
             path = str(Path(fmu_dir) / f"{fmu}.fmu")
             if path not in unpacked:     # one extraction per FMU, shared by its instances
-                unpacked[path] = (read_model_description(path), extract(path))
+                unpacked[path] = (model_description(path), _extract(path))
             md, unzipped = unpacked[path]
             var = {v.name: v for v in md.modelVariables}
             f = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
@@ -602,14 +770,18 @@ def recording_from_result(result) -> dict:
 
 
 def write_recording(path, rec: dict, columns=None) -> Path:
+    """Write the recording as CSV (time with 6 decimals, the channels with 6 significant
+    digits), formatted in one call and written atomically."""
+    import os
     path = Path(path)
     columns = list(columns or RECORDING_COLUMNS)
-    with path.open("w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(columns)
-        cols = [rec[c] for c in columns]
-        for row in zip(*cols):
-            w.writerow([f"{row[0]:.6f}"] + [f"{v:.6g}" for v in row[1:]])
+    data = np.column_stack([np.asarray(rec[c], dtype=float) for c in columns])
+    row = ",".join(["%.6f"] + ["%.6g"] * (len(columns) - 1)) + "\r\n"
+    text = ",".join(columns) + "\r\n" + (row * len(data)) % tuple(data.ravel().tolist())
+    tmp = path.with_name(f".{path.name}.partial-{os.getpid()}")
+    with tmp.open("w", newline="") as f:
+        f.write(text)
+    os.replace(tmp, path)
     return path
 
 
@@ -651,23 +823,31 @@ MASTERS = ("lean", "fmpy")
 
 def run_bench(sc: Scenario, fmu_dir, out_dir=None, sensors: Sensors = Sensors(),
               step: float = 1e-3, design: DriveDesign = None, master: str = "lean",
-              progress=False) -> BenchRun:
-    """Build the SSP, simulate it, and (with ``out_dir``) write recording, windows and plots.
+              progress=False, plot: bool = False, fmus: str = None) -> BenchRun:
+    """Build the SSP, simulate it, and (with ``out_dir``) write the SSP, the recording and the
+    windows, and with ``plot`` the figure ``bench_<mode>_<scenario>.png`` (matplotlib: about
+    0.8 s, so opt-in).
 
     ``master``: ``"lean"`` runs the SSP's components, connections and parameters in this
     package's fixed-step Jacobi master (``run_fmus``: cached value references, direct FMI
-    calls; the same numbers as fmpy's SSP master, a test), ``"fmpy"`` in fmpy's SSP master."""
+    calls; the same numbers as fmpy's SSP master, a test), ``"fmpy"`` in fmpy's SSP master.
+    ``fmus``: "native" or "python" (default: native when ``fmu_dir`` holds the native set; a
+    native reducer must have been built for ``design``)."""
     parse_mode(sc.mode)
+    fmus = fmu_set(fmu_dir, fmus)
     if master not in MASTERS:
         raise ValueError(f"master = {master!r}: must be one of {', '.join(MASTERS)}")
     out = Path(out_dir) if out_dir else None
     if master == "fmpy" or out is not None:     # the SSP is an output, or what fmpy runs
-        ssp = build_ssp((out or Path(fmu_dir)) / "TestBench.ssp", fmu_dir, sc, sensors, design)
+        ssp = build_ssp((out or Path(fmu_dir)) / "TestBench.ssp", fmu_dir, sc, sensors, design,
+                        step, fmus)
     if master == "fmpy":
         result = run_ssp(ssp, sc.stop_time, step)
     else:
-        result = run_fmus(fmu_dir, bench_parameters(sc, sensors, design), sc.stop_time, step,
-                          progress=progress)
+        if fmus == "native":
+            check_native_design(fmu_dir, design)
+        result = run_fmus(fmu_dir, bench_parameters(sc, sensors, design, fmus), sc.stop_time,
+                          step, progress=progress, fmus=fmus)
     rec = recording_from_result(result)
     windows = steady_windows(rec, sc, design or DriveDesign())
     run = BenchRun(sc, rec, windows, result)
@@ -678,7 +858,8 @@ def run_bench(sc: Scenario, fmu_dir, out_dir=None, sensors: Sensors = Sensors(),
                 w = csv.DictWriter(f, fieldnames=list(windows[0]))
                 w.writeheader()
                 w.writerows(windows)
-        plot_bench(run, out)
+        if plot:
+            plot_bench(run, out)
     return run
 
 

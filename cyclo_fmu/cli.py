@@ -333,8 +333,8 @@ def _bench_step(text) -> float:
 
 
 def cmd_bench(args) -> int:
-    from .bench import Sensors, run_bench, scenario
-    from .fmu_build import SLAVES, build_fmu
+    from .bench import Sensors, fmu_names, run_bench, scenario
+    from .fmu_cache import fmus_into
     mode = "".join(parse_mode(args.mode)[:2])
     if mode not in ("S1", "S2"):
         raise CycloidInputError("mode", args.mode, "the bench drives the eccentric shaft S: "
@@ -348,13 +348,12 @@ def cmd_bench(args) -> int:
                                 "loadstep, reversal") from exc
     design = _load_design(args.design, args.profile)
     with _staged_dir("out", args.out) as out:
-        fmu_dir = out / "fmus"
-        for name in SLAVES:   # the reducer with the design built in (its fields without an
-            # FMU parameter included)
-            build_fmu(name, fmu_dir, design if name == "CycloidDrive" else None)
+        # the FMUs built once per version and sources (cyclo_fmu.fmu_cache), copied here
+        fmu_dir = fmus_into(out / "fmus", fmu_names(args.fmu_set), design)
         try:
             run = run_bench(sc, fmu_dir, out, Sensors(ideal=args.ideal_sensors, seed=args.seed),
-                            step=step, design=design, progress=_progress_on(args))
+                            step=step, design=design, progress=_progress_on(args),
+                            plot=args.plot, fmus=args.fmu_set)
         except CycloidInputError:
             raise
         except ValueError as exc:
@@ -628,6 +627,11 @@ def build_parser() -> argparse.ArgumentParser:
                        "recording's rate); 'steady': the step the convergence check chose for "
                        "steady scenarios (README)")
     bench.add_argument("--quiet", action="store_true", help="no progress bar")
+    bench.add_argument("--fmus", dest="fmu_set", default="native", choices=("native", "python"),
+                       help="the bench's FMUs: native (C, default: runs in any host, no Python) "
+                       "or python (the pythonfmu slaves)")
+    bench.add_argument("--plot", action="store_true", help="also draw bench_<mode>_<scenario>.png "
+                       "(signals, window efficiencies; matplotlib, about 0.8 s)")
     bench.add_argument("--design", help="design file (TOML) for the reducer, e.g. the "
                        "design_updated.toml a diagnosis wrote, or a preset name (mackic-rig)")
     _add_profile(bench)

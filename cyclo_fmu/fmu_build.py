@@ -22,9 +22,20 @@ BUNDLE = "cyclofmu_" + __version__.replace(".", "_") + "_slaves"
 
 #: model name -> module in cyclo_fmu/slaves
 SLAVES = {"CycloidDrive": "cycloid_drive", "InductionMotor": "motor", "FeltBrake": "brake",
-          "Transducer": "transducer"}
-#: FMUs in C (cyclo_fmu.native), built with the machine's C compiler
-NATIVE = ("CycloidDriveNative",)
+          "Transducer": "transducer", "TorqueTransducer": "transducer",
+          "SpeedTransducer": "transducer"}
+#: FMUs in C (cyclo_fmu.native), built with the machine's C compiler: the reducer (its design
+#: compiled in) and the bench components (cyclo_fmu.native.rig_build: the twins of the slaves)
+DESIGN_FMUS = ("CycloidDriveNative", "CycloidDriveNative3")    # FMI 2.0, FMI 3.0
+RIG_NATIVE = ("InductionMotorNative", "FeltBrakeNative", "TransducerNative",
+              "TorqueTransducerNative", "SpeedTransducerNative")
+#: the bench components as FMI 3.0 co-simulation FMUs (the same C code behind an FMI 3 adapter)
+RIG_NATIVE3 = ("InductionMotorNative3", "FeltBrakeNative3", "TorqueTransducerNative3",
+               "SpeedTransducerNative3")
+NATIVE = DESIGN_FMUS + RIG_NATIVE + RIG_NATIVE3
+#: the FMUs built for a reducer design: the native reducers and the Python reducer (which
+#: ships the design as its start values and the fields without a parameter)
+DESIGNED_FMUS = DESIGN_FMUS + ("CycloidDrive",)
 #: everything ``build`` writes by default
 ALL_FMUS = tuple(SLAVES) + NATIVE
 
@@ -186,12 +197,21 @@ def _install_status_shim(fmu: Path, name: str) -> None:
 
 
 def build_any(name: str, dest="dist", design=None) -> Path:
-    """Build one FMU by name: a Python FMU (SLAVES) or the native one, the reducers for
-    ``design`` (default the paper's test drive). The motor, brake and transducer FMUs do not
-    depend on the reducer's design."""
-    if name in NATIVE:
+    """Build one FMU by name: a Python FMU (SLAVES) or the native one (for ``design``, default
+    the paper's test drive); the Python reducer takes the design too (its start values and
+    the fields without a parameter). The motor, brake and transducer FMUs do not depend on it."""
+    if name == "CycloidDriveNative3":
+        from .native.fmi3_build import build_fmi3_reducer
+        return build_fmi3_reducer(design, dest)
+    if name in DESIGN_FMUS:
         from .native import build_native_fmu
         return build_native_fmu(design, dest)
+    if name in RIG_NATIVE:
+        from .native.rig_build import build_rig_fmu
+        return build_rig_fmu(name, dest)
+    if name in RIG_NATIVE3:
+        from .native.fmi3_build import build_fmi3_component
+        return build_fmi3_component(name, dest)
     return build_fmu(name, dest, design if name == "CycloidDrive" else None)
 
 
@@ -199,7 +219,7 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="build_fmu", description="Build the cyclo-fmu FMUs.")
     p.add_argument("--dest", default="dist", help="output folder (default: dist)")
     p.add_argument("--design", help="design file (TOML) or preset name for the reducer FMUs "
-                   "(CycloidDrive, CycloidDriveNative)")
+                   "(CycloidDrive, CycloidDriveNative, CycloidDriveNative3)")
     p.add_argument("names", nargs="*", default=list(ALL_FMUS), help="FMUs to build")
     args = p.parse_args(argv)
     design = None

@@ -305,7 +305,8 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
         if fmu_dir is None:
             for name in sorted({f for f, _ in COMPONENTS.values()}):
                 build_fmu(name, d)
-        res = run_fmus(d, params, duration, 1.0 / settings.sample_rate, progress=progress)
+        res = run_fmus(d, params, duration, 1.0 / settings.sample_rate, progress=progress,
+                       fmus="python")
     rec = recording_from_result(res)
     rec["truth"] = {"effect": effect, "values": values, "shape": shape,
                     "friction_error": friction_error, "mode": mode, "seed": seed,

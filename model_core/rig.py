@@ -178,6 +178,43 @@ def coupled_drum_step(twist, w_drum, w_shaft, dt, setpoint, w_reg, J, k, c):
 COUPLING_SUBSTEP = 2.5e-4
 
 
+_GOLDEN = 0x9E3779B97F4A7C15
+_MASK64 = (1 << 64) - 1
+
+
+def _mix64(z):
+    """SplitMix64's output function (Steele, Lea and Flood 2014) on uint64 arrays."""
+    import numpy as np
+    z = z ^ (z >> np.uint64(30))
+    z = z * np.uint64(0xBF58476D1CE4E5B9)
+    z = z ^ (z >> np.uint64(27))
+    z = z * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+def normal_samples(seed: int, start: int, count: int):
+    """Standard-normal samples ``start`` .. ``start + count - 1`` of the stream ``seed``.
+
+    Counter-based, so any sample can be drawn without the ones before it and a transducer's
+    noise state is one integer: uniform pairs from SplitMix64 over the counter, one Box-Muller
+    pair per sample (the cosine branch):
+
+    .. math:: n_k = \\sqrt{-2 \\ln u_{1,k}} \\cos(2 \\pi u_{2,k})
+
+    The native transducer FMU (cyclo_fmu/native/rig_common.c, ``rig_normal_sample``) draws the
+    same numbers, so the Python and native bench components give the same noisy readings."""
+    import numpy as np
+    base = _mix64(np.array([(int(seed) + _GOLDEN) & _MASK64], dtype=np.uint64))[0]
+    k = np.arange(int(start), int(start) + int(count), dtype=np.uint64)
+    g = np.uint64(_GOLDEN)
+    with np.errstate(over="ignore"):
+        z1 = _mix64(base + (np.uint64(2) * k + np.uint64(1)) * g)
+        z2 = _mix64(base + (np.uint64(2) * k + np.uint64(2)) * g)
+    u1 = ((z1 >> np.uint64(11)).astype(np.float64) + 1.0) * 2.0 ** -53
+    u2 = (z2 >> np.uint64(11)).astype(np.float64) * 2.0 ** -53
+    return np.sqrt(-2.0 * np.log(u1)) * np.cos(6.283185307179586 * u2)
+
+
 @dataclass(frozen=True)
 class Transducer:
     """Torque or speed transducer: accuracy-class gain error and zero offset, first-order

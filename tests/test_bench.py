@@ -108,12 +108,30 @@ def test_schedules():
 
 def test_cli_bench_runup(tmp_path):
     r = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "bench", "--mode", "S2",
-                        "--scenario", "runup", "--out", str(tmp_path)], capture_output=True,
-                       text=True, timeout=600)
+                        "--scenario", "runup", "--out", str(tmp_path), "--plot"],
+                       capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr
     rec = tmp_path / "recording_S2_runup.csv"
     assert rec.exists() and (tmp_path / "efficiency_S2_runup.csv").exists()
     assert (tmp_path / "bench_S2_runup.png").stat().st_size > 10000
+    # without --plot: the same results, no figure
+    plain = tmp_path / "plain"
+    r = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "bench", "--mode", "S2",
+                        "--scenario", "runup", "--out", str(plain)], capture_output=True,
+                       text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert not (plain / "bench_S2_runup.png").exists()
+    assert (plain / "recording_S2_runup.csv").read_bytes() == rec.read_bytes()
+    # the Python slaves instead of the native FMUs: the same recording, byte for byte
+    slaves = tmp_path / "slaves"
+    r = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "bench", "--mode", "S2",
+                        "--scenario", "runup", "--out", str(slaves), "--fmus", "python"],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert (slaves / "recording_S2_runup.csv").read_bytes() == rec.read_bytes()
+    assert sorted(p.name for p in (slaves / "fmus").iterdir()) == [
+        "CycloidDrive.fmu", "FeltBrake.fmu", "InductionMotor.fmu", "SpeedTransducer.fmu",
+        "TorqueTransducer.fmu"]
     r = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "bench", "--scenario", "nope",
                         "--out", str(tmp_path)], capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1

@@ -50,7 +50,7 @@ DISPLAY_UNITS = {
     "1": (("%", 100.0),),
 }
 #: quantity per unit, when a variable does not name its own
-QUANTITIES = {"rad/s": "AngularVelocity", "N.m": "Torque", "W": "Power", "m": "Length",
+QUANTITIES = {"rad/s": "AngularVelocity", "r/min": "AngularVelocity", "N.m": "Torque", "W": "Power", "m": "Length",
               "m2/s": "KinematicViscosity", "kg/m3": "Density", "kg.m2": "MomentOfInertia",
               "s": "Time", "rad": "Angle", "Hz": "Frequency", "1": "DimensionlessRatio",
               "N.m.s/rad": "RotationalDampingConstant", "N.m/rad": "RotationalSpringConstant",
@@ -59,6 +59,7 @@ QUANTITIES = {"rad/s": "AngularVelocity", "N.m": "Torque", "W": "Power", "m": "L
 # SI base-unit exponents of the units we use (FMI 2.0 BaseUnit attributes)
 UNITS = {
     "rad/s": dict(rad=1, s=-1),
+    "r/min": dict(rad=1, s=-1, factor=math.pi / 30),    # a speed sensor's reading
     "rad/s2": dict(rad=1, s=-2),
     "N.m": dict(kg=1, m=2, s=-2),
     "W": dict(kg=1, m=2, s=-3),

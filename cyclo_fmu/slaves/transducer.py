@@ -1,10 +1,14 @@
 """FMI slave: a torque or speed transducer (gain and offset errors, bandwidth, noise,
-quantisation, unit scale), switchable to ideal with ``ideal = true``."""
+quantisation, unit scale), switchable to ideal with ``ideal = true``.
+
+One implementation, three FMUs that differ only in the units they declare: ``Transducer``
+(any signal, unit "1"), ``TorqueTransducer`` (N.m in, N.m out) and ``SpeedTransducer`` (rad/s
+in, r/min out, scale 30/pi). Hosts that check units on connections (OMSimulator refuses an
+N.m output wired to an input of unit "1") take the bench with the typed ones."""
 from __future__ import annotations
 
 import math
 
-import numpy as np
 
 from . import core
 from .base import Boolean, Integer, UnitSlave
@@ -17,20 +21,26 @@ _NOISE_BLOCK = 4096
 class Transducer(UnitSlave):
     author = "cyclo-fmu"
     description = "Transducer: y = scale*x through first-order bandwidth, class errors, noise"
+    #: declared units of the input x and the reading y (and of offset, noise, resolution)
+    x_unit, y_unit = "1", "1"
+    #: default of ``scale`` (the numeric factor from x's unit to y's)
+    default_scale = 1.0
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.parameter("scale", 1.0, "1", "unit scale and sign, y = scale*x (e.g. 30/pi for "
-                       "rad/s to r/min)")
+        yu = self.y_unit
+        self.parameter("scale", self.default_scale, "1", "unit scale and sign, y = scale*x "
+                       "(e.g. 30/pi for rad/s to r/min)")
         self.parameter("gain_error", 0.0, "1", "relative gain error (accuracy class)")
-        self.parameter("offset", 0.0, "1", "zero offset, in output units")
+        self.parameter("offset", 0.0, yu, "zero offset, in output units")
         self.parameter("bandwidth", 1000.0, "Hz", "first-order bandwidth (<= 0: none)")
-        self.parameter("noise", 0.0, "1", "standard deviation of white noise, output units", min=0.0)
-        self.parameter("resolution", 0.0, "1", "quantisation step, output units (<= 0: none)")
+        self.parameter("noise", 0.0, yu, "standard deviation of white noise, output units",
+                       min=0.0)
+        self.parameter("resolution", 0.0, yu, "quantisation step, output units (<= 0: none)")
         self.parameter("seed", 1, None, "noise seed", Integer, min=0)
         self.parameter("ideal", False, None, "switch all errors off: y = scale*x", Boolean)
-        self.input("x", 0.0, "1", "true value")
-        self.output("y", 0.0, "1", "reading", depends=("x",))
+        self.input("x", 0.0, self.x_unit, "true value")
+        self.output("y", 0.0, yu, "reading", depends=("x",))
         self._filtered = None
 
     init_independent = ("bandwidth",)   # the filter starts at the input
@@ -66,9 +76,10 @@ class Transducer(UnitSlave):
         x = self.x
         if not math.isfinite(x):
             self.require_finite(x=x)
-        # the same first draws at every evaluation: standard-normal samples drawn in blocks
-        self._rng = np.random.default_rng(int(self.seed))
-        self._noise, self._next = [], 0
+        # the same first draws at every evaluation: standard-normal samples of the counter-
+        # based stream of ``seed`` (model_core.rig.normal_samples, as the native transducer),
+        # drawn in blocks
+        self._noise, self._next, self._block = [], 0, 0
         self._filtered = self.scale * x
         self._dt, self._a = None, 0.0
         self._read()
@@ -79,7 +90,9 @@ class Transducer(UnitSlave):
             return
         k = self._next
         if k >= len(self._noise):
-            self._noise, k = self._rng.standard_normal(_NOISE_BLOCK).tolist(), 0
+            self._noise = core.rig.normal_samples(int(self.seed), self._block * _NOISE_BLOCK,
+                                                  _NOISE_BLOCK).tolist()
+            self._block, k = self._block + 1, 0
         self._next = k + 1
         self.y = self._model.reading(self._filtered, self._noise[k])
 
@@ -96,3 +109,17 @@ class Transducer(UnitSlave):
             self.fail(f"x = {x!r} gives a reading that is not a finite number (scale = "
                       f"{self.scale!r}): refused")
         return True
+
+
+class TorqueTransducer(Transducer):
+    """A torque transducer (e.g. HBM T22, T30FN): N.m in, N.m out."""
+    description = "Torque transducer: y = scale*x through first-order bandwidth, class errors, noise"
+    x_unit, y_unit = "N.m", "N.m"
+
+
+class SpeedTransducer(Transducer):
+    """A speed sensor: rad/s in, r/min out (scale 30/pi by default)."""
+    description = ("Speed transducer: y = scale*x (rad/s to r/min) through first-order bandwidth, "
+                   "class errors, noise")
+    x_unit, y_unit = "rad/s", "r/min"
+    default_scale = 30.0 / math.pi
