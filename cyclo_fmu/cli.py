@@ -142,13 +142,18 @@ def cmd_efficiency(args) -> int:
         design = thermal.at_temperature(design, temperature)
     else:
         op = operating_point(design, a + b, rpm_to_rad_s(args.speed), args.torque)
-    from model_core.contact import ring_torque_rating
-    rating = ring_torque_rating(design)
+    from model_core.stiffness import static_torque_rating
+    rated = static_torque_rating(design)
+    rating = rated["rating_Nm"]
+    # the output torque of one gear path: the disc's torque, or the ring's times i0 (the ring
+    # rollers' torque about the ring axis is z1/z_c times the gear's)
     T_ring = abs(float(op.torques["1"]))
-    if math.isfinite(T_ring) and T_ring > rating:
-        raise CycloidInputError("torque", args.torque, f"puts {T_ring:.4g} N*m on the ring, beyond "
-                                f"the design's static rating {rating:.4g} N*m (Hertz pressure "
-                                "4000 MPa on the ring rollers, ISO 76)")
+    T_path = max(abs(float(op.torques["2"])), design.i0 * T_ring)
+    if math.isfinite(T_path) and T_path > rating:
+        raise CycloidInputError("torque", args.torque, f"puts {T_path:.4g} N*m through the "
+                                f"gears, beyond the design's static rating {rating:.4g} N*m "
+                                f"(limited by {rated['limiting']}: "
+                                f"{rated['descriptions'][rated['limiting']]})")
     losses = {k: _json_num(v) for k, v in op.losses.as_dict().items()}
     stalled = not bool(op.locked) and not math.isfinite(float(op.torques[b]))
     # the no-load running torque (the drag at the shafts and the gear's losses at zero load):
@@ -277,13 +282,22 @@ def cmd_stiffness(args) -> int:
     if args.json:
         print(json.dumps(values, indent=2))
         return 0
-    print(f"Torsional behaviour with the input locked (contact model; rated torque "
+    print(f"Torsional behaviour with the input locked (series model; rated torque "
           f"{values['rated_torque_Nm']:.3g} N*m)")
     print(f"  torsional rigidity (50-100 % rated)   {values['torsional_rigidity_Nm_per_arcmin']:.4g} N*m/arcmin")
     print(f"  lost motion (+-3 % rated)             {values['lost_motion_arcmin']:.4g} arcmin")
     print(f"  backlash                              {values['backlash_arcmin']:.4g} arcmin")
     print(f"  twist at rated torque                 {values['twist_at_rated_arcmin']:.4g} arcmin")
     print(f"  hysteresis loss (loop width at 0)     {values['hysteresis_loss_arcmin']:.4g} arcmin")
+    print("  elements in series (share of the rigidity's compliance; lost motion; twist at rated):")
+    for name, v in values["elements"].items():
+        print(f"    {name:28s} {100 * v['rigidity_compliance_share']:5.1f} %  "
+              f"{v['lost_motion_arcmin']:7.3f} arcmin  {v['twist_at_rated_arcmin']:7.3f} arcmin")
+    r = values["static_rating"]
+    print(f"  static torque rating (output)         {r['rating_Nm']:.4g} N*m, limited by "
+          f"{r['limiting']} ({r['descriptions'][r['limiting']]})")
+    for name, T in r["elements"].items():
+        print(f"    {name:28s} {T:10.4g} N*m")
     if args.out:
         print(f"  figure: {Path(args.out) / 'stiffness.png'}")
     return 0

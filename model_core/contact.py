@@ -465,7 +465,14 @@ def ring_contact_pressure(design, gear_torque, n_positions=16):
     psi = np.linspace(0.0, 2 * np.pi / design.z1, n_positions, endpoint=False)
     _, F = ring_roller_forces(design, abs(float(gear_torque)), psi)
     F_max = float(np.nanmax(F))
-    return np.sqrt(F_max * STEEL_CONTACT_MODULUS / (np.pi * design.b1 * design.d_v1 / 2))
+    return line_contact_pressure(F_max, design.b1, design.d_v1 / 2)
+
+
+def line_contact_pressure(force, length, radius):
+    """Peak Hertz pressure p0 [Pa] of a steel line contact: force [N] over length [m], effective
+    radius of curvature [m] (1/R = 1/R1 +- 1/R2, minus for a concave partner):
+    p0 = sqrt(F E* / (pi l R)) (Johnson, Contact Mechanics, 1985, Eq. 4.45)."""
+    return np.sqrt(np.asarray(force, float) * STEEL_CONTACT_MODULUS / (np.pi * length * radius))
 
 
 def ring_torque_rating(design) -> float:
