@@ -201,6 +201,14 @@ def cmd_efficiency(args) -> int:
                               "skid" if st[k + "_rolling"] == 0 else "mixed"),
                     "pin_hersey_min_max": [_json_num(x) for x in st[k + "_hersey"]],
                     "stribeck_clamp_binds": st[k + "_clamped"]} for k in ("ring", "disc")}
+    if args.band:
+        from model_core.design import CONSERVATIVE_DESCRIPTION, conservative_variant
+        op_c = operating_point(conservative_variant(design), a + b, rpm_to_rad_s(args.speed),
+                               args.torque)
+        result["band"] = {"variant": CONSERVATIVE_DESCRIPTION,
+                          "eta_nominal": _json_num(op.eta),
+                          "eta_conservative": _json_num(op_c.eta),
+                          "loss_power_conservative_W": _json_num(op_c.loss_power)}
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
@@ -240,6 +248,12 @@ def cmd_efficiency(args) -> int:
         print(f"    {k:10}  {v:9.3f} W  {share} of input   {text}")
     print(f"    {'sum':10}  {result['loss_power_W']:9.3f} W")
     print(f"  profile {design.profile}, losses {design.losses}")
+    if "band" in result:
+        bd = result["band"]
+        cons = ("no steady state" if bd["eta_conservative"] is None
+                else f"{100 * bd['eta_conservative']:.2f} %")
+        print(f"  band: nominal {100 * float(op.eta):.2f} %, conservative {cons} "
+              f"({bd['variant']})")
     if "calibration" in result:
         c = result["calibration"]
         print(f"  CALIBRATED: mesh_loss_k = {c['mesh_loss_k']:.4g}, idle_loss_scale = "
@@ -260,9 +274,9 @@ def cmd_paper(args) -> int:
     from .paper import run_paper_comparison
     design = _load_design(args.design, args.profile)
     if not args.out:
-        return run_paper_comparison(design, args.out, args.json)
+        return run_paper_comparison(design, args.out, args.json, args.band)
     with _staged_dir("out", args.out) as out:
-        return run_paper_comparison(design, out, args.json)
+        return run_paper_comparison(design, out, args.json, args.band)
 
 
 def cmd_stiffness(args) -> int:
@@ -589,6 +603,9 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--design", help="design file (TOML) or preset name (mackic-rig); "
                    "default: the paper's test drive")
     e.add_argument("--json", action="store_true", help="print one JSON object")
+    e.add_argument("--band", action="store_true", help="also the conservative variant's "
+                   "efficiency (boundary pin friction, catalogue idle losses with lip seals), "
+                   "JSON key band")
     e.add_argument("--temperature", type=_number("temperature"),
                    help="grease temperature, degC (fixes it; physical profile)")
     e.add_argument("--ambient", type=_number("ambient"),
@@ -601,6 +618,9 @@ def build_parser() -> argparse.ArgumentParser:
     pp.add_argument("--design", help="design file (TOML) or preset name (mackic-rig); "
                    "default: the paper's test drive")
     pp.add_argument("--json", action="store_true", help="print one JSON object")
+    pp.add_argument("--band", action="store_true", help="also the physical profile's "
+                    "conservative variant (boundary pin friction, catalogue idle losses with lip "
+                    "seals), JSON key band")
     _add_profile(pp)
     pp.set_defaults(func=cmd_paper)
     sp = sub.add_parser("stiffness", help="torsional rigidity, lost motion, backlash and the "

@@ -774,3 +774,31 @@ def scale_viscosity(design: DriveDesign, factor: float) -> DriveDesign:
     return dataclasses.replace(design, lubricant=dataclasses.replace(
         lub, kinematic_viscosity=lub.kinematic_viscosity * factor,
         kinematic_viscosity_100=lub.kinematic_viscosity_100 * factor))
+
+
+#: The conservative variant's Hersey transition [1]: 1, six orders of magnitude above any
+#: Hersey number of a greased pin in the drive (about 1e-9 to 1e-6), so the Stribeck law's
+#: boundary term exp(-H/H_t) stays 1 within 1e-6: the pins at boundary friction everywhere.
+CONSERVATIVE_HERSEY_TRANSITION = 1.0
+#: What the conservative variant changes (printed by ``--band``)
+CONSERVATIVE_DESCRIPTION = (
+    "conservative variant (model_core.design.conservative_variant): (1) the pins at boundary "
+    "friction everywhere (friction.hersey_transition = 1: mu_pin = mu_pin_boundary plus "
+    "Petroff at every Hersey number, no mixed-film relief); (2) laboratory idle losses: the "
+    "catalogue load-independent losses in full (calibration.idle_loss_scale at least 1, lip "
+    "seals); nothing else changes (geometry, k, tooth traction, temperature). The physical "
+    "profile with losses = 'all' only: the paper profile's pins are already at their boundary "
+    "clamp and it has no idle losses.")
+
+
+def conservative_variant(design: DriveDesign) -> DriveDesign:
+    """The design's conservative variant (``--band``): exactly the two changes of
+    CONSERVATIVE_DESCRIPTION (boundary pin friction, full catalogue idle losses with lip
+    seals). The paper's absolute efficiency level is uncertain by several points (its input
+    transducer's zero may drift 0.1 N*m per 10 K against inputs of 0.3-0.85 N*m), so a
+    prediction is given as nominal next to this variant."""
+    fr = dataclasses.replace(design.friction, hersey_transition=max(
+        design.friction.hersey_transition, CONSERVATIVE_HERSEY_TRANSITION))
+    cal = dataclasses.replace(design.calibration,
+                              idle_loss_scale=max(design.calibration.idle_loss_scale, 1.0))
+    return dataclasses.replace(design, friction=fr, calibration=cal, seals="lip")
