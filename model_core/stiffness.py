@@ -252,9 +252,10 @@ def gear_path(design, gear_torque, n_positions=None):
         K = _stiff(design, width)
         rot, Q = solve_series_set(l, cl, T, K, law, c_pin)
         lpos = np.where(l > 0, l, 0.0)[None]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            v = np.where(lpos > 0, lpos * Q / T[:, None, None], 0.0)     # torque weights, sum 1
-            inv_l = np.where(lpos > 0, 1.0 / np.where(lpos > 0, lpos, 1.0), 0.0)
+        # torque weights v_i = l_i Q_i / T_c, summing to 1 (all 0 at zero torque)
+        T_safe = np.where(T > 0, T, 1.0)[:, None, None]
+        v = np.where((lpos > 0) & (T[:, None, None] > 0), lpos * Q / T_safe, 0.0)
+        inv_l = np.where(lpos > 0, 1.0 / np.where(lpos > 0, lpos, 1.0), 0.0)
         gap = np.sum(v * np.broadcast_to(cl, Q.shape) * inv_l, -1)
         hertz = np.sum(v * _contact_deformation(Q, K, law) * inv_l, -1)
         pin = np.sum(v * c_pin * Q * inv_l, -1)

@@ -112,6 +112,12 @@ def test_static_rating_is_the_weakest_element():
     assert loads["eccentric_bearing"][0][0] == pytest.approx(st.eccentric_bearing_C0(d), rel=1e-6)
     loads = st._element_loads(d, r["elements"]["ring_pins"])
     assert loads["ring_pins"][0][0] == pytest.approx(st.YIELD_STRENGTH, rel=1e-6)
+    loads = st._element_loads(d, r["elements"]["ring_contact"])
+    assert loads["ring_contact"][0][0] == pytest.approx(contact.STATIC_CONTACT_PRESSURE_LIMIT,
+                                                        rel=1e-6)
+    # Johnson's line contact: p0 = sqrt(F E* / (pi l R))
+    assert float(contact.line_contact_pressure(1000.0, 0.012, 0.006)) == pytest.approx(
+        np.sqrt(1000.0 * 210e9 / (2 * (1 - 0.09)) / (np.pi * 0.012 * 0.006)))
     T_shaft = st.YIELD_STRENGTH / np.sqrt(3) * np.pi * d.output_shaft_diameter ** 3 / 16
     assert r["elements"]["output_shaft"] == pytest.approx(T_shaft, rel=1e-9)
     # far below the ring contacts' rating alone (the rating before pins and bearings counted)
