@@ -142,13 +142,18 @@ def cmd_efficiency(args) -> int:
         design = thermal.at_temperature(design, temperature)
     else:
         op = operating_point(design, a + b, rpm_to_rad_s(args.speed), args.torque)
-    from model_core.contact import ring_torque_rating
-    rating = ring_torque_rating(design)
+    from model_core.stiffness import static_torque_rating
+    rated = static_torque_rating(design)
+    rating = rated["rating_Nm"]
+    # the output torque of one gear path: the disc's torque, or the ring's times i0 (the ring
+    # rollers' torque about the ring axis is z1/z_c times the gear's)
     T_ring = abs(float(op.torques["1"]))
-    if math.isfinite(T_ring) and T_ring > rating:
-        raise CycloidInputError("torque", args.torque, f"puts {T_ring:.4g} N*m on the ring, beyond "
-                                f"the design's static rating {rating:.4g} N*m (Hertz pressure "
-                                "4000 MPa on the ring rollers, ISO 76)")
+    T_path = max(abs(float(op.torques["2"])), design.i0 * T_ring)
+    if math.isfinite(T_path) and T_path > rating:
+        raise CycloidInputError("torque", args.torque, f"puts {T_path:.4g} N*m through the "
+                                f"gears, beyond the design's static rating {rating:.4g} N*m "
+                                f"(limited by {rated['limiting']}: "
+                                f"{rated['descriptions'][rated['limiting']]})")
     losses = {k: _json_num(v) for k, v in op.losses.as_dict().items()}
     stalled = not bool(op.locked) and not math.isfinite(float(op.torques[b]))
     # the no-load running torque (the drag at the shafts and the gear's losses at zero load):
@@ -196,6 +201,14 @@ def cmd_efficiency(args) -> int:
                               "skid" if st[k + "_rolling"] == 0 else "mixed"),
                     "pin_hersey_min_max": [_json_num(x) for x in st[k + "_hersey"]],
                     "stribeck_clamp_binds": st[k + "_clamped"]} for k in ("ring", "disc")}
+    if args.band:
+        from model_core.design import CONSERVATIVE_DESCRIPTION, conservative_variant
+        op_c = operating_point(conservative_variant(design), a + b, rpm_to_rad_s(args.speed),
+                               args.torque)
+        result["band"] = {"variant": CONSERVATIVE_DESCRIPTION,
+                          "eta_nominal": _json_num(op.eta),
+                          "eta_conservative": _json_num(op_c.eta),
+                          "loss_power_conservative_W": _json_num(op_c.loss_power)}
     if args.json:
         print(json.dumps(result, indent=2))
         return 0
@@ -235,6 +248,12 @@ def cmd_efficiency(args) -> int:
         print(f"    {k:10}  {v:9.3f} W  {share} of input   {text}")
     print(f"    {'sum':10}  {result['loss_power_W']:9.3f} W")
     print(f"  profile {design.profile}, losses {design.losses}")
+    if "band" in result:
+        bd = result["band"]
+        cons = ("no steady state" if bd["eta_conservative"] is None
+                else f"{100 * bd['eta_conservative']:.2f} %")
+        print(f"  band: nominal {100 * float(op.eta):.2f} %, conservative {cons} "
+              f"({bd['variant']})")
     if "calibration" in result:
         c = result["calibration"]
         print(f"  CALIBRATED: mesh_loss_k = {c['mesh_loss_k']:.4g}, idle_loss_scale = "
@@ -255,9 +274,9 @@ def cmd_paper(args) -> int:
     from .paper import run_paper_comparison
     design = _load_design(args.design, args.profile)
     if not args.out:
-        return run_paper_comparison(design, args.out, args.json)
+        return run_paper_comparison(design, args.out, args.json, args.band)
     with _staged_dir("out", args.out) as out:
-        return run_paper_comparison(design, out, args.json)
+        return run_paper_comparison(design, out, args.json, args.band)
 
 
 def cmd_stiffness(args) -> int:
@@ -277,13 +296,22 @@ def cmd_stiffness(args) -> int:
     if args.json:
         print(json.dumps(values, indent=2))
         return 0
-    print(f"Torsional behaviour with the input locked (contact model; rated torque "
+    print(f"Torsional behaviour with the input locked (series model; rated torque "
           f"{values['rated_torque_Nm']:.3g} N*m)")
     print(f"  torsional rigidity (50-100 % rated)   {values['torsional_rigidity_Nm_per_arcmin']:.4g} N*m/arcmin")
     print(f"  lost motion (+-3 % rated)             {values['lost_motion_arcmin']:.4g} arcmin")
     print(f"  backlash                              {values['backlash_arcmin']:.4g} arcmin")
     print(f"  twist at rated torque                 {values['twist_at_rated_arcmin']:.4g} arcmin")
     print(f"  hysteresis loss (loop width at 0)     {values['hysteresis_loss_arcmin']:.4g} arcmin")
+    print("  elements in series (share of the rigidity's compliance; lost motion; twist at rated):")
+    for name, v in values["elements"].items():
+        print(f"    {name:28s} {100 * v['rigidity_compliance_share']:5.1f} %  "
+              f"{v['lost_motion_arcmin']:7.3f} arcmin  {v['twist_at_rated_arcmin']:7.3f} arcmin")
+    r = values["static_rating"]
+    print(f"  static torque rating (output)         {r['rating_Nm']:.4g} N*m, limited by "
+          f"{r['limiting']} ({r['descriptions'][r['limiting']]})")
+    for name, T in r["elements"].items():
+        print(f"    {name:28s} {T:10.4g} N*m")
     if args.out:
         print(f"  figure: {Path(args.out) / 'stiffness.png'}")
     return 0
@@ -575,6 +603,9 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--design", help="design file (TOML) or preset name (mackic-rig); "
                    "default: the paper's test drive")
     e.add_argument("--json", action="store_true", help="print one JSON object")
+    e.add_argument("--band", action="store_true", help="also the conservative variant's "
+                   "efficiency (boundary pin friction, catalogue idle losses with lip seals), "
+                   "JSON key band")
     e.add_argument("--temperature", type=_number("temperature"),
                    help="grease temperature, degC (fixes it; physical profile)")
     e.add_argument("--ambient", type=_number("ambient"),
@@ -587,6 +618,9 @@ def build_parser() -> argparse.ArgumentParser:
     pp.add_argument("--design", help="design file (TOML) or preset name (mackic-rig); "
                    "default: the paper's test drive")
     pp.add_argument("--json", action="store_true", help="print one JSON object")
+    pp.add_argument("--band", action="store_true", help="also the physical profile's "
+                    "conservative variant (boundary pin friction, catalogue idle losses with lip "
+                    "seals), JSON key band")
     _add_profile(pp)
     pp.set_defaults(func=cmd_paper)
     sp = sub.add_parser("stiffness", help="torsional rigidity, lost motion, backlash and the "

@@ -30,7 +30,7 @@ def plot_stiffness(design, rated_torque, path) -> Path:
     ax.plot([a * rated_torque, b * rated_torque], [pa, pb], "k--", lw=0.8,
             label=f"rigidity {(b - a) * rated_torque / (pb - pa):.3g} N*m/arcmin")
     ax.set(xlabel="output torque / N*m", ylabel="twist of the output / arcmin",
-           title="torsional behaviour, input locked (contact model)")
+           title="torsional behaviour, input locked (series model)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()

@@ -455,25 +455,8 @@ STATIC_CONTACT_PRESSURE_LIMIT = 4.0e9
 STEEL_CONTACT_MODULUS = 210e9 / (2 * (1 - 0.3 ** 2))
 
 
-def ring_contact_pressure(design, gear_torque, n_positions=16):
-    """Largest Hertz line-contact pressure p0 (Pa) between a ring roller and the tooth of one
-    cycloid gear carrying ``gear_torque`` (N*m), over ``n_positions`` mesh positions of one pitch.
-
-    p0 = sqrt(F E* / (pi l R)) (Johnson, Contact Mechanics, 1985, Eq. 4.45), R the roller radius
-    d_v1/2 against a flat tooth: the tooth's convex curvature only raises p0, so this is a lower
-    bound on the pressure and the rating derived from it an upper bound."""
-    psi = np.linspace(0.0, 2 * np.pi / design.z1, n_positions, endpoint=False)
-    _, F = ring_roller_forces(design, abs(float(gear_torque)), psi)
-    F_max = float(np.nanmax(F))
-    return np.sqrt(F_max * STEEL_CONTACT_MODULUS / (np.pi * design.b1 * design.d_v1 / 2))
-
-
-def ring_torque_rating(design) -> float:
-    """Static torque rating (N*m) of the ring (shaft 1): the ring torque at which the most
-    loaded ring roller reaches :data:`STATIC_CONTACT_PRESSURE_LIMIT` (see
-    :func:`ring_contact_pressure`; p0 grows about as sqrt(torque), found by fixed-point steps)."""
-    T = 100.0
-    for _ in range(6):
-        p = ring_contact_pressure(design, T * design.torque_share)
-        T *= (STATIC_CONTACT_PRESSURE_LIMIT / p) ** 2
-    return float(T)
+def line_contact_pressure(force, length, radius):
+    """Peak Hertz pressure p0 [Pa] of a steel line contact: force [N] over length [m], effective
+    radius of curvature [m] (1/R = 1/R1 +- 1/R2, minus for a concave partner):
+    p0 = sqrt(F E* / (pi l R)) (Johnson, Contact Mechanics, 1985, Eq. 4.45)."""
+    return np.sqrt(np.asarray(force, float) * STEEL_CONTACT_MODULUS / (np.pi * length * radius))

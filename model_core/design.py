@@ -308,6 +308,38 @@ class DriveDesign:
                     "[paper, Table 3].", "mm", MM)
     d_p: float = _f(25e-3, "m", "Bore (raceway) diameter of the eccentric bearing. **Assumption**: "
                     "25 mm, a drawn-cup needle bearing with D = 32 mm (HK2516 series).", "mm", MM)
+    bearing_clearance: float = _f(0.015e-3, "m",
+                                  "Radial internal clearance of the eccentric needle bearing "
+                                  "(and of the rollers' needle bearings with roller kind "
+                                  "'needle'): the total radial play of one ring against the other "
+                                  "(ISO 5753-1 definition); enters the lost motion "
+                                  "(model_core.stiffness). **Assumption**: 15 um, the middle of "
+                                  "the Normal group of ISO 5753-1 for radial bearings of 24-30 mm "
+                                  "bore (5-20 um for deep-groove ball bearings, about 10-25 um "
+                                  "for a drawn cup on an h6 shaft after mounting).", "mm", MM)
+    pin_end_gap: float = _f(1e-3, "m",
+                            "Axial gap at each side of a roller on its pin (between the rollers of "
+                            "the two gears and at the pin's supports): the pins are beams simply "
+                            "supported at both ends over 2 b + 3 gap, each gear's roller load at "
+                            "its roller's middle (model_core.stiffness). **Assumption**: 1 mm, "
+                            "the axial play of small reducers.", "mm", MM)
+    output_shaft_diameter: float = _f(30e-3, "m",
+                                      "Diameter of the output shafts (ring 1 and disc 2) between "
+                                      "the mechanism and the coupling, for their torsion "
+                                      "(model_core.stiffness) and their torsional yield. "
+                                      "**Assumption**: 30 mm, the bore of the 6006 support "
+                                      "bearings of model_core.drag.", "mm", MM)
+    output_shaft_length: float = _f(60e-3, "m",
+                                    "Twisted length of an output shaft, mechanism to coupling. "
+                                    "**Assumption**: 60 mm (two 13 mm bearings, a seal, a "
+                                    "housing wall and a coupling seat).", "mm", MM)
+    input_shaft_diameter: float = _f(20e-3, "m",
+                                     "Diameter of the eccentric (input) shaft S, for its torsion. "
+                                     "**Assumption**: 20 mm, the bore of the 6004 support "
+                                     "bearings of model_core.drag.", "mm", MM)
+    input_shaft_length: float = _f(60e-3, "m",
+                                   "Twisted length of the input shaft, coupling to eccentric. "
+                                   "**Assumption**: 60 mm, as the output shafts.", "mm", MM)
     delta_z: float = _f(0.05e-3, "m", "Size of the profile correction [paper, Table 3].", "mm", MM)
     profile_modification: str = _f("equidistant", "-",
                                    "Kind of the profile correction delta_z: 'equidistant' (the "
@@ -488,10 +520,14 @@ def validate_design(d: DriveDesign) -> None:
                                 f"arrays (z1^2 x n_positions x 8 B) would exceed "
                                 f"{MAX_CONTACT_ARRAY_BYTES / 2**20:.0f} MiB; use fewer positions")
     for name in ("e", "lam", "d_v1", "d_o1", "b1", "d_v2", "d_o2", "b2", "d_m2", "D_cz", "D_p",
-                 "d_p", "linear_stiffness", "torque_share"):
+                 "d_p", "linear_stiffness", "torque_share", "output_shaft_diameter",
+                 "output_shaft_length", "input_shaft_diameter", "input_shaft_length"):
         v = getattr(d, name)
         if not v > 0:
             raise CycloidInputError(name, v, "must be positive")
+    for name in ("bearing_clearance", "pin_end_gap"):
+        if getattr(d, name) < 0:
+            raise CycloidInputError(name, getattr(d, name), "must not be negative")
     if d.delta_z < 0:
         raise CycloidInputError("delta_z", d.delta_z, "profile correction must not be negative")
     if d.torque_share > 1:
@@ -738,3 +774,31 @@ def scale_viscosity(design: DriveDesign, factor: float) -> DriveDesign:
     return dataclasses.replace(design, lubricant=dataclasses.replace(
         lub, kinematic_viscosity=lub.kinematic_viscosity * factor,
         kinematic_viscosity_100=lub.kinematic_viscosity_100 * factor))
+
+
+#: The conservative variant's Hersey transition [1]: 1, six orders of magnitude above any
+#: Hersey number of a greased pin in the drive (about 1e-9 to 1e-6), so the Stribeck law's
+#: boundary term exp(-H/H_t) stays 1 within 1e-6: the pins at boundary friction everywhere.
+CONSERVATIVE_HERSEY_TRANSITION = 1.0
+#: What the conservative variant changes (printed by ``--band``)
+CONSERVATIVE_DESCRIPTION = (
+    "conservative variant (model_core.design.conservative_variant): (1) the pins at boundary "
+    "friction everywhere (friction.hersey_transition = 1: mu_pin = mu_pin_boundary plus "
+    "Petroff at every Hersey number, no mixed-film relief); (2) laboratory idle losses: the "
+    "catalogue load-independent losses in full (calibration.idle_loss_scale at least 1, lip "
+    "seals); nothing else changes (geometry, k, tooth traction, temperature). The physical "
+    "profile with losses = 'all' only: the paper profile's pins are already at their boundary "
+    "clamp and it has no idle losses.")
+
+
+def conservative_variant(design: DriveDesign) -> DriveDesign:
+    """The design's conservative variant (``--band``): exactly the two changes of
+    CONSERVATIVE_DESCRIPTION (boundary pin friction, full catalogue idle losses with lip
+    seals). The paper's absolute efficiency level is uncertain by several points (its input
+    transducer's zero may drift 0.1 N*m per 10 K against inputs of 0.3-0.85 N*m), so a
+    prediction is given as nominal next to this variant."""
+    fr = dataclasses.replace(design.friction, hersey_transition=max(
+        design.friction.hersey_transition, CONSERVATIVE_HERSEY_TRANSITION))
+    cal = dataclasses.replace(design.calibration,
+                              idle_loss_scale=max(design.calibration.idle_loss_scale, 1.0))
+    return dataclasses.replace(design, friction=fr, calibration=cal, seals="lip")

@@ -4,10 +4,11 @@ shafts, the shaft seals and the grease drag of the eccentric bearings.
 The paper keeps only load-dependent losses and blames part of its 1.76-1.92 % gap between
 theory and experiment on these (Section 5). Each is a named partial loss in W:
 
-- ``PL_support``: two deep-groove ball bearings on each rotating shaft, Palmgren's
-  load-independent moment M0 = 1e-7 f0 (nu n)^(2/3) d_m^3 [N*mm; nu mm^2/s, n r/min, d_m mm],
-  or 160e-7 f0 d_m^3 for nu n < 2000 (Palmgren, Ball and Roller Bearing Engineering, 1959;
-  Harris & Kotzalas, Rolling Bearing Analysis, 5th ed., Sec. 9.4).
+- ``PL_support``: two deep-groove ball bearings on each rotating shaft, by the SKF 2014
+  frictional-moment model (the model of the eccentric bearing, ``friction.skf_frictional_moment``)
+  with the deep-groove ball bearing's terms (``friction.skf_ball_frictional_moment``) at a
+  constant radial load SUPPORT_RADIAL_LOAD (SKF, Rolling bearings, PUB BU/P1 10000/2 EN (2014),
+  "Friction"). Until 2026-11 Palmgren's M0 with f0 = 0.75 was used, 2.4-6 times more.
 - ``PL_churn``: the grease sheared between the orbiting cycloid gears' faces and their
   neighbours (disc, housing, the other gear): Couette flow P = eta v^2 A / h per face, with v =
   e |w2 - wS| the gear's translation speed relative to the disc (Petroff's film argument; the
@@ -40,9 +41,21 @@ IDLE_DESCRIPTIONS = {
 #: **Assumption**: input shaft S on two 6004 (20 x 42 mm), output shafts 1 and 2 on two 6006
 #: (30 x 55 mm): light series for a 250 W drive.
 SUPPORT_BEARINGS = {"S": (0.020, 0.042), "1": (0.030, 0.055), "2": (0.030, 0.055)}
-#: Palmgren's f0 of a grease-lubricated deep-groove ball bearing [1]. **Assumption**: 0.75
-#: (Harris & Kotzalas Table 9.x: 0.7-1 for greased deep-groove ball bearings).
-F0_BALL_GREASE = 0.75
+#: [N] radial load on each support bearing. **Assumption**: 50 N, the couple of the two
+#: gears' eccentric-bearing forces (about 250 N each at the middle of the bench's torque band,
+#: 13 mm apart) reacted by two bearings about 60 mm apart; taken constant, so the support
+#: losses stay load-independent (their growth with load, F^0.54, is not modelled).
+SUPPORT_RADIAL_LOAD = 50.0
+#: SKF geometry constants of deep-groove ball bearings of series 60 (6004, 6006) [1]:
+#: R1 = 4.1e-7, S1 = 3.73e-3 (SKF 2014, table of geometry constants for rolling and sliding
+#: frictional moments; **not verified against the printed catalogue in this project**: a
+#: reviewer should check them), K_Z = 3.1 (deep-groove ball bearings), mu_EHL = 0.05 (mineral
+#: base oil); K_rs (grease) and mu_bl as for the eccentric bearing (Friction.skf_Krs,
+#: Friction.skf_mu_bl).
+SKF_BALL_R1 = 4.1e-7
+SKF_BALL_S1 = 3.73e-3
+SKF_BALL_KZ = 3.1
+SKF_BALL_MU_EHL = 0.05
 #: Gap between a gear face and its neighbour [m]. **Assumption**: 0.5 mm, an axial play
 #: typical of small reducers.
 FACE_GAP = 0.5e-3
@@ -71,12 +84,15 @@ def drag_sign(w):
     return np.clip(np.asarray(w, float) / DRAG_SIGN_SPEED, -1.0, 1.0)
 
 
-def palmgren_idle_moment(n_rpm, nu_mm2_s, dm_mm, f0):
-    """Load-independent bearing moment M0 [N*mm] of Palmgren (see module note)."""
-    n = np.abs(np.asarray(n_rpm, float))
-    x = nu_mm2_s * n
-    return np.where(x >= 2000, 1e-7 * f0 * np.maximum(x, 2000) ** (2 / 3) * dm_mm ** 3,
-                    160e-7 * f0 * dm_mm ** 3) * (n > 0)
+def support_bearing_moment(design, speed, d, D, nu):
+    """Frictional moment [N*m] of one support bearing (bore d, outside D [m]) turning at
+    ``speed`` [rad/s] in grease of kinematic viscosity nu [m^2/s]: the SKF model at
+    SUPPORT_RADIAL_LOAD (see module note)."""
+    from .friction import skf_ball_frictional_moment
+    fr = design.friction
+    return skf_ball_frictional_moment(SUPPORT_RADIAL_LOAD, speed, d, D, nu, SKF_BALL_R1,
+                                      SKF_BALL_S1, SKF_BALL_KZ, fr.skf_Krs, fr.skf_mu_bl,
+                                      SKF_BALL_MU_EHL)
 
 
 def idle_torques(design, speeds, nu):
@@ -95,7 +111,8 @@ def idle_torques(design, speeds, nu):
     -------
     dict
         ``{name: {"1": T1, "2": T2, "S": TS}}`` for name in IDLE_NAMES. A shaft's support
-        bearings and seal act on it alone, T = sign(w) M (M = 2 M0 for the two bearings; the
+        bearings and seal act on it alone, T = sign(w) M (M twice support_bearing_moment for
+        the two bearings; the
         seal's M = P/|w| = SEAL_POWER_COEFF d^2 * 60/(2 pi), constant; sign(w) is
         ``drag_sign``, linear within DRAG_SIGN_SPEED of a standstill); the grease drag acts
         between the eccentric S and the disc 2 (the orbiting gear's faces against the disc and
@@ -103,14 +120,13 @@ def idle_torques(design, speeds, nu):
         The held shaft's entry is the housing's reaction (its own speed is zero). The power
         sum_x T_x w_x of each entry is that loss (``idle_losses``).
     """
-    nu_mm = nu * 1e6
     zero = 0.0 * sum(np.asarray(speeds[x], float) for x in "12S")
     sup, seal = {}, {}
     for shaft, (d, D) in SUPPORT_BEARINGS.items():
         w = np.asarray(speeds[shaft], float)
-        M0 = palmgren_idle_moment(rad_s_to_rpm(w), nu_mm, 0.5 * (d + D) * 1e3, F0_BALL_GREASE)
+        M = support_bearing_moment(design, w, d, D, nu)
         sign = drag_sign(w)
-        sup[shaft] = zero + 2 * M0 * 1e-3 * sign
+        sup[shaft] = zero + 2 * M * sign
         seal[shaft] = zero + (SEAL_POWER_COEFF * (SEAL_DIAMETERS[shaft] * 1e3) ** 2
                               * rad_s_to_rpm(1.0) * sign) * (design.seals == "lip")
     w_rel = np.asarray(speeds["S"], float) - np.asarray(speeds["2"], float)

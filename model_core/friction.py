@@ -79,6 +79,31 @@ def skf_frictional_moment(radial_load, speed, d, D, nu, friction):
     return (M_rr + M_sl) * 1e-3
 
 
+def skf_ball_frictional_moment(radial_load, speed, d, D, nu, R1, S1, K_z, K_rs, mu_bl,
+                               mu_ehl):
+    """Frictional moment M_rr + M_sl (N*m) of a deep-groove ball bearing under a radial load
+    alone, SKF rolling bearings catalogue (2014) model, the same model as
+    :func:`skf_frictional_moment` with the ball bearing's load terms:
+
+        M_rr = phi_ish * phi_rs * G_rr * (nu n)^0.6,   G_rr = R1 d_m^1.96 F_r^0.54
+        M_sl = G_sl mu_sl,   G_sl = S1 d_m^-0.26 F_r^(5/3)          (F_a = 0)
+
+    with phi_ish, phi_rs and mu_sl as there (K_z the bearing type's constant). Units as
+    there: F_r in N, speed in rad/s, d and D in m, nu in m^2/s; the catalogue's N*mm, r/min,
+    mm and mm^2/s inside. Seal and drag moments are left out (grease: SKF neglects M_drag)."""
+    n = np.abs(np.asarray(speed, float)) * 60.0 / (2 * np.pi)
+    F = np.maximum(np.asarray(radial_load, float), 0.0)
+    d_mm, D_mm, nu_mm = d * 1e3, D * 1e3, nu * 1e6
+    dm = 0.5 * (d_mm + D_mm)
+    phi_ish = 1.0 / (1.0 + 1.84e-9 * (n * dm) ** 1.28 * nu_mm ** 0.64)
+    phi_rs = np.exp(-K_rs * nu_mm * n * (d_mm + D_mm) * np.sqrt(K_z / (2 * (D_mm - d_mm))))
+    M_rr = phi_ish * phi_rs * R1 * dm ** 1.96 * F ** 0.54 * (nu_mm * n) ** 0.6
+    phi_bl = np.exp(-2.6e-8 * (n * nu_mm) ** 1.4 * dm)
+    mu_sl = phi_bl * mu_bl + (1 - phi_bl) * mu_ehl
+    M_sl = S1 * dm ** -0.26 * F ** (5.0 / 3.0) * mu_sl
+    return (M_rr + M_sl) * 1e-3
+
+
 #: Upper bound of any sliding coefficient the Stribeck law may return [1]: dry clean steel on
 #: steel (about 0.6, Bhushan 2013, Table 9.1); reaching it means the film model has broken down,
 #: and every such point is reported (StribeckMu.clamped).

@@ -131,3 +131,94 @@ def test_cli_export_modelica(tmp_path):
                        timeout=120)
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "mo" / "CycloidDrive_S2.mo").is_file()
+
+
+def _table_from_source(src):
+    rows = re.search(r"lossTable\[:, 5\] = \[(.*?)\]", src, re.S).group(1)
+    return np.array([[float(x) for x in r.split(",")] for r in rows.split(";")])
+
+
+def _back_drive(table, ratio, w_a, T_load):
+    """LossyGear's equations with the driving shaft's speed imposed and the load torque
+    T_load (N*m, driving, in the driven shaft's direction) on flange_b, as in the package's
+    test model: flange_b.tau = T_load; in the back-drive quadrants (flange_b drives) tauLoss =
+    (1 - 1/eta_mf2) flange_a.tau + sign(w_a) tau_bf2 and 0 = flange_b.tau + ratio (flange_a.tau
+    - tauLoss), so flange_a.tau = eta_mf2 (sign(w_a) tau_bf2 - flange_b.tau / ratio).
+    Returns (flange_a.tau, lossPower = tauLoss w_a)."""
+    from cyclo_fmu.modelica_export import lossy_gear_columns
+    _, eta2, _, bf2 = lossy_gear_columns(table, w_a)
+    tau_a = eta2 * (np.sign(w_a) * bf2 - T_load / ratio)
+    tau_loss = tau_a + T_load / ratio
+    return tau_a, tau_loss * w_a
+
+
+@pytest.mark.parametrize("mode", ["S1", "S2"])
+def test_table_is_held_beyond_the_band_as_msl_reads_it(tmp_path, mode):
+    """MSL extrapolates a lossTable linearly through its last two rows (Vectors.interpolate in
+    4.0, ExternalCombiTable1D with LastTwoPoints in 4.1, final inside LossyGear). The exported
+    table holds the band's ends, so no mesh efficiency passes 1 at any speed, and the package's
+    test model (back-driven to 12 x the band's top speed) never creates energy. Without the
+    hold row the same table's back-drive mesh efficiency would pass 1 (about 7800 r/min in S1)."""
+    from cyclo_fmu.modelica_export import TEST_SPEED_FACTOR, lossy_gear_columns, msl_interpolate
+    src = export_modelica(mode, tmp_path).read_text()
+    table = _table_from_source(src)
+    fit = fit_loss_table(DriveDesign(), mode)
+    w_top = fit.speed_band[1]
+    w = np.linspace(0.0, 100 * w_top, 20001)
+    eta1, eta2, bf1, bf2 = lossy_gear_columns(table, w)
+    assert np.all(eta1 <= 1) and np.all(eta2 <= 1)
+    beyond = w >= w_top
+    for col, v in zip(range(1, 5), (eta1, eta2, bf1, bf2)):
+        np.testing.assert_allclose(v[beyond], table[-2, col], rtol=1e-12)
+    # the test model: speed ramped to TEST_SPEED_FACTOR x the top, the load drives
+    T_load = float(re.search(r"tau_constant = ([-0-9.e]+)", src).group(1))
+    assert np.sign(T_load) == np.sign(fit.ratio)          # in the driven shaft's direction
+    w_t = np.linspace(1.0, TEST_SPEED_FACTOR * w_top, 4001)
+    tau_a, loss = _back_drive(table, fit.ratio, w_t, T_load)
+    assert np.all(loss >= 0)
+    assert np.all(tau_a * w_t < 0)                        # the driving shaft brakes: back-drive
+    # consistent with the LossyGear evaluator used against the core
+    np.testing.assert_allclose(lossy_gear_tau_out(table, fit.ratio, w_t, tau_a), T_load,
+                               rtol=1e-9)
+    # teeth: the table without its hold row, as MSL reads it, passes 1 beyond the band
+    old = table[:-1]
+    eta2_old = msl_interpolate(old[:, 0], old[:, 2], w)
+    if mode == "S1":
+        first = w[np.argmax(eta2_old > 1)] * 30 / math.pi
+        assert eta2_old.max() > 1 and 5000 < first < 12000, first
+
+
+def test_example_and_test_models_in_the_package(tmp_path):
+    """The package carries Examples.MotorReducerLoad (motor inertia, reducer, load) and
+    Tests.TableHeldBeyondBand; it parses; the example's steady state, found with LossyGear's
+    equations (motor slip line = brake torque through the table), lies inside the fitted band,
+    where LossyGear's efficiency is the core's within the table's error; the text names the
+    minimax fit (not least squares)."""
+    from cyclo_fmu.modelica_export import example_parameters, example_steady_state
+    path = export_modelica("S1", tmp_path)
+    src = path.read_text()
+    errors, text = _parse_errors(path)
+    assert errors == [], errors
+    for piece in ("packageExamples", "modelMotorReducerLoad", "endMotorReducerLoad;",
+                  "packageTests", "modelTableHeldBeyondBand", "CycloidDrive_S1.Reducerreducer;",
+                  "connect(reducer.flange_b,loadInertia.flange_a);"):
+        assert piece in text, piece
+    assert "least-squares" not in src and "least squares" not in src
+    assert "minimax" in src
+    assert "not simulated" in src
+    fit = fit_loss_table(DriveDesign(), "S1")
+    p = example_parameters(fit)
+    assert f"tau_load = {float(p['tau_load']):.10g}" in src
+    ss = example_steady_state(fit)
+    rpm = ss["w_a"] * 30 / math.pi
+    env = BenchEnvelope()
+    assert env.speed_min_rpm <= rpm <= env.speed_max_rpm
+    assert env.torque_min <= ss["tau_a"] <= env.torque_max
+    # the motor's slip line at that speed gives the same torque (the balance closed)
+    tau_m = p["tau_nominal"] * (p["w_sync"] - ss["w_a"]) / (p["w_sync"] - p["w_nominal"])
+    assert tau_m == pytest.approx(ss["tau_a"], rel=1e-6)
+    op = operating_point(DriveDesign(), "S1", ss["w_a"], T_in=ss["tau_a"])
+    p_in = ss["tau_a"] * ss["w_a"]
+    core = -float(op.torques["1"]) * ss["w_a"] / fit.ratio / p_in
+    lg = float(lossy_gear_efficiency(fit.table, fit.ratio, ss["w_a"], ss["tau_a"]))
+    assert abs(lg - core) <= fit.max_error_forward + 1e-4

@@ -196,9 +196,24 @@ def test_load_independent_losses_switch():
     # the paper profile is the paper's model: no load-independent losses even with "all"
     pp = operating_point(DriveDesign(profile="paper", losses="all"), "S1", 293.0, 0.85)
     assert float(pp.losses.idle) == 0
-    # Palmgren's M0 closed form
-    assert float(drag.palmgren_idle_moment(1000.0, 100.0, 30.0, 1.0)) == pytest.approx(
-        1e-7 * (1e5) ** (2 / 3) * 27000.0)
+    # the support bearings by the SKF 2014 model of the eccentric bearing (deep-groove ball
+    # terms): at a standstill's limit of no film (phi_bl = 1) only the sliding moment
+    # S1 d_m^-0.26 F^(5/3) mu_bl remains; at speed the closed form of M_rr + M_sl
+    from model_core.friction import skf_ball_frictional_moment
+    import math
+    M = skf_ball_frictional_moment(50.0, 1e-9, 0.020, 0.042, 200e-6, 4.1e-7, 3.73e-3, 3.1,
+                                   6e-8, 0.15, 0.05)
+    assert float(M) == pytest.approx(3.73e-3 * 31 ** -0.26 * 50 ** (5 / 3) * 0.15 * 1e-3,
+                                     rel=1e-4)
+    n, dm, nu = 1500.0, 31.0, 200.0
+    phi_ish = 1 / (1 + 1.84e-9 * (n * dm) ** 1.28 * nu ** 0.64)
+    phi_rs = math.exp(-6e-8 * nu * n * 62 * math.sqrt(3.1 / (2 * 22)))
+    phi_bl = math.exp(-2.6e-8 * (n * nu) ** 1.4 * dm)
+    expect = (phi_ish * phi_rs * 4.1e-7 * dm ** 1.96 * 50 ** 0.54 * (nu * n) ** 0.6
+              + 3.73e-3 * dm ** -0.26 * 50 ** (5 / 3) * (phi_bl * 0.15 + (1 - phi_bl) * 0.05))
+    M = skf_ball_frictional_moment(50.0, n * math.pi / 30, 0.020, 0.042, 200e-6, 4.1e-7,
+                                   3.73e-3, 3.1, 6e-8, 0.15, 0.05)
+    assert float(M) == pytest.approx(expect * 1e-3, rel=1e-9)
 
 
 def test_walther_viscosity_and_heat_balance():
