@@ -192,6 +192,11 @@ class ExtraPhysics:
                                        "per 10 K of the recording's temperature column (replay "
                                        "only)")
 
+    discovered: tuple = _f((), "-", "discovered loss terms (model_core.discovered."
+                           "DiscoveredTerm): a sparse sum of power laws in driving speed and "
+                           "load a diagnosis fitted to a mismatch outside the library; the "
+                           "design file's [[extra.discovered]] tables")
+
     #: fields the FMUs do not carry (a diagnosis's replay uses them)
     REPLAY_ONLY = ("thermal_loss_per_10K", "viscosity_ln_change", "viscosity_ln_per_10K",
                    "torque_in_offset", "torque_in_gain_error", "torque_in_zero_drift",
@@ -213,6 +218,12 @@ class ExtraPhysics:
                 s, self.stribeck_speed)[:, 0]
         return t.reshape(w.shape)
 
+
+    def discovered_torque(self, w, tau_out):
+        """Torque (N*m) of the discovered terms at driving speed w (rad/s) and load torque
+        tau_out (N*m) (model_core.discovered, the one implementation)."""
+        from .discovered import discovered_torque
+        return discovered_torque(self.discovered, w, tau_out)
 
     def dynamic_torque(self, alpha, theta, order, elapsed, loss_in):
         """Inertia, ripple and warm-up torque at the driving shaft (N*m): J*alpha +
@@ -392,6 +403,14 @@ def validate_design(d: DriveDesign) -> None:
         if int(v) != v:
             raise CycloidInputError(name, v, "must be a whole number")
         object.__setattr__(d, name, int(v))   # 15.0 -> 15: counts are used as integers
+    from .discovered import DiscoveredTerm, MAX_TERMS
+    disc = d.extra.discovered
+    if not isinstance(disc, tuple) or not all(isinstance(k, DiscoveredTerm) for k in disc):
+        raise CycloidInputError("extra.discovered", disc, "must be a tuple of DiscoveredTerm")
+    if len(disc) > MAX_TERMS:
+        raise CycloidInputError("extra.discovered", len(disc), f"at most {MAX_TERMS} terms")
+    for i, k in enumerate(disc):
+        k.validate(f"extra.discovered[{i}]")
     if not -0.5 < d.extra.torque_in_gain_error < 0.5:
         raise CycloidInputError("extra.torque_in_gain_error", d.extra.torque_in_gain_error,
                                 "must lie between -0.5 and 0.5")
@@ -519,7 +538,7 @@ def _toml_key(f) -> str:
 def _section_to_dict(obj, only=None, skip=()) -> dict:
     out = {}
     for f in dataclasses.fields(obj):
-        if f.name in ("lubricant", "friction", "extra") or f.name in skip:
+        if f.name in ("lubricant", "friction", "extra", "discovered") or f.name in skip:
             continue
         if only is not None and f.name not in only:
             continue
@@ -535,7 +554,8 @@ def _section_to_dict(obj, only=None, skip=()) -> dict:
 
 def _section_from_dict(cls, data: dict, section: str, only=None, skip=()) -> dict:
     keys = {_toml_key(f): f for f in dataclasses.fields(cls)
-            if f.name not in ("lubricant", "friction", "extra") and f.name not in skip
+            if f.name not in ("lubricant", "friction", "extra", "discovered")
+            and f.name not in skip
             and (only is None or f.name in only)}
     kwargs = {}
     for key, value in data.items():
@@ -564,7 +584,16 @@ def design_to_dict(design: DriveDesign) -> dict:
             "geometry": _section_to_dict(design, skip=MODEL_FIELDS),
             "lubricant": _section_to_dict(design.lubricant),
             "friction": _section_to_dict(design.friction),
-            "extra": _section_to_dict(design.extra)}
+            "extra": _extra_to_dict(design.extra)}
+
+
+def _extra_to_dict(extra) -> dict:
+    out = _section_to_dict(extra)
+    if extra.discovered:
+        out["discovered"] = [{"coefficient_Nm": k.coefficient, "speed_exponent":
+                              k.speed_exponent, "load_exponent": k.load_exponent}
+                             for k in extra.discovered]
+    return out
 
 
 def design_from_dict(data: dict) -> DriveDesign:
@@ -582,7 +611,10 @@ def design_from_dict(data: dict) -> DriveDesign:
     fr = Friction(**_section_from_dict(Friction, data.get("friction", {}), "friction"))
     geo = _section_from_dict(DriveDesign, data.get("geometry", {}), "geometry", skip=MODEL_FIELDS)
     geo.update(_section_from_dict(DriveDesign, data.get("model", {}), "model", only=MODEL_FIELDS))
-    ex = ExtraPhysics(**_section_from_dict(ExtraPhysics, data.get("extra", {}), "extra"))
+    extra = dict(data.get("extra", {}))
+    from .discovered import terms_from_toml
+    discovered = terms_from_toml(extra.pop("discovered", []))
+    ex = ExtraPhysics(**_section_from_dict(ExtraPhysics, extra, "extra"), discovered=discovered)
     return DriveDesign(lubricant=lub, friction=fr, extra=ex, **geo)
 
 
@@ -598,9 +630,11 @@ def design_to_toml(design: DriveDesign) -> str:
     """The design as TOML text (lengths in mm, viscosity in mm^2/s, roughness in um)."""
     lines = ["# cyclo-fmu design file: lengths in mm, viscosity in mm^2/s, roughness in um"]
     for section, values in design_to_dict(design).items():
+        values.pop("discovered", None)     # [[extra.discovered]] tables, at the end
         lines.append(f"\n[{section}]")
         lines += [f"{k} = {_toml_value(v)}" for k, v in values.items()]
-    return "\n".join(lines) + "\n"
+    from .discovered import terms_to_toml
+    return "\n".join(lines) + "\n" + terms_to_toml(design.extra.discovered)
 
 
 def design_from_toml(source) -> DriveDesign:

@@ -264,21 +264,23 @@ def roller_pass_order(mode: str, z1: int) -> float:
 
 
 def effect_signals(t, w_in, loss_in, mode, z1, temperature=None, T_in_model=None,
-                   sens_mu=None, sens_nu=None) -> dict:
-    """The signal dict the effects' terms read (see the module docstring)."""
+                   sens_mu=None, sens_nu=None, tau_out=None) -> dict:
+    """The signal dict the effects' terms read (see the module docstring); ``tau_out``
+    [N*m], the load torque on the driven shaft, feeds a design's discovered terms."""
     t = np.asarray(t, float)
     w_in = np.asarray(w_in, float)
     alpha = np.gradient(w_in, t) if len(t) > 1 else np.zeros_like(w_in)
     theta = np.concatenate([[0.0], np.cumsum(0.5 * (w_in[1:] + w_in[:-1]) * np.diff(t))])
     return {"t": t, "w_in": w_in, "alpha_in": alpha, "theta_in": theta, "loss_in": loss_in,
             "order_roller": roller_pass_order(mode, z1), "temperature": temperature,
-            "T_in_model": T_in_model, "sens_mu": sens_mu, "sens_nu": sens_nu}
+            "T_in_model": T_in_model, "sens_mu": sens_mu, "sens_nu": sens_nu,
+            "tau_out": None if tau_out is None else np.asarray(tau_out, float)}
 
 
 # -- a design's extra physics in a replay ---------------------------------------------------------
 def extra_torque(extra, s: dict) -> np.ndarray:
     """Torque (N*m) at the driving shaft of a design's ``extra`` physics (design.ExtraPhysics),
-    from the same terms the diagnosis fits; steady (drag, Stribeck), dynamic (inertia, ripple,
+    from the same terms the diagnosis fits; steady (drag, Stribeck, discovered terms), dynamic (inertia, ripple,
     warm-up) and, in a replay, the temperature-form warm-up and the viscosity drift.
 
     The transducer corrections of ``extra`` are not torque of the drive: see
@@ -295,6 +297,11 @@ def extra_torque(extra, s: dict) -> np.ndarray:
             or extra.thermal_loss_change):
         total += extra.dynamic_torque(s["alpha_in"], s["theta_in"], s["order_roller"],
                                       s["t"] - s["t"][0], s["loss_in"])
+    if extra.discovered:
+        if s.get("tau_out") is None:
+            raise ValueError("the design's discovered terms need the load torque (signals "
+                             "'tau_out')")
+        total += extra.discovered_torque(s["w_in"], s["tau_out"])
     temp = s.get("temperature")
     if extra.thermal_loss_per_10K and temp is not None:
         total += EFFECTS["thermal_drift"].torque(s, [extra.thermal_loss_per_10K], None)

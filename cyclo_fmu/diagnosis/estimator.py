@@ -586,6 +586,7 @@ class Diagnoser:
         effects.sort(key=lambda e: -e["explained_rms_Nm"])
         # the unknown: generic basis next to the selection, orders and peaks
         unexplained = self._unexplained(st, r_raw, sig, dt)
+        unexplained["proposed"] = self._discover(rec, st, r_raw, unexplained, rel1)
         # the friction level alone is named unless it may hold part of an unknown
         if not effects and calibration and not (st["friction_doubted"]
                                                 and unexplained["present"]):
@@ -809,6 +810,34 @@ class Diagnoser:
                     ["friction_miscalibrated"] if doubted else []),
                 "bursts": b, "_orders_all": amps, "step_transient": step_transient,
                 "_smooth": smooth}
+
+    # -- the discovery stage hook (issue 18 item 4; the stage is diagnosis.discover) -------------
+    def _discover(self, rec, st, r_raw, unexplained, rel1=0.0):
+        """``unexplained.proposed``: a sparse closed form fitted to a confirmed smooth remainder
+        (``discover.discover``), its JSON with ``library_change`` (what the selected effects'
+        values become next to it); None when no smooth remainder is confirmed."""
+        if not (unexplained["present"] and unexplained["_smooth"]):
+            return None
+        from .discover import discover
+        P, S = st["P"], st["S"]
+        cols = [c for t in S.terms for c in t.cols]
+        self.discovery_ = d = discover(
+            r_raw, rec.time, rec.speed_in, rec.torque_out, samples_per_block=P["m"],
+            weights=st["weights"], temperature=getattr(rec, "temperature", None),
+            mode=self.mode, z1=self.design.z1, bandwidth=self.bandwidth,
+            n_folds=self.n_folds, min_explained=st["min_expl"], noise=st["noise"],
+            nuisance=P["X"][:, cols] if cols else None)
+        out = d.to_json()
+        change, i = {}, 0
+        for t in S.terms:      # the selected effects' parameter changes next to the form
+            k = len(t.cols)
+            scale = (1 + rel1) if (t.effect == "friction_miscalibrated" and rel1) else 1.0
+            if d.proposed:
+                change[t.effect] = {n: scale * v for n, v in
+                                    zip(t.names, d.nuisance_change[i:i + k])}
+            i += k
+        out["library_change"] = change
+        return out
 
     def _lookalikes(self, st) -> dict:
         prob, S, opts = st["prob"], st["S"], st["opts"]

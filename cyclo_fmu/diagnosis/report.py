@@ -27,7 +27,10 @@ def updated_design(design: DriveDesign, d: Diagnosis):
             continue
         done.add(e["id"])
         eff = EFFECTS[e["id"]]
-        values = {k: v["value"] for k, v in e["parameters"].items()}
+        # next to a discovered form the selected effects' values change (``library_change``)
+        change = ((d.unexplained.get("proposed") or {}).get("library_change") or {}).get(
+            e["id"], {})
+        values = {k: v["value"] + change.get(k, 0.0) for k, v in e["parameters"].items()}
         shape = values.get(eff.shape_name) if eff.shape else None
         form = e.get("form", "").startswith("per 10 K")
         fixed, more = eff.apply(fixed, values, shape, temperature=form)
@@ -35,6 +38,24 @@ def updated_design(design: DriveDesign, d: Diagnosis):
     if d.unexplained.get("present"):
         notes.append("a mismatch remains that no library effect explains: "
                      + d.unexplained["statement"])
+    fixed, more = _discovered(fixed, d.unexplained.get("proposed"))
+    notes += more
+    return fixed, notes
+
+
+def _discovered(design, proposed):
+    """The discovery stage's steady terms (``unexplained.proposed.design_terms``) added to the
+    design's ``[[extra.discovered]]``; terms the design cannot carry are said in a note."""
+    if not proposed or not proposed.get("formula"):
+        return design, []
+    from model_core.discovered import DiscoveredTerm
+    from .discover import apply_terms
+    terms = [DiscoveredTerm(t["coefficient_Nm"], t["speed_exponent"], t["load_exponent"])
+             for t in proposed.get("design_terms", [])]
+    fixed, notes = apply_terms(design, terms, proposed["formula"])
+    if proposed.get("not_in_design"):
+        notes.append("discovered terms the design does not carry (the FMUs evaluate steady "
+                     "power laws in speed and load only): " + ", ".join(proposed["not_in_design"]))
     return fixed, notes
 
 
