@@ -10,7 +10,8 @@ can compile them (FMI 2.0 ``SourceFiles`` and ``sources/buildDescription.xml``).
 
 What is fixed at build time: the design (its geometry, lubricant and friction: the map depends
 on them) and the map's range. What stays a run-time parameter: the mode and the extra physics
-(design ``[extra]``: drag, Stribeck, inertia, ripple, warm-up).
+(design ``[extra]``: drag, Stribeck, inertia, ripple, warm-up); the discovered loss terms
+(``[[extra.discovered]]``) are built in, as the map is.
 """
 from __future__ import annotations
 
@@ -156,6 +157,11 @@ def design_constants(design: DriveDesign):
              "rolling-resistance coefficient of the disc rollers (mu_rolling: the ring rollers)"))
     names = {o[0] for o in out}
     out += [m for m in more if m[0] not in names]
+    # the discovered loss terms (design [[extra.discovered]]): built in, shown as constants
+    from ..slaves.cycloid_drive import DISCOVERED_PARAMETERS, discovered_values
+    values = discovered_values(design)
+    out += [(name, "Real", values[name], unit, desc) for name, _k, _f, unit, desc, *_ in
+            DISCOVERED_PARAMETERS]
     return out
 
 
@@ -249,6 +255,13 @@ def generate_data_c(design, lt, lw, modes, constants, guid, torque_max, speed_ma
     ex = design.extra
     lines.append("const CDExtra CD_DEFAULT_EXTRA = {"
                  + ", ".join(_hex(getattr(ex, e[0])) for e in EXTRA) + "};")
+    # design [[extra.discovered]] (model_core.discovered), padded to CD_MAX_DISCOVERED
+    from model_core.discovered import MAX_TERMS
+    terms = [(t.coefficient, t.speed_exponent, t.load_exponent) for t in ex.discovered]
+    rows = terms + [(0.0, 0.0, 0.0)] * (MAX_TERMS - len(terms))
+    lines.append(f"const CDTerm CD_DISCOVERED[CD_MAX_DISCOVERED] = {{"
+                 + ", ".join("{" + ", ".join(_hex(v) for v in r) + "}" for r in rows) + "};")
+    lines.append(f"const int CD_N_DISCOVERED = {len(terms)};")
     lines.append(f"const char CD_GUID[] = {_c_string(guid)};")
     lines.append(f"const double CD_MAP_TORQUE_MAX = {_hex(torque_max)};")
     lines.append(f"const double CD_MAP_SPEED_MAX = {_hex(speed_max)};")

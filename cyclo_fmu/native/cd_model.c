@@ -157,6 +157,20 @@ double cd_steady_torque(const CDExtra *x, double w)
     return t;
 }
 
+/* model_core.discovered: reference load of the terms (T_REF), N*m */
+#define CD_T_REF 10.0
+
+double cd_discovered_torque(const CDTerm *terms, int n, double w, double tau_out)
+{
+    double total = 0.0;
+    int k;
+    for (k = 0; k < n; k++)
+        total = total + terms[k].coefficient
+                * (sign(w) * pow(fabs(w) / CD_W_REF, terms[k].speed_exponent)
+                   * pow(fabs(tau_out) / CD_T_REF, terms[k].load_exponent));
+    return total;
+}
+
 double cd_dynamic_torque(const CDExtra *x, double alpha, double theta, double order,
                          double elapsed, double loss_in)
 {

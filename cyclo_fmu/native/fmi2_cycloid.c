@@ -235,7 +235,8 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     /* the load including the output inertia's torque */
     double tau_ext = s->tau_out, tau_out = tau_ext - J_r * s->alpha_in;
     double tau_in, tau_in_gear, p_in, p_out, p_stored = 0.0, w_in = s->w_in;
-    int steady = s->extra.drag_torque != 0 || s->extra.stribeck_torque != 0;
+    int steady = s->extra.drag_torque != 0 || s->extra.stribeck_torque != 0
+                 || CD_N_DISCOVERED > 0;
     int dynamic = s->extra.input_inertia != 0 || s->extra.ripple_1x != 0
                   || s->extra.ripple_roller != 0 || s->extra.thermal_loss_change != 0;
     m = &CD_MAP.modes[mode];
@@ -261,6 +262,8 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     s->out[O_PL_SEAL] = r.losses[6];
     s->out[O_PL_CHURN] = r.losses[7];
     if (steady) tau_in += cd_steady_torque(&s->extra, w_in);
+    if (CD_N_DISCOVERED > 0)   /* design [[extra.discovered]] */
+        tau_in += cd_discovered_torque(CD_DISCOVERED, CD_N_DISCOVERED, w_in, tau_out);
     if (dynamic) {
         /* CycloidDrive._dynamic_torque */
         double alpha = (!s->has_w_last || dt <= 0) ? 0.0 : (w_in - s->w_last) / dt;

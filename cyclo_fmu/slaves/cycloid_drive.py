@@ -95,6 +95,31 @@ DESIGN_PARAMETERS = [
      "grease temperature (physical profile; sets the viscosity by Walther's law)", Real),
 ]
 
+#: the design's discovered loss terms ([[extra.discovered]], model_core.discovered) as
+#: numbered slots (FMU parameter -> DiscoveredTerm field, unit, description, min, max); a slot
+#: whose torque is 0 is empty. Registered after every other variable: the value references of
+#: the older ones stay
+DISCOVERED_SLOTS = core.discovered.MAX_TERMS
+DISCOVERED_PARAMETERS = [
+    (f"discovered{k}_{name}", k - 1, field, unit, desc.format(k=k), lo, hi)
+    for k in range(1, DISCOVERED_SLOTS + 1)
+    for name, field, unit, desc, lo, hi in (
+        ("torque", "coefficient", "N.m", "discovered loss term {k}: torque at 300 rad/s and "
+         "10 N.m load, sgn(w_in) (|w_in|/300 rad/s)^p (|tau_out|/10 N.m)^q (0: unused)",
+         None, None),
+        ("speed_exponent", "speed_exponent", "1", "discovered loss term {k}: exponent p of the "
+         "driving speed", 0.0, core.discovered.MAX_EXPONENT),
+        ("load_exponent", "load_exponent", "1", "discovered loss term {k}: exponent q of the "
+         "load torque", 0.0, core.discovered.MAX_EXPONENT))]
+
+
+def discovered_values(design) -> dict:
+    """The discovered slots' parameter values for a design (empty slots 0)."""
+    terms = design.extra.discovered
+    return {name: float(getattr(terms[k], field)) if k < len(terms) else 0.0
+            for name, k, field, *_ in DISCOVERED_PARAMETERS}
+
+
 #: min/max of the parameters (the modelDescription's; checked at initialization). Lengths,
 #: viscosity, density positive; friction coefficients in [0, 1]: above 1 no lubricated steel
 #: contact (dry steel on steel is about 0.6-0.8); thermal_loss_change >= -1: the losses cannot
@@ -235,6 +260,8 @@ class CycloidDrive(UnitSlave):
             self.output(n, 0.0, "W", f"partial loss {n}: {_LOSS_TEXT[n]}", depends=both)
         self.output("J_load_dec", 0.0, "kg.m2", "J_out as the driving shaft feels it through the "
                     "reducer while it slows down (|w_in| falling)", depends=both)
+        for name, _k, _field, unit, desc, lo, hi in DISCOVERED_PARAMETERS:
+            self.parameter(name, 0.0, unit, desc, Real, min=lo, max=hi)
         self._theta = 0.0
         self._slope_key = None
         self._w_last = None
@@ -251,6 +278,11 @@ class CycloidDrive(UnitSlave):
             v = getattr(self, name)
             {None: changes, "lubricant": lub, "friction": fr, "extra": ex}[section][field] = v
         fr["rolling_disc"] = fr["rolling_ring"]
+        slots = [{} for _ in range(DISCOVERED_SLOTS)]
+        for name, k, field, *_ in DISCOVERED_PARAMETERS:
+            slots[k][field] = float(getattr(self, name))
+        ex["discovered"] = tuple(core.discovered.DiscoveredTerm(**x) for x in slots
+                                 if x["coefficient"] != 0.0)
         base = core.DriveDesign()
         return dataclasses.replace(base, lubricant=dataclasses.replace(base.lubricant, **lub),
                                    friction=dataclasses.replace(base.friction, **fr),
@@ -305,6 +337,7 @@ class CycloidDrive(UnitSlave):
                 self._map_key = map_key
             ex = self._design.extra
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
+            self._discovered = bool(ex.discovered)
             self._dynamic_extra = bool(ex.input_inertia or ex.ripple_1x or ex.ripple_roller
                                        or ex.thermal_loss_change)
             unit = core.shaft_speeds(self._mode, 1.0, self._design.z1)
@@ -412,12 +445,14 @@ class CycloidDrive(UnitSlave):
                 self.tau_in += float(self._design.extra.steady_torque(w_in))
         else:
             speeds, torques, losses, eta, eta0, locked = self._exact(w_in, tau_out)
+        if self._discovered:     # design [[extra.discovered]] (model_core.discovered)
+            self.tau_in += float(self._design.extra.discovered_torque(w_in, tau_out))
         self.P_stored = 0.0
         if self._dynamic_extra:
             self.tau_in += self._dynamic_torque(t, dt, w_in, tau_out)
         self.P_extra = (self.tau_in - self._tau_in_gear) * w_in
         self.P_loss = self.tau_in * w_in + tau_out * self.w_out - self.P_stored
-        if self._steady_extra or self._dynamic_extra:
+        if self._steady_extra or self._dynamic_extra or self._discovered:
             p_in = max(self.tau_in * w_in, tau_out * self.w_out)
             p_out = -min(self.tau_in * w_in, tau_out * self.w_out)
             eta = p_out / p_in if (p_in > 0 and p_out > 0 and not locked) else 0.0
