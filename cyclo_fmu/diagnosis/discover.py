@@ -63,6 +63,12 @@ RUN_IN_TAUS = (60.0, 180.0, 600.0)
 #: [1] a term is stable when its family is selected, at its shape or a neighbouring one, in
 #: more than this share of the leave-one-fold-out selections ("in most folds")
 MIN_STABILITY = 0.5
+#: [1] the proposed form must remove at least this share of the remainder's structured held-out
+#: RMS (above the noise): 0.5. A form that leaves more than half of it is a fragment, not a
+#: model of the unknown, and the structure it leaves (correlated blocks) breaks the
+#: independence the BIC assumes, so its evidence and stability are overstated (a loss that is
+#: random per hold gets a "stable" linear time trend that removes 3 % of it)
+MIN_REMOVED_SHARE = 0.5
 #: [N*m] default of the smallest held-out RMS a term must explain (the estimator's
 #: ``MIN_EXPLAINED_NM``: 0.5 mN*m, a sixth of the paper bench's transducer noise)
 MIN_EXPLAINED_NM = 0.5e-3
@@ -266,7 +272,7 @@ class SparseDiscovery:
     def fit(self, columns, y, weights=None, nuisance=None) -> "SparseDiscovery":
         """``columns``: per feature of the library, its block-level columns (n_blocks, k);
         ``y``: the block-level remainder (N*m); ``weights``: the blocks' weights (0 excludes a
-        spike block; default: Huber weights of ``residual.robust_weights``); ``nuisance``:
+        spike block; default: ``residual.robust_weights`` of the remainder alone); ``nuisance``:
         block-level columns (n_blocks, k) of the library effects already fitted, refitted
         with every candidate form (a library term that took up part of the unknown gives it
         back; its change is ``nuisance_change_``)."""
@@ -275,8 +281,8 @@ class SparseDiscovery:
         k_n = 0 if nuisance is None else np.asarray(nuisance).reshape(len(y), -1).shape[1]
         if k_n:
             X = np.hstack([np.asarray(nuisance, float).reshape(len(y), -1), X])
-        if weights is None:
-            weights = R.robust_weights(X, y)[0]
+        if weights is None:     # spikes and Huber weights judged on the remainder itself
+            weights = R.robust_weights(np.ones((len(y), 1)), y)[0]
         prob = GramProblem(X, y, weights, self.n_folds)
         forced = (Term("library", None, tuple(range(k_n)), tuple(f"n{i}" for i in range(k_n)),
                        ("",) * k_n, (-np.inf,) * k_n, (np.inf,) * k_n),) if k_n else ()
@@ -423,6 +429,14 @@ def _term_text(feature, coef) -> str:
     return f"{1e3 * a:.4g} mN*m amplitude * {feature.name} (phase {math.atan2(coef[1], coef[0]):+.3f} rad)"
 
 
+def removed_share(before, after, noise) -> float:
+    """Share of the structured held-out RMS a form removes: 1 - sqrt(after^2 - noise^2) /
+    sqrt(before^2 - noise^2) (N*m in, 1 out; the noise is the block-level noise of the
+    reading, which no form can remove)."""
+    return 1.0 - math.sqrt(max(after ** 2 - noise ** 2, 0.0)
+                           / max(before ** 2 - noise ** 2, 1e-300))
+
+
 def discover(residual, t, w_in, T_out, *, samples_per_block=None, block=0.01,
              residual_blocks=None, weights=None, w_out=None, T_in=None, temperature=None,
              model_T_in=None, mode="S1", z1=15, bandwidth=0.0, n_folds=5,
@@ -492,12 +506,16 @@ def discover(residual, t, w_in, T_out, *, samples_per_block=None, block=0.01,
     if noise is None:
         noise = R.robust_sigma(np.diff(y)) / math.sqrt(2)
     before, after = sd.heldout_rms_before_, sd.heldout_rms_after_
-    removed = 1.0 - math.sqrt(max(after ** 2 - noise ** 2, 0.0)
-                              / max(before ** 2 - noise ** 2, 1e-300))
+    removed = removed_share(before, after, noise)
     cand = [{"feature": sd.feature(t_).name, "family": t_.effect,
              "stability": sd.stability_[t_]} for t_ in sd.selected_]
-    if not sd.terms_:
-        return Discovery(False, None, [], before, after, noise, 0.0, "", sd.refused_,
+    reason = sd.refused_
+    if sd.terms_ and removed < MIN_REMOVED_SHARE:
+        reason = (f"the best form stable across folds removes {100 * removed:.0f} % of the "
+                  f"remainder's structured held-out RMS (at least {100 * MIN_REMOVED_SHARE:.0f} "
+                  "% needed): a fragment, not a model of the unknown")
+    if reason:
+        return Discovery(False, None, [], before, after, noise, removed, "", reason,
                          candidates=cand, n_folds=n_folds)
     terms, texts, readings, design_terms, not_in = [], [], [], [], []
     pred = np.zeros(n)
