@@ -59,6 +59,23 @@ def _discovered(design, proposed):
     return fixed, notes
 
 
+def _proposed_html(p) -> str:
+    """The discovery stage's proposal (``unexplained.proposed``) for the report."""
+    e = html.escape
+    if not p:
+        return ""
+    if not p.get("formula"):
+        return f"<p>No closed form proposed: {e(str(p.get('refused')))}.</p>"
+    rows = "".join(f"<tr><td>{e(t['feature'])}</td><td>{_fmt(t['coefficient'])} {e(t['unit'])}"
+                   f"</td><td>[{_fmt(t['ci95'][0])}, {_fmt(t['ci95'][1])}]</td>"
+                   f"<td>{100 * t['stability']:.0f} %</td></tr>" for t in p["terms"])
+    return (f"<p>Proposed closed form (written to the updated design): <b>{e(p['formula'])}"
+            f"</b>. Held-out RMS {1e3 * p['heldout_rms_before_Nm']:.3g} &rarr; "
+            f"{1e3 * p['heldout_rms_after_Nm']:.3g} mN*m (noise {1e3 * p['noise_Nm']:.3g}). "
+            f"Reading: {e(p['reading'])}.</p><table><tr><th>feature</th><th>coefficient</th>"
+            f"<th>95 % interval</th><th>stable across folds</th></tr>{rows}</table>")
+
+
 def _figure(d: Diagnosis):
     import matplotlib.pyplot as plt
     s = d.series
@@ -165,6 +182,7 @@ zeta_d (paper Eq. 31) {100 * d.zeta_d_before:.2f} &rarr; {100 * d.zeta_d_after:.
 {f'<p>Friction level (model calibration):</p><ul>{cal}</ul>' if cal else ''}
 <h2>What remains</h2>
 <p class="{'warn' if u.get('present') else ''}">{e(u.get('statement', ''))}</p>
+{_proposed_html(u.get('proposed'))}
 {f"<p>A run that would separate look-alikes: {e(d.suggested_test)}</p>" if d.suggested_test else ''}
 <h2>Checks before fitting</h2><ul>{checks or '<li>none</li>'}</ul>
 <h2>Left out</h2><ul>{excl or '<li>nothing</li>'}
