@@ -542,3 +542,49 @@ def discover(residual, t, w_in, T_out, *, samples_per_block=None, block=0.01,
                      design_terms=tuple(design_terms[:MAX_TERMS]), not_in_design=not_in,
                      candidates=cand, n_folds=n_folds, prediction=pred,
                      nuisance_change=[float(x) for x in sd.nuisance_change_])
+
+
+# -- closure: the friction level and the discovered coefficients made consistent -------------------
+#: Gauss-Newton steps of :func:`refine_closure` (each a replay of the recording with the model's
+#: friction sensitivity): the friction level is nonlinear in the model, so a correction of
+#: 10 % taken from one linearisation misses by about a percent; two steps settle it
+REFINE_STEPS = 2
+
+
+def refine_closure(design, rec, mode, bandwidth, samples_per_block, weights,
+                   steps=REFINE_STEPS):
+    """``design`` with its friction level (ln of a factor, ``scale_friction_level``) and the
+    coefficients of its discovered terms refitted together on the recording by Gauss-Newton
+    (the replay's own sensitivity to ln mu_boundary, the terms' own columns), so that a
+    discovered form next to a friction level corrected from one linearisation closes the
+    recording. Returns the design (unchanged when it has no discovered terms)."""
+    import math as _m
+    from dataclasses import replace
+
+    from model_core.design import scale_friction_level
+    from model_core.discovered import term_torque
+
+    from .replay import replay
+    if not design.extra.discovered:
+        return design
+    m = samples_per_block
+    dt = float(np.median(np.diff(rec.time)))
+    w = np.asarray(weights, float)
+    for _ in range(steps):
+        rp = replay(design, mode, rec, bandwidth)
+        s = rp.signals
+        y = block_means(rec.torque_in - first_order(rp.T_model, dt, bandwidth), m)
+        g = 1.0 + design.extra.torque_in_gain_error
+        cols = [s["sens_mu"] * g] + [g * term_torque(s["w_in"], s["tau_out"], k.speed_exponent,
+                                                     k.load_exponent)
+                                     for k in design.extra.discovered]
+        X = block_means(first_order(np.stack(cols, -1), dt, bandwidth), m)
+        n = min(len(y), len(w))
+        Xw = X[:n] * w[:n, None]
+        delta = np.linalg.lstsq(Xw.T @ X[:n], Xw.T @ y[:n], rcond=1e-12)[0]
+        terms = tuple(DiscoveredTerm(k.coefficient + float(d), k.speed_exponent,
+                                     k.load_exponent)
+                      for k, d in zip(design.extra.discovered, delta[1:]))
+        design = replace(scale_friction_level(design, _m.exp(float(delta[0]))),
+                         extra=replace(design.extra, discovered=terms))
+    return design

@@ -321,6 +321,16 @@ class Diagnoser:
         fixed, notes = updated_design(self.design, self.diagnosis_)
         if fixed == self.design:
             return fixed, notes
+        if fixed.extra.discovered != self.design.extra.discovered:
+            # a discovered form (diagnosis.discover): friction level and its coefficients
+            # refitted together on the recording (closure)
+            from .discover import refine_closure
+            fixed = refine_closure(fixed, self._rec, self.mode, self.bandwidth,
+                                   self._first["P"]["m"], self._first["weights"])
+            notes = notes + [
+                "refitted with the discovered form on the recording: friction.mu_boundary "
+                f"{fixed.friction.mu_boundary:.6g}, discovered coefficients "
+                + ", ".join(f"{1e3 * k.coefficient:.4g} mN*m" for k in fixed.extra.discovered)]
         before, after = self.residual_rms(self.design), self.residual_rms(fixed)
         self.diagnosis_.design_check = {"rms_given_Nm": before, "rms_updated_Nm": after}
         if after > before:
