@@ -159,9 +159,10 @@ class ExtraPhysics:
     drag_torque: float = _f(0.0, "N*m", "load-independent drag at 300 rad/s of the driving "
                             "shaft, growing as (speed)^(2/3) (churning, seals, bearing drag)")
     drag_exponent: float = _f(2.0 / 3.0, "1", "exponent p of the drag's speed law "
-                              "T_drag (|w|/300 rad/s)^p: 2/3 churning, 0 seals, 1 viscous")
+                              "T_drag (|w|/300 rad/s)^p: 2/3 churning, 0 seals, 1 viscous, "
+                              "2 windage (0 to 2)")
     stribeck_torque: float = _f(0.0, "N*m", "extra friction at standstill of the driving shaft, "
-                                "decaying as exp(-(w/w_s)^2)")
+                                "decaying as exp(-(|w|/w_s)^delta)")
     stribeck_speed: float = _f(40.0, "rad/s", "Stribeck speed w_s")
     input_inertia: float = _f(0.0, "kg*m^2", "unmodelled inertia at the driving shaft "
                               "(dynamic: FMU and bench only)")
@@ -197,6 +198,10 @@ class ExtraPhysics:
                            "load a diagnosis fitted to a mismatch outside the library; the "
                            "design file's [[extra.discovered]] tables")
 
+    stribeck_exponent: float = _f(2.0, "1", "shape exponent delta of the Stribeck decay "
+                                  "exp(-(|w|/w_s)^delta): 1 Tustin's exponential, 2 the Gaussian "
+                                  "(1 to 2)")
+
     #: fields the FMUs do not carry (a diagnosis's replay uses them)
     REPLAY_ONLY = ("thermal_loss_per_10K", "viscosity_ln_change", "viscosity_ln_per_10K",
                    "torque_in_offset", "torque_in_gain_error", "torque_in_zero_drift",
@@ -215,7 +220,7 @@ class ExtraPhysics:
             s, self.drag_exponent)[:, 0]
         if self.stribeck_torque:
             t = t + self.stribeck_torque * EFFECTS["low_speed_friction"].basis(
-                s, self.stribeck_speed)[:, 0]
+                s, (self.stribeck_speed, self.stribeck_exponent))[:, 0]
         return t.reshape(w.shape)
 
 
@@ -391,6 +396,9 @@ def validate_design(d: DriveDesign) -> None:
     for name in ("stribeck_speed", "thermal_tau", "viscosity_tau", "torque_in_zero_tau"):
         if not getattr(d.extra, name) > 0:
             raise CycloidInputError("extra." + name, getattr(d.extra, name), "must be positive")
+    if not 1.0 <= d.extra.stribeck_exponent <= 2.0:
+        raise CycloidInputError("extra.stribeck_exponent", d.extra.stribeck_exponent,
+                                "must lie between 1 (Tustin) and 2 (Gaussian)")
     if not 0.0 <= d.extra.drag_exponent <= 2.0:
         raise CycloidInputError("extra.drag_exponent", d.extra.drag_exponent,
                                 "must lie between 0 and 2")

@@ -34,9 +34,12 @@ from .kinematics import parse_mode, shaft_speeds
 W_REF = 300.0   # rad/s, reference input speed of the drag law (about 2860 r/min)
 #: exponent of the no-load drag on speed: (nu n)^(2/3) for churning and the viscous part of
 #: bearing drag (SKF M0, Niemann/Winter); the grid the diagnosis scans spans a seal's nearly
-#: constant friction (0) to a purely viscous drag (1)
+#: constant friction (0), a purely viscous drag (1) and the turbulent losses of splash
+#: lubrication and windage, whose torque grows up to the square of the speed (churning losses
+#: of dip-lubricated gears: T ~ n^1.5 .. n^2 at high Reynolds numbers, Changenet & Velex 2007;
+#: windage T ~ rho w^2 r^5, ISO/TR 14179-2)
 DRAG_EXPONENT = 2.0 / 3.0
-DRAG_EXPONENTS = (0.0, 1.0 / 3.0, 0.5, 2.0 / 3.0, 0.85, 1.0)
+DRAG_EXPONENTS = (0.0, 1.0 / 3.0, 0.5, 2.0 / 3.0, 0.85, 1.0, 1.5, 2.0)
 #: [K] temperature step of the temperature form of the warm-up terms (per 10 K, as catalogue
 #: viscosity and transducer drift figures are quoted)
 T_STEP = 10.0
@@ -87,6 +90,24 @@ class Effect:
             return (None,)
         return self.shape or (None,)
 
+    @property
+    def shape_names(self) -> tuple:
+        """Names of the shape's parameters (a shape of several is a tuple, e.g. (w_s, delta))."""
+        return tuple(n.strip() for n in self.shape_name.split(",")) if self.shape_name else ()
+
+    def shape_parameters(self, shape) -> dict:
+        """{name: (value, unit)} of a shape value."""
+        vals = shape if isinstance(shape, tuple) else (shape,)
+        units = [u.strip() for u in self.shape_unit.split(",")]
+        return {n: (float(v), u) for n, v, u in zip(self.shape_names, vals, units)}
+
+    def shape_from(self, values: dict):
+        """The shape value from reported parameters ({name: value}); None if absent."""
+        got = [values.get(n) for n in self.shape_names]
+        if not got or any(g is None for g in got):
+            return None
+        return tuple(got) if len(got) > 1 else got[0]
+
     def apply(self, design, values: dict, shape=None, temperature=False):
         """``design`` with the effect switched on at fitted values; returns (design, notes)."""
         return _APPLY.get(self.id, _apply_nothing)(design, values, shape, temperature)
@@ -126,8 +147,10 @@ def _ripple(s, shape):
 
 
 def _stribeck(s, shape):
+    """sgn(w) exp(-(|w|/w_s)^delta); ``shape`` (w_s, delta) or w_s alone (delta = 2)."""
+    w_s, delta = shape if isinstance(shape, tuple) else (shape, STRIBECK_EXPONENT)
     w = s["w_in"]
-    return (np.sign(w) * np.exp(-(w / shape) ** 2))[:, None]
+    return (np.sign(w) * np.exp(-(np.abs(w) / w_s) ** delta))[:, None]
 
 
 def _offset(s, shape):
@@ -157,6 +180,15 @@ _BASIS = {"load_independent_loss": _drag, "thermal_drift": _thermal,
           "friction_miscalibrated": _friction, "none": _none}
 
 TAU_GRID = (60.0, 150.0, 300.0, 600.0, 1200.0)    # s, warm-up time constants scanned
+#: shape exponent delta of the Stribeck decay exp(-(|w|/w_s)^delta): 2, the Gaussian form
+#: (Armstrong-Helouvry 1994), by default; 1 is Tustin's exponential (Tustin 1947), the other
+#: end of the range measured on lubricated contacts (delta = 0.5..2, Armstrong-Helouvry et al.,
+#: Automatica 30, 1994)
+STRIBECK_EXPONENT = 2.0
+STRIBECK_EXPONENTS = (1.0, 2.0)
+#: [rad/s] Stribeck speeds scanned: steps of about 1.4 (the exponential form is sharp: a w_s
+#: a third off leaves a remainder of a quarter of its size)
+STRIBECK_SPEEDS = (15.0, 20.0, 30.0, 40.0, 60.0, 80.0, 150.0)
 
 EFFECTS = {
     "friction_miscalibrated": Effect(
@@ -168,9 +200,9 @@ EFFECTS = {
         requires=("sens_mu",)),
     "load_independent_loss": Effect(
         "load_independent_loss",
-        "no-load drag (grease churning, seals, bearing drag): a torque that grows with speed as "
-        "n^p (p = 2/3 for churning, (nu n)^(2/3); 0 for seal friction; 1 for viscous drag) and "
-        "does not depend on load",
+        "no-load drag (grease churning, seals, bearing drag, windage): a torque that grows with "
+        "speed as n^p (p = 2/3 for churning, (nu n)^(2/3); 0 for seal friction; 1 for viscous "
+        "drag; 1.5 to 2 for turbulent churning and windage) and does not depend on load",
         (Parameter("T_drag", "N*m", 0.0, 0.5, f"drag torque at the input at {W_REF:.0f} rad/s"),),
         shape=DRAG_EXPONENTS, shape_name="p", shape_unit="1",
         separating_run="a speed sweep at light load, in both directions",
@@ -212,9 +244,10 @@ EFFECTS = {
                        None)),
     "low_speed_friction": Effect(
         "low_speed_friction", "boundary / Stribeck friction rising at low sliding speed: "
-        "T_s exp(-(w/w_s)^2)",
+        "T_s exp(-(|w|/w_s)^delta), delta from 1 (Tustin's exponential) to 2 (Gaussian)",
         (Parameter("T_stribeck", "N*m", 0.0, 0.5, "extra friction torque at standstill"),),
-        shape=(20.0, 40.0, 80.0, 150.0), shape_name="w_s", shape_unit="rad/s",
+        shape=tuple((w, d) for w in STRIBECK_SPEEDS for d in STRIBECK_EXPONENTS),
+        shape_name="w_s, delta", shape_unit="rad/s, 1",
         separating_run="a low-speed sweep at constant load",
         synth_default=({"T_stribeck": 0.025}, 40.0)),
     "torque_sensor_offset": Effect(
@@ -291,8 +324,8 @@ def extra_torque(extra, s: dict) -> np.ndarray:
         total += EFFECTS["load_independent_loss"].torque(s, [extra.drag_torque],
                                                          extra.drag_exponent)
     if extra.stribeck_torque:
-        total += EFFECTS["low_speed_friction"].torque(s, [extra.stribeck_torque],
-                                                     extra.stribeck_speed)
+        total += EFFECTS["low_speed_friction"].torque(
+            s, [extra.stribeck_torque], (extra.stribeck_speed, extra.stribeck_exponent))
     if (extra.input_inertia or extra.ripple_1x or extra.ripple_roller
             or extra.thermal_loss_change):
         total += extra.dynamic_torque(s["alpha_in"], s["theta_in"], s["order_roller"],
@@ -417,8 +450,10 @@ def _apply_gain(design, v, shape, temperature):
 _APPLY = {
     "friction_miscalibrated": _apply_friction,
     "load_independent_loss": _apply_drag,
-    "low_speed_friction": lambda d, v, sh, T: (
-        _with_extra(d, stribeck_torque=max(v["T_stribeck"], 0.0), stribeck_speed=sh), []),
+    "low_speed_friction": lambda d, v, sh, T: (_with_extra(
+        d, stribeck_torque=max(v["T_stribeck"], 0.0),
+        **dict(zip(("stribeck_speed", "stribeck_exponent"),
+                   sh if isinstance(sh, tuple) else (sh,)))), []),
     "inertia": lambda d, v, sh, T: (
         _with_extra(d, input_inertia=d.extra.input_inertia + max(v["J"], 0.0)), []),
     "mesh_ripple": _apply_ripple,

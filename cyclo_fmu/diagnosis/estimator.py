@@ -220,7 +220,8 @@ class Diagnoser:
                                   tuple(p.unit for p in eff.parameters),
                                   tuple(p.lower for p in eff.parameters),
                                   tuple(p.upper for p in eff.parameters),
-                                  1 if (eff.shape and shape is not None) else 0))
+                                  len(eff.shape_names) if (eff.shape and shape is not None)
+                                  else 0))
             options[eid] = terms
         Gb, groups = R.generic_basis(blocks)
         k0 = sum(c.shape[1] for c in cols)
@@ -578,8 +579,8 @@ class Diagnoser:
                 for v in params.values():
                     v["unit"] = f"{v['unit']} per 10 K"
             if eff.shape and t.shape is not None:
-                params[eff.shape_name] = {"value": float(t.shape), "unit": eff.shape_unit,
-                                          "ci95": None}
+                for name, (val, unit) in eff.shape_parameters(t.shape).items():
+                    params[name] = {"value": val, "unit": unit, "ci95": None}
             entry = {"id": t.effect, "description": eff.description, "parameters": params,
                      "explained_rms_Nm": expl,
                      "torque_rms_Nm": torque_rms,

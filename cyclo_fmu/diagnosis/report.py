@@ -31,7 +31,7 @@ def updated_design(design: DriveDesign, d: Diagnosis):
         change = ((d.unexplained.get("proposed") or {}).get("library_change") or {}).get(
             e["id"], {})
         values = {k: v["value"] + change.get(k, 0.0) for k, v in e["parameters"].items()}
-        shape = values.get(eff.shape_name) if eff.shape else None
+        shape = eff.shape_from(values) if eff.shape else None
         form = e.get("form", "").startswith("per 10 K")
         fixed, more = eff.apply(fixed, values, shape, temperature=form)
         notes += more

@@ -73,6 +73,8 @@ EXTRA = (
     ("thermal_tau", "s", "Time", 0.0, True, "warm-up time constant (> 0)"),
     ("drag_exponent", "1", None, 0.0, False, "exponent p of the drag's speed law "
      "(|w|/300 rad/s)^p (0 to 2)"),
+    ("stribeck_exponent", "1", None, 1.0, False, "shape exponent delta of the Stribeck decay "
+     "exp(-(|w|/w_s)^delta): 1 Tustin, 2 Gaussian (1 to 2)"),
 )
 
 #: Outputs, in the order of the C state's out[] (value references 10..29), then ``locked``.
@@ -369,7 +371,8 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
     # Outputs: dependencies on the inputs in Step Mode. InitialUnknowns: on inputs and
     # parameters in Initialization Mode (t = start, no step yet: no inertia or warm-up term).
     mode_p = ["mode", "mode_number"]
-    steady = ["drag_torque", "stribeck_torque", "stribeck_speed", "ripple_1x",
+    steady = ["drag_torque", "stribeck_torque", "stribeck_speed", "stribeck_exponent",
+              "ripple_1x",
               "ripple_1x_phase", "ripple_roller", "ripple_roller_phase"]
     # alpha_in acts through J_out (0 by default); declared, so that the dependencies hold for
     # every parameter value

@@ -151,8 +151,8 @@ double cd_steady_torque(const CDExtra *x, double w)
 {
     double t = x->drag_torque * (sign(w) * pow(fabs(w) / CD_W_REF, x->drag_exponent));
     if (x->stribeck_torque != 0) {
-        double q = w / x->stribeck_speed;
-        t = t + x->stribeck_torque * (sign(w) * exp(-(q * q)));
+        double q = fabs(w) / x->stribeck_speed;
+        t = t + x->stribeck_torque * (sign(w) * exp(-pow(q, x->stribeck_exponent)));
     }
     return t;
 }

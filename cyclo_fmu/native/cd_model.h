@@ -46,9 +46,10 @@ typedef struct {
     double drag_torque, stribeck_torque, stribeck_speed, input_inertia;
     double ripple_1x, ripple_1x_phase, ripple_roller, ripple_roller_phase;
     double thermal_loss_change, thermal_tau, drag_exponent;
+    double stribeck_exponent;  /* delta of exp(-(|w|/w_s)^delta): 1 Tustin .. 2 Gaussian */
 } CDExtra;
 
-#define CD_N_EXTRA 11
+#define CD_N_EXTRA 12
 
 /* A discovered loss term (design [[extra.discovered]], model_core.discovered): the torque
  * coefficient * sgn(w) (|w|/300 rad/s)^speed_exponent (|tau_out|/10 N*m)^load_exponent. */

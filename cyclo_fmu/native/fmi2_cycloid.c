@@ -9,7 +9,7 @@
  * cyclo_fmu/native/build.py):
  *   Real     0 w_in, 1 tau_out, 2 alpha_in (inputs)
  *            10..29 outputs, in the order of OUT_NAMES
- *            30..40 extra physics parameters, in the order of CDExtra
+ *            30..41 extra physics parameters, in the order of CDExtra
  *            50 J_out, 51 alpha_ref (parameters of the output inertia)
  *            100.. constants of the design (generated table)
  *   Integer  0 mode_number; 100.. constants
@@ -50,12 +50,12 @@ enum { O_W_OUT, O_TAU_IN, O_TAU_HOUSING, O_P_LOSS, O_PL1, O_PL2, O_PL3, O_PL5, O
 static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "drag_torque", "stribeck_torque", "stribeck_speed", "input_inertia", "ripple_1x",
     "ripple_1x_phase", "ripple_roller", "ripple_roller_phase", "thermal_loss_change",
-    "thermal_tau", "drag_exponent"};
+    "thermal_tau", "drag_exponent", "stribeck_exponent"};
 
 enum { PH_INSTANTIATED = 1, PH_INIT, PH_STEP, PH_TERMINATED };
 
 #define STATE_MAGIC 0x43444e53u   /* "CDNS" */
-#define STATE_VERSION 2u
+#define STATE_VERSION 3u   /* 3: CDExtra.stribeck_exponent */
 
 /* Everything that defines the instance's behaviour from here on: inputs, parameters,
  * outputs and the dynamic state. Plain data: copied and serialised as it is. */
@@ -157,7 +157,7 @@ static double *extra_field(CDExtra *x, int i)
     f[0] = &x->drag_torque; f[1] = &x->stribeck_torque; f[2] = &x->stribeck_speed;
     f[3] = &x->input_inertia; f[4] = &x->ripple_1x; f[5] = &x->ripple_1x_phase;
     f[6] = &x->ripple_roller; f[7] = &x->ripple_roller_phase; f[8] = &x->thermal_loss_change;
-    f[9] = &x->thermal_tau; f[10] = &x->drag_exponent;
+    f[9] = &x->thermal_tau; f[10] = &x->drag_exponent; f[11] = &x->stribeck_exponent;
     return f[i];
 }
 
@@ -172,6 +172,8 @@ static const char *extra_problem(int i, double v)
         return v > 0 ? NULL : "must be positive";
     case 10:
         return (v >= 0 && v <= 2) ? NULL : "must lie between 0 and 2";
+    case 11:
+        return (v >= 1 && v <= 2) ? NULL : "must lie between 1 (Tustin) and 2 (Gaussian)";
     default:
         return NULL;
     }

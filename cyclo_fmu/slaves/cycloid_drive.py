@@ -93,6 +93,10 @@ DESIGN_PARAMETERS = [
      "profile always uses load_dependent)", String),
     ("operating_temperature", None, "operating_temperature", "K",
      "grease temperature (physical profile; sets the viscosity by Walther's law)", Real),
+    # after the others, so that their value references stay
+    ("stribeck_exponent", "extra", "stribeck_exponent", "1",
+     "shape exponent delta of the Stribeck decay exp(-(|w|/w_s)^delta): 1 Tustin, 2 Gaussian",
+     Real),
 ]
 
 #: the design's discovered loss terms ([[extra.discovered]], model_core.discovered) as
@@ -131,6 +135,7 @@ PARAMETER_LIMITS = dict(
                                 "drag_torque", "stribeck_torque", "stribeck_speed",
                                 "input_inertia", "thermal_tau")},
     mu_boundary=(0.0, 1.0), mu_rolling=(0.0, 1.0), thermal_loss_change=(-1.0, None),
+    stribeck_exponent=(1.0, 2.0),
     mode_number=(0, 6), map_torque_max=(0.0, None), map_speed_max=(0.0, None),
     operating_temperature=(0.0, None))
 

@@ -1,0 +1,66 @@
+"""Library forms with physical scaling (issue 18, item 3): a drag whose exponent reaches 2
+(windage, turbulent churning) and a Stribeck decay whose shape runs from Tustin's exponential
+(delta = 1) to the Gaussian (delta = 2). Each is one formula (model_core.effects) that the
+synthesiser hides, the diagnosis names with its shape, the design carries and both FMUs
+evaluate (the native FMU's C is compared with it in test_native_fmu)."""
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from cyclo_fmu.diagnosis import Diagnoser, updated_design
+from cyclo_fmu.synth import synthesize
+from model_core import DriveDesign
+from model_core.design import ExtraPhysics, design_from_toml, design_to_toml
+from model_core.errors import CycloidInputError
+
+
+def as_recording(r):
+    return SimpleNamespace(time=r["time_s"], speed_in=r["speed_in_rpm"] * np.pi / 30,
+                           torque_in=r["torque_in_Nm"], speed_out=r["speed_out_rpm"] * np.pi / 30,
+                           torque_out=r["torque_out_Nm"], temperature=r.get("temperature_C"))
+
+
+def test_stribeck_shape_closed_forms():
+    """At w = w_s the decay is exp(-1) for every delta; below it the exponential (delta = 1)
+    lies under the Gaussian, above it over it; odd in w."""
+    w = np.array([-30.0, 15.0, 30.0, 60.0])
+    t = {d: ExtraPhysics(stribeck_torque=0.02, stribeck_speed=30.0,
+                         stribeck_exponent=d).steady_torque(w) for d in (1.0, 2.0)}
+    for d in (1.0, 2.0):
+        assert t[d][2] == pytest.approx(0.02 * np.exp(-1.0)) and t[d][0] == -t[d][2]
+    assert t[1.0][1] < t[2.0][1] and t[1.0][3] > t[2.0][3]
+    assert t[1.0][3] == pytest.approx(0.02 * np.exp(-2.0))
+    assert t[2.0][3] == pytest.approx(0.02 * np.exp(-4.0))
+
+
+def test_stribeck_exponent_in_the_design_file_and_its_bounds():
+    d = DriveDesign(extra=ExtraPhysics(stribeck_torque=0.01, stribeck_exponent=1.0))
+    assert design_from_toml(design_to_toml(d)) == d
+    with pytest.raises(CycloidInputError, match="extra.stribeck_exponent"):
+        DriveDesign(extra=ExtraPhysics(stribeck_exponent=0.5))
+
+
+@pytest.mark.parametrize("effect, values, shape, key, expect", [
+    ("low_speed_friction", {"T_stribeck": 0.025}, (30.0, 1.0), "delta", 1.0),
+    ("low_speed_friction", {"T_stribeck": 0.025}, (40.0, 2.0), "delta", 2.0),
+    ("load_independent_loss", {"T_drag": 0.006}, 2.0, "p", 2.0),
+    ("load_independent_loss", {"T_drag": 0.008}, 1.5, "p", 1.5)])
+def test_named_with_their_shape_and_closed(effect, values, shape, key, expect):
+    """Hidden by the synthesiser at a shape of the new range, named with that shape and
+    size, nothing left; the written design carries the shape and closes the recording."""
+    r = synthesize(effect, 81, "S1", "small", effect_values=values, shape=shape)
+    d = Diagnoser(None, "S1").fit(as_recording(r)).diagnosis_
+    assert [e["id"] for e in d.effects] == [effect] and not d.unexplained["present"]
+    p = d.effects[0]["parameters"]
+    assert p[key]["value"] == expect
+    (name, v), = values.items()
+    assert p[name]["value"] == pytest.approx(v, rel=0.1)
+    fixed, _ = updated_design(DriveDesign(), d)
+    ex = fixed.extra
+    if effect == "low_speed_friction":
+        assert (ex.stribeck_speed, ex.stribeck_exponent) == shape
+    else:
+        assert ex.drag_exponent == shape
+    again = Diagnoser(fixed, "S1").fit(as_recording(r)).diagnosis_
+    assert again.effects == [] and not again.unexplained["present"]
