@@ -198,6 +198,11 @@ class ExtraPhysics:
                            "load a diagnosis fitted to a mismatch outside the library; the "
                            "design file's [[extra.discovered]] tables")
 
+    run_in_change: float = _f(0.0, "1", "excess of the losses of a drive that runs in, relative, "
+                              "at the start; it decays with the sliding distance, "
+                              "exp(-distance/run_in_distance) (no temperature needed; dynamic)")
+    run_in_distance: float = _f(1e4, "rad", "distance (angle travelled by the driving shaft) over "
+                                "which the run-in excess decays by 1/e")
     stribeck_exponent: float = _f(2.0, "1", "shape exponent delta of the Stribeck decay "
                                   "exp(-(|w|/w_s)^delta): 1 Tustin's exponential, 2 the Gaussian "
                                   "(1 to 2)")
@@ -229,6 +234,14 @@ class ExtraPhysics:
         tau_out (N*m) (model_core.discovered, the one implementation)."""
         from .discovered import discovered_torque
         return discovered_torque(self.discovered, w, tau_out)
+
+    def run_in_torque(self, distance, loss_in):
+        """Run-in torque at the driving shaft (N*m): c exp(-distance/s0) loss_in, with the
+        distance the driving shaft has travelled since the start (rad, the integral of |w|) and
+        the model's loss torque referred to it (N*m): the losses of a new drive start c above
+        the model's and settle as its contacts run in (model_core.effects 'run_in')."""
+        import numpy as _np
+        return self.run_in_change * _np.exp(-distance / self.run_in_distance) * loss_in
 
     def dynamic_torque(self, alpha, theta, order, elapsed, loss_in):
         """Inertia, ripple and warm-up torque at the driving shaft (N*m): J*alpha +
@@ -393,7 +406,11 @@ def validate_design(d: DriveDesign) -> None:
     _check_finite(d.lubricant, "lubricant.")
     _check_finite(d.friction, "friction.")
     _check_finite(d.extra, "extra.")
-    for name in ("stribeck_speed", "thermal_tau", "viscosity_tau", "torque_in_zero_tau"):
+    if not d.extra.run_in_change >= -1.0:
+        raise CycloidInputError("extra.run_in_change", d.extra.run_in_change,
+                                "must be at least -1 (the losses cannot fall below zero)")
+    for name in ("stribeck_speed", "thermal_tau", "viscosity_tau", "torque_in_zero_tau",
+                 "run_in_distance"):
         if not getattr(d.extra, name) > 0:
             raise CycloidInputError("extra." + name, getattr(d.extra, name), "must be positive")
     if not 1.0 <= d.extra.stribeck_exponent <= 2.0:

@@ -17,7 +17,8 @@ The synthesiser hides effects with these terms, the diagnosis fits them, and a d
 steady and dynamic terms of ``design.ExtraPhysics`` from the same formulas.
 
 Signals ``s`` (numpy arrays over samples, SI), built by :func:`effect_signals`: ``t`` (s),
-``w_in`` (rad/s), ``alpha_in`` (rad/s^2), ``theta_in`` (rad, integral of w_in), ``loss_in``
+``w_in`` (rad/s), ``alpha_in`` (rad/s^2), ``theta_in`` (rad, integral of w_in),
+``distance_in`` (rad, integral of |w_in|: the distance run), ``loss_in``
 (the model's loss torque referred to the input, N*m), ``T_in_model`` (the model's input
 torque, N*m), ``order_roller`` (roller-pass order of the input speed), ``temperature`` (degC
 or None), ``sens_mu`` and ``sens_nu`` (d T_in_model / d ln mu_boundary and / d ln nu, N*m;
@@ -132,6 +133,10 @@ def _thermal(s, shape):
     return (s["loss_in"] * _warm(s, shape))[:, None]
 
 
+def _run_in(s, shape):
+    return (s["loss_in"] * np.exp(-s["distance_in"] / shape))[:, None]
+
+
 def _viscosity(s, shape):
     return (s["sens_nu"] * _warm(s, shape))[:, None]
 
@@ -177,9 +182,13 @@ _BASIS = {"load_independent_loss": _drag, "thermal_drift": _thermal,
           "viscosity_drift": _viscosity, "inertia": _inertia, "mesh_ripple": _ripple,
           "low_speed_friction": _stribeck, "torque_sensor_offset": _offset,
           "torque_sensor_gain": _gain, "torque_sensor_drift": _zero_drift,
-          "friction_miscalibrated": _friction, "none": _none}
+          "friction_miscalibrated": _friction, "run_in": _run_in, "none": _none}
 
 TAU_GRID = (60.0, 150.0, 300.0, 600.0, 1200.0)    # s, warm-up time constants scanned
+#: [rad] run-in distances scanned (angle of the driving shaft over which the excess decays by
+#: 1/e): 3000 rad are 8 minutes at 60 r/min or 10 s at 2800 r/min, 1e5 rad about ten minutes at
+#: the bench's top speed: a run-in spread over minutes to an hour of the paper's bench plan
+RUN_IN_DISTANCES = (3e3, 1e4, 3e4, 1e5)
 #: shape exponent delta of the Stribeck decay exp(-(|w|/w_s)^delta): 2, the Gaussian form
 #: (Armstrong-Helouvry 1994), by default; 1 is Tustin's exponential (Tustin 1947), the other
 #: end of the range measured on lubricated contacts (delta = 0.5..2, Armstrong-Helouvry et al.,
@@ -227,6 +236,17 @@ EFFECTS = {
                        "losses change sign with speed, a friction level does not)",
         synth_default=({"ln_viscosity_change": -0.8}, 300.0), requires=("sens_nu",),
         temperature_form=True, time_drift=True),
+    "run_in": Effect(
+        "run_in", "the drive runs in: its losses start above the model's and settle with the "
+        "distance its contacts have slid (every loss scaled by c exp(-distance/s0), the distance "
+        "the angle travelled by the driving shaft); unlike a warm-up it needs no temperature "
+        "change and follows the distance run, not the time",
+        (Parameter("loss_excess", "1", 0.0, 2.0, "excess of the losses at the start, relative"),),
+        shape=RUN_IN_DISTANCES, shape_name="s0", shape_unit="rad",
+        separating_run="a temperature channel (a warm-up follows it, a run-in does not) and a "
+                       "return to the first operating points late in the run, at another speed "
+                       "(a run-in follows the distance run, a warm-up the time)",
+        synth_default=({"loss_excess": 0.15}, 1e4), time_drift=True),
     "inertia": Effect(
         "inertia", "unmodelled rotating inertia on the input side: torque J dw/dt",
         (Parameter("J", "kg*m^2", 0.0, 1e-2, "inertia referred to the input shaft"),),
@@ -304,7 +324,10 @@ def effect_signals(t, w_in, loss_in, mode, z1, temperature=None, T_in_model=None
     w_in = np.asarray(w_in, float)
     alpha = np.gradient(w_in, t) if len(t) > 1 else np.zeros_like(w_in)
     theta = np.concatenate([[0.0], np.cumsum(0.5 * (w_in[1:] + w_in[:-1]) * np.diff(t))])
+    aw = np.abs(w_in)
+    distance = np.concatenate([[0.0], np.cumsum(0.5 * (aw[1:] + aw[:-1]) * np.diff(t))])
     return {"t": t, "w_in": w_in, "alpha_in": alpha, "theta_in": theta, "loss_in": loss_in,
+            "distance_in": distance,
             "order_roller": roller_pass_order(mode, z1), "temperature": temperature,
             "T_in_model": T_in_model, "sens_mu": sens_mu, "sens_nu": sens_nu,
             "tau_out": None if tau_out is None else np.asarray(tau_out, float)}
@@ -335,6 +358,8 @@ def extra_torque(extra, s: dict) -> np.ndarray:
             raise ValueError("the design's discovered terms need the load torque (signals "
                              "'tau_out')")
         total += extra.discovered_torque(s["w_in"], s["tau_out"])
+    if extra.run_in_change:
+        total += extra.run_in_torque(s["distance_in"], s["loss_in"])
     temp = s.get("temperature")
     if extra.thermal_loss_per_10K and temp is not None:
         total += EFFECTS["thermal_drift"].torque(s, [extra.thermal_loss_per_10K], None)
@@ -458,6 +483,8 @@ _APPLY = {
         _with_extra(d, input_inertia=d.extra.input_inertia + max(v["J"], 0.0)), []),
     "mesh_ripple": _apply_ripple,
     "thermal_drift": _apply_thermal,
+    "run_in": lambda d, v, sh, T: (_with_extra(d, run_in_change=v["loss_excess"],
+                                               run_in_distance=sh), []),
     "viscosity_drift": _apply_viscosity,
     "torque_sensor_offset": _apply_offset,
     "torque_sensor_gain": _apply_gain,

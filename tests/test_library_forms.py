@@ -64,3 +64,55 @@ def test_named_with_their_shape_and_closed(effect, values, shape, key, expect):
         assert ex.drag_exponent == shape
     again = Diagnoser(fixed, "S1").fit(as_recording(r)).diagnosis_
     assert again.effects == [] and not again.unexplained["present"]
+
+
+@pytest.mark.parametrize("seed, kw", [(91, {}), (93, {"temperature_rise": 0.0}),
+                                      (94, {"plan": "four_quadrant"})])
+def test_a_run_in_is_named_as_such_and_closes(seed, kw):
+    """Losses 15 % above the model at the start, settling over 1e4 rad of the driving shaft
+    (no temperature change; with a flat temperature column too): named ``run_in`` (not a
+    transducer drift, not a warm-up), its size and distance found, nothing left; the updated
+    design closes the recording."""
+    r = synthesize("run_in", seed, "S1", "small", **kw)
+    d = Diagnoser(None, "S1").fit(as_recording(r)).diagnosis_
+    assert [e["id"] for e in d.effects] == ["run_in"], [e["id"] for e in d.effects]
+    p = d.effects[0]["parameters"]
+    assert p["loss_excess"]["value"] == pytest.approx(0.15, rel=0.1)
+    assert p["s0"]["value"] == 1e4 and not d.unexplained["present"]
+    fixed, _ = updated_design(DriveDesign(), d)
+    assert fixed.extra.run_in_distance == 1e4
+    again = Diagnoser(fixed, "S1").fit(as_recording(r)).diagnosis_
+    assert again.effects == [] and not again.unexplained["present"]
+
+
+def test_run_in_in_the_fmu_decays_with_the_distance_run(fmu):
+    """Held at one operating point, the Python FMU's run-in excess decays as
+    c exp(-|w| t / s0) of its loss torque; standing still (w = 0) it does not decay."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+    c, s0, w, tau = 0.2, 50.0, 100.0, -8.0
+    out = {}
+    for change in (0.0, c):
+        md = read_model_description(fmu)
+        vr = {v.name: v.valueReference for v in md.modelVariables}
+        f = FMU2Slave(guid=md.guid, unzipDirectory=extract(fmu),
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="i")
+        f.instantiate()
+        f.setupExperiment(startTime=0.0)
+        f.enterInitializationMode()
+        f.setReal([vr["run_in_change"], vr["run_in_distance"], vr["w_in"], vr["tau_out"]],
+                  [change, s0, w, tau])
+        f.exitInitializationMode()
+        vals = []
+        for k in range(5):
+            f.doStep(currentCommunicationPoint=0.1 * k, communicationStepSize=0.1)
+            vals.append(f.getReal([vr["tau_in"]])[0])
+        f.terminate()
+        f.freeInstance()
+        out[change] = np.array(vals)
+    from model_core import shaft_speeds
+    gear = out[0.0]
+    loss_in = gear + tau * float(shaft_speeds("S1", 1.0, 15)["1"])   # less the lossless torque
+    dist = w * 0.1 * np.arange(1, 6)
+    assert out[c] - gear == pytest.approx(c * np.exp(-dist / s0) * loss_in, rel=1e-9)
+    assert np.all(loss_in > 0)

@@ -75,6 +75,10 @@ EXTRA = (
      "(|w|/300 rad/s)^p (0 to 2)"),
     ("stribeck_exponent", "1", None, 1.0, False, "shape exponent delta of the Stribeck decay "
      "exp(-(|w|/w_s)^delta): 1 Tustin, 2 Gaussian (1 to 2)"),
+    ("run_in_change", "1", None, -1.0, False, "excess of the losses of a drive that runs in, "
+     "relative, at the start, decaying as exp(-distance/run_in_distance)"),
+    ("run_in_distance", "rad", "Angle", 0.0, True, "distance (angle travelled by the driving "
+     "shaft) over which the run-in excess decays by 1/e (> 0)"),
 )
 
 #: Outputs, in the order of the C state's out[] (value references 10..29), then ``locked``.
@@ -372,6 +376,7 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
     # parameters in Initialization Mode (t = start, no step yet: no inertia or warm-up term).
     mode_p = ["mode", "mode_number"]
     steady = ["drag_torque", "stribeck_torque", "stribeck_speed", "stribeck_exponent",
+              "run_in_change", "run_in_distance",
               "ripple_1x",
               "ripple_1x_phase", "ripple_roller", "ripple_roller_phase"]
     # alpha_in acts through J_out (0 by default); declared, so that the dependencies hold for

@@ -157,6 +157,11 @@ double cd_steady_torque(const CDExtra *x, double w)
     return t;
 }
 
+double cd_run_in_torque(const CDExtra *x, double distance, double loss_in)
+{
+    return x->run_in_change * exp(-distance / x->run_in_distance) * loss_in;
+}
+
 /* model_core.discovered: reference load of the terms (T_REF), N*m */
 #define CD_T_REF 10.0
 

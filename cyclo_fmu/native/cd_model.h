@@ -47,9 +47,10 @@ typedef struct {
     double ripple_1x, ripple_1x_phase, ripple_roller, ripple_roller_phase;
     double thermal_loss_change, thermal_tau, drag_exponent;
     double stribeck_exponent;  /* delta of exp(-(|w|/w_s)^delta): 1 Tustin .. 2 Gaussian */
+    double run_in_change, run_in_distance;   /* run-in: c exp(-distance/s0) loss_in */
 } CDExtra;
 
-#define CD_N_EXTRA 12
+#define CD_N_EXTRA 14
 
 /* A discovered loss term (design [[extra.discovered]], model_core.discovered): the torque
  * coefficient * sgn(w) (|w|/300 rad/s)^speed_exponent (|tau_out|/10 N*m)^load_exponent. */
@@ -72,6 +73,10 @@ double cd_steady_torque(const CDExtra *x, double w);
 /* ExtraPhysics.dynamic_torque: inertia, ripple and warm-up torque (N*m). */
 double cd_dynamic_torque(const CDExtra *x, double alpha, double theta, double order,
                          double elapsed, double loss_in);
+
+/* ExtraPhysics.run_in_torque: run-in torque after the driving shaft travelled distance (rad)
+ * at the loss torque loss_in (N*m). */
+double cd_run_in_torque(const CDExtra *x, double distance, double loss_in);
 
 /* model_core.discovered.discovered_torque: the sum of n terms at driving speed w (rad/s) and
  * load torque tau_out (N*m), N*m. */

@@ -97,6 +97,10 @@ DESIGN_PARAMETERS = [
     ("stribeck_exponent", "extra", "stribeck_exponent", "1",
      "shape exponent delta of the Stribeck decay exp(-(|w|/w_s)^delta): 1 Tustin, 2 Gaussian",
      Real),
+    ("run_in_change", "extra", "run_in_change", "1", "excess of the losses of a drive that runs "
+     "in, relative, at the start, decaying as exp(-distance/run_in_distance)", Real),
+    ("run_in_distance", "extra", "run_in_distance", "rad", "distance (angle travelled by the "
+     "driving shaft) over which the run-in excess decays by 1/e", Real),
 ]
 
 #: the design's discovered loss terms ([[extra.discovered]], model_core.discovered) as
@@ -135,7 +139,7 @@ PARAMETER_LIMITS = dict(
                                 "drag_torque", "stribeck_torque", "stribeck_speed",
                                 "input_inertia", "thermal_tau")},
     mu_boundary=(0.0, 1.0), mu_rolling=(0.0, 1.0), thermal_loss_change=(-1.0, None),
-    stribeck_exponent=(1.0, 2.0),
+    stribeck_exponent=(1.0, 2.0), run_in_change=(-1.0, None), run_in_distance=(0.0, None),
     mode_number=(0, 6), map_torque_max=(0.0, None), map_speed_max=(0.0, None),
     operating_temperature=(0.0, None))
 
@@ -268,6 +272,7 @@ class CycloidDrive(UnitSlave):
         for name, _k, _field, unit, desc, lo, hi in DISCOVERED_PARAMETERS:
             self.parameter(name, 0.0, unit, desc, Real, min=lo, max=hi)
         self._theta = 0.0
+        self._distance = 0.0
         self._slope_key = None
         self._w_last = None
         self._map = None
@@ -344,6 +349,7 @@ class CycloidDrive(UnitSlave):
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
             self._discovered = bool(ex.discovered)
             self._dynamic_extra = bool(ex.input_inertia or ex.ripple_1x or ex.ripple_roller
+                                       or ex.run_in_change
                                        or ex.thermal_loss_change)
             unit = core.shaft_speeds(self._mode, 1.0, self._design.z1)
             self._ratio_out = float(unit[b])
@@ -352,15 +358,16 @@ class CycloidDrive(UnitSlave):
         except (core.CycloidInputError, TypeError, ValueError) as exc:
             self.fail(f"invalid parameter: {exc}")
         self._theta, self._w_last, self._slope_key = 0.0, None, None
+        self._distance = 0.0
         self._last_inputs = None
 
     def _evaluate_init(self):
         if self._in_init:   # a read in Initialization Mode: commit no dynamic state
-            saved = self._theta, self._w_last
+            saved = self._theta, self._w_last, self._distance
             try:
                 self._update()
             finally:
-                self._theta, self._w_last = saved
+                self._theta, self._w_last, self._distance = saved
         else:               # fmi2ExitInitializationMode: the state starts here
             self._update()
 
@@ -455,6 +462,8 @@ class CycloidDrive(UnitSlave):
         self.P_stored = 0.0
         if self._dynamic_extra:
             self.tau_in += self._dynamic_torque(t, dt, w_in, tau_out)
+            if self._design.extra.run_in_change:     # after it, as the native FMU adds it
+                self.tau_in += self._run_in
         self.P_extra = (self.tau_in - self._tau_in_gear) * w_in
         self.P_loss = self.tau_in * w_in + tau_out * self.w_out - self.P_stored
         if self._steady_extra or self._dynamic_extra or self._discovered:
@@ -468,12 +477,14 @@ class CycloidDrive(UnitSlave):
         alpha = 0.0 if (self._w_last is None or dt <= 0) else (w_in - self._w_last) / dt
         if dt > 0:
             self._theta += w_in * dt
+            self._distance += abs(w_in) * dt
             self._w_last = w_in
         elif self._w_last is None:
             self._w_last = w_in
         loss_in = self._tau_in_gear + tau_out * self._ratio_out   # minus the lossless torque
         ex = self._design.extra
         torque = float(ex.dynamic_torque(alpha, self._theta, self._order, t, loss_in))
+        self._run_in = float(ex.run_in_torque(self._distance, loss_in))
         # the conservative part: d/dt of J w^2/2 and of the ripples' potentials
         # -A cos(theta + phi) - A_z/z cos(z theta + phi_z), each times w = dtheta/dt
         stored = float(ex.dynamic_torque(alpha, self._theta, self._order, 0.0, 0.0))
