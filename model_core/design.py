@@ -203,6 +203,15 @@ class ExtraPhysics:
                               "exp(-distance/run_in_distance) (no temperature needed; dynamic)")
     run_in_distance: float = _f(1e4, "rad", "distance (angle travelled by the driving shaft) over "
                                 "which the run-in excess decays by 1/e")
+    ripple_1x_load: float = _f(0.0, "N*m", "part of the 1x ripple's amplitude that grows with "
+                               "the load: amplitude at 10 N*m of |tau_out|, in proportion "
+                               "(transmission error times mesh stiffness; dynamic)")
+    ripple_1x_load_phase: float = _f(0.0, "rad", "phase of the load-scaled 1x ripple")
+    ripple_roller_load: float = _f(0.0, "N*m", "part of the roller-pass ripple's amplitude that "
+                                   "grows with the load: amplitude at 10 N*m of |tau_out| "
+                                   "(dynamic)")
+    ripple_roller_load_phase: float = _f(0.0, "rad", "phase of the load-scaled roller-pass "
+                                         "ripple")
     stribeck_exponent: float = _f(2.0, "1", "shape exponent delta of the Stribeck decay "
                                   "exp(-(|w|/w_s)^delta): 1 Tustin's exponential, 2 the Gaussian "
                                   "(1 to 2)")
@@ -234,6 +243,18 @@ class ExtraPhysics:
         tau_out (N*m) (model_core.discovered, the one implementation)."""
         from .discovered import discovered_torque
         return discovered_torque(self.discovered, w, tau_out)
+
+    def load_ripple_torque(self, theta, order, tau_out):
+        """Ripple whose amplitude grows with the load (N*m): |tau_out|/T_ref (A1L sin(theta +
+        phi1L) + AzL sin(order theta + phizL)), T_ref = 10 N*m (model_core.discovered.T_REF):
+        a transmission error times the mesh stiffness gives a torque ripple in proportion to
+        the load (model_core.effects 'load_ripple'). Next to ``ripple_1x``/``ripple_roller``
+        (the load-independent part) the amplitude is a + b |tau_out|."""
+        import numpy as _np
+        from .discovered import T_REF
+        return (_np.abs(tau_out) / T_REF) * (
+            self.ripple_1x_load * _np.sin(theta + self.ripple_1x_load_phase)
+            + self.ripple_roller_load * _np.sin(order * theta + self.ripple_roller_load_phase))
 
     def run_in_torque(self, distance, loss_in):
         """Run-in torque at the driving shaft (N*m): c exp(-distance/s0) loss_in, with the

@@ -151,6 +151,12 @@ def _ripple(s, shape):
     return np.stack([np.sin(th), np.cos(th), np.sin(k * th), np.cos(k * th)], -1)
 
 
+def _load_ripple(s, shape):
+    from .discovered import T_REF
+    v = np.abs(s["tau_out"]) / T_REF
+    return _ripple(s, shape) * v[:, None]
+
+
 def _stribeck(s, shape):
     """sgn(w) exp(-(|w|/w_s)^delta); ``shape`` (w_s, delta) or w_s alone (delta = 2)."""
     w_s, delta = shape if isinstance(shape, tuple) else (shape, STRIBECK_EXPONENT)
@@ -182,7 +188,8 @@ _BASIS = {"load_independent_loss": _drag, "thermal_drift": _thermal,
           "viscosity_drift": _viscosity, "inertia": _inertia, "mesh_ripple": _ripple,
           "low_speed_friction": _stribeck, "torque_sensor_offset": _offset,
           "torque_sensor_gain": _gain, "torque_sensor_drift": _zero_drift,
-          "friction_miscalibrated": _friction, "run_in": _run_in, "none": _none}
+          "friction_miscalibrated": _friction, "run_in": _run_in,
+          "load_ripple": _load_ripple, "none": _none}
 
 TAU_GRID = (60.0, 150.0, 300.0, 600.0, 1200.0)    # s, warm-up time constants scanned
 #: [rad] run-in distances scanned (angle of the driving shaft over which the excess decays by
@@ -262,6 +269,17 @@ EFFECTS = {
         separating_run="an order analysis at several constant speeds",
         synth_default=({"A1_sin": 0.006, "A1_cos": 0.003, "Az_sin": 0.004, "Az_cos": 0.0},
                        None)),
+    "load_ripple": Effect(
+        "load_ripple", "torque ripple at orders of the shaft speed whose amplitude grows with "
+        "the load (a transmission error times the mesh stiffness): |tau_out|/10 N*m times "
+        "sinusoids at 1x and the roller pass; next to mesh_ripple the amplitude is a + b |T|",
+        (Parameter("B1_sin", "N*m", -0.5, 0.5, "1x ripple at 10 N*m load, sine"),
+         Parameter("B1_cos", "N*m", -0.5, 0.5, "1x ripple at 10 N*m load, cosine"),
+         Parameter("Bz_sin", "N*m", -0.5, 0.5, "roller-pass ripple at 10 N*m load, sine"),
+         Parameter("Bz_cos", "N*m", -0.5, 0.5, "roller-pass ripple at 10 N*m load, cosine")),
+        separating_run="an order analysis at several loads at one speed",
+        synth_default=({"B1_sin": 0.004, "B1_cos": 0.002, "Bz_sin": 0.006, "Bz_cos": 0.0},
+                       None), requires=("tau_out",)),
     "low_speed_friction": Effect(
         "low_speed_friction", "boundary / Stribeck friction rising at low sliding speed: "
         "T_s exp(-(|w|/w_s)^delta), delta from 1 (Tustin's exponential) to 2 (Gaussian)",
@@ -353,6 +371,8 @@ def extra_torque(extra, s: dict) -> np.ndarray:
             or extra.thermal_loss_change):
         total += extra.dynamic_torque(s["alpha_in"], s["theta_in"], s["order_roller"],
                                       s["t"] - s["t"][0], s["loss_in"])
+    if extra.ripple_1x_load or extra.ripple_roller_load:
+        total += extra.load_ripple_torque(s["theta_in"], s["order_roller"], s["tau_out"])
     if extra.discovered:
         if s.get("tau_out") is None:
             raise ValueError("the design's discovered terms need the load torque (signals "
@@ -440,6 +460,13 @@ def _apply_ripple(design, v, shape, temperature):
                        ripple_roller_phase=float(np.arctan2(v["Az_cos"], v["Az_sin"]))), []
 
 
+def _apply_load_ripple(design, v, shape, temperature):
+    return _with_extra(design, ripple_1x_load=float(np.hypot(v["B1_sin"], v["B1_cos"])),
+                       ripple_1x_load_phase=float(np.arctan2(v["B1_cos"], v["B1_sin"])),
+                       ripple_roller_load=float(np.hypot(v["Bz_sin"], v["Bz_cos"])),
+                       ripple_roller_load_phase=float(np.arctan2(v["Bz_cos"], v["Bz_sin"]))), []
+
+
 def _apply_offset(design, v, shape, temperature):
     return _with_extra(design, torque_in_offset=design.extra.torque_in_offset + v["offset"]), [
         f"diagnosed: input torque transducer zero offset {v['offset']:.6g} N*m (a sensor fault, "
@@ -482,6 +509,7 @@ _APPLY = {
     "inertia": lambda d, v, sh, T: (
         _with_extra(d, input_inertia=d.extra.input_inertia + max(v["J"], 0.0)), []),
     "mesh_ripple": _apply_ripple,
+    "load_ripple": _apply_load_ripple,
     "thermal_drift": _apply_thermal,
     "run_in": lambda d, v, sh, T: (_with_extra(d, run_in_change=v["loss_excess"],
                                                run_in_distance=sh), []),

@@ -116,3 +116,29 @@ def test_run_in_in_the_fmu_decays_with_the_distance_run(fmu):
     dist = w * 0.1 * np.arange(1, 6)
     assert out[c] - gear == pytest.approx(c * np.exp(-dist / s0) * loss_in, rel=1e-9)
     assert np.all(loss_in > 0)
+
+
+@pytest.mark.parametrize("seed, plan", [(61, "full"), (65, "one_speed")])
+def test_a_ripple_growing_with_the_load_is_named_as_such(seed, plan):
+    """Ripple at 1x and the roller pass whose amplitude is in proportion to the load
+    (4.5 and 6 mN*m at 10 N*m): named ``load_ripple`` with its amplitudes (not "shaft orders
+    remain"), and the updated design closes the recording."""
+    r = synthesize("load_ripple", seed, "S1", "small", plan=plan)
+    d = Diagnoser(None, "S1").fit(as_recording(r)).diagnosis_
+    assert [e["id"] for e in d.effects] == ["load_ripple"] and not d.unexplained["present"]
+    p = {k: v["value"] for k, v in d.effects[0]["parameters"].items()}
+    assert np.hypot(p["B1_sin"], p["B1_cos"]) == pytest.approx(np.hypot(0.004, 0.002), rel=0.15)
+    assert np.hypot(p["Bz_sin"], p["Bz_cos"]) == pytest.approx(0.006, rel=0.15)
+    fixed, _ = updated_design(DriveDesign(), d)
+    assert fixed.extra.ripple_roller_load == pytest.approx(0.006, rel=0.15)
+    again = Diagnoser(fixed, "S1").fit(as_recording(r)).diagnosis_
+    assert again.effects == [] and not again.unexplained["present"]
+
+
+def test_load_ripple_closed_form():
+    """At a held load the ripple's amplitude is in proportion to |tau_out|, zero at no load."""
+    ex = ExtraPhysics(ripple_roller_load=0.006, ripple_roller_load_phase=0.3)
+    th = np.linspace(0, 2 * np.pi, 721)
+    for T in (0.0, 5.0, -10.0):
+        amp = np.max(np.abs(ex.load_ripple_torque(th, 14.0, T)))
+        assert amp == pytest.approx(0.006 * abs(T) / 10.0, abs=1e-6)

@@ -748,7 +748,8 @@ class Diagnoser:
         peaks = R.spectral_peaks(r_raw, dt, min_amplitude=PEAK_MIN_AMPLITUDE_NM,
                                  speed=sig["w_in"], orders=list(orders.values()))
         ex = self.design.extra
-        if "mesh_ripple" in S.ids or ex.ripple_1x or ex.ripple_roller:
+        if ({"mesh_ripple", "load_ripple"} & set(S.ids) or ex.ripple_1x or ex.ripple_roller
+                or ex.ripple_1x_load or ex.ripple_roller_load):
             inside = {}       # the library's orders, fitted: what is left is phase tracking
         if outside or inside:
             present = True

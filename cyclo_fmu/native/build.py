@@ -79,6 +79,13 @@ EXTRA = (
      "relative, at the start, decaying as exp(-distance/run_in_distance)"),
     ("run_in_distance", "rad", "Angle", 0.0, True, "distance (angle travelled by the driving "
      "shaft) over which the run-in excess decays by 1/e (> 0)"),
+    ("ripple_1x_load", "N.m", "Torque", None, False, "load-scaled 1x ripple: amplitude at 10 N.m "
+     "of |tau_out|, in proportion"),
+    ("ripple_1x_load_phase", "rad", "Angle", None, False, "phase of the load-scaled 1x ripple"),
+    ("ripple_roller_load", "N.m", "Torque", None, False, "load-scaled roller-pass ripple: "
+     "amplitude at 10 N.m of |tau_out|, in proportion"),
+    ("ripple_roller_load_phase", "rad", "Angle", None, False,
+     "phase of the load-scaled roller-pass ripple"),
 )
 
 #: Outputs, in the order of the C state's out[] (value references 10..29), then ``locked``.
@@ -376,7 +383,8 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
     # parameters in Initialization Mode (t = start, no step yet: no inertia or warm-up term).
     mode_p = ["mode", "mode_number"]
     steady = ["drag_torque", "stribeck_torque", "stribeck_speed", "stribeck_exponent",
-              "run_in_change", "run_in_distance",
+              "run_in_change", "run_in_distance", "ripple_1x_load", "ripple_1x_load_phase",
+              "ripple_roller_load", "ripple_roller_load_phase",
               "ripple_1x",
               "ripple_1x_phase", "ripple_roller", "ripple_roller_phase"]
     # alpha_in acts through J_out (0 by default); declared, so that the dependencies hold for

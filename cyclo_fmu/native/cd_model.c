@@ -165,6 +165,13 @@ double cd_run_in_torque(const CDExtra *x, double distance, double loss_in)
 /* model_core.discovered: reference load of the terms (T_REF), N*m */
 #define CD_T_REF 10.0
 
+double cd_load_ripple_torque(const CDExtra *x, double theta, double order, double tau_out)
+{
+    return (fabs(tau_out) / CD_T_REF)
+           * (x->ripple_1x_load * sin(theta + x->ripple_1x_load_phase)
+              + x->ripple_roller_load * sin(order * theta + x->ripple_roller_load_phase));
+}
+
 double cd_discovered_torque(const CDTerm *terms, int n, double w, double tau_out)
 {
     double total = 0.0;

@@ -48,9 +48,10 @@ typedef struct {
     double thermal_loss_change, thermal_tau, drag_exponent;
     double stribeck_exponent;  /* delta of exp(-(|w|/w_s)^delta): 1 Tustin .. 2 Gaussian */
     double run_in_change, run_in_distance;   /* run-in: c exp(-distance/s0) loss_in */
+    double ripple_1x_load, ripple_1x_load_phase, ripple_roller_load, ripple_roller_load_phase;
 } CDExtra;
 
-#define CD_N_EXTRA 14
+#define CD_N_EXTRA 18
 
 /* A discovered loss term (design [[extra.discovered]], model_core.discovered): the torque
  * coefficient * sgn(w) (|w|/300 rad/s)^speed_exponent (|tau_out|/10 N*m)^load_exponent. */
@@ -77,6 +78,9 @@ double cd_dynamic_torque(const CDExtra *x, double alpha, double theta, double or
 /* ExtraPhysics.run_in_torque: run-in torque after the driving shaft travelled distance (rad)
  * at the loss torque loss_in (N*m). */
 double cd_run_in_torque(const CDExtra *x, double distance, double loss_in);
+
+/* ExtraPhysics.load_ripple_torque: the ripple whose amplitude grows with |tau_out| (N*m). */
+double cd_load_ripple_torque(const CDExtra *x, double theta, double order, double tau_out);
 
 /* model_core.discovered.discovered_torque: the sum of n terms at driving speed w (rad/s) and
  * load torque tau_out (N*m), N*m. */

@@ -9,7 +9,7 @@
  * cyclo_fmu/native/build.py):
  *   Real     0 w_in, 1 tau_out, 2 alpha_in (inputs)
  *            10..29 outputs, in the order of OUT_NAMES
- *            30..43 extra physics parameters, in the order of CDExtra
+ *            30..47 extra physics parameters, in the order of CDExtra
  *            50 J_out, 51 alpha_ref (parameters of the output inertia)
  *            100.. constants of the design (generated table)
  *   Integer  0 mode_number; 100.. constants
@@ -50,7 +50,8 @@ enum { O_W_OUT, O_TAU_IN, O_TAU_HOUSING, O_P_LOSS, O_PL1, O_PL2, O_PL3, O_PL5, O
 static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "drag_torque", "stribeck_torque", "stribeck_speed", "input_inertia", "ripple_1x",
     "ripple_1x_phase", "ripple_roller", "ripple_roller_phase", "thermal_loss_change",
-    "thermal_tau", "drag_exponent", "stribeck_exponent", "run_in_change", "run_in_distance"};
+    "thermal_tau", "drag_exponent", "stribeck_exponent", "run_in_change", "run_in_distance",
+    "ripple_1x_load", "ripple_1x_load_phase", "ripple_roller_load", "ripple_roller_load_phase"};
 
 enum { PH_INSTANTIATED = 1, PH_INIT, PH_STEP, PH_TERMINATED };
 
@@ -159,7 +160,9 @@ static double *extra_field(CDExtra *x, int i)
     f[3] = &x->input_inertia; f[4] = &x->ripple_1x; f[5] = &x->ripple_1x_phase;
     f[6] = &x->ripple_roller; f[7] = &x->ripple_roller_phase; f[8] = &x->thermal_loss_change;
     f[9] = &x->thermal_tau; f[10] = &x->drag_exponent; f[11] = &x->stribeck_exponent;
-    f[12] = &x->run_in_change; f[13] = &x->run_in_distance;
+    f[12] = &x->run_in_change; f[13] = &x->run_in_distance; f[14] = &x->ripple_1x_load;
+    f[15] = &x->ripple_1x_load_phase; f[16] = &x->ripple_roller_load;
+    f[17] = &x->ripple_roller_load_phase;
     return f[i];
 }
 
@@ -247,7 +250,8 @@ static void evaluate(Instance *c, double t, double dt, int commit)
                  || CD_N_DISCOVERED > 0;
     int dynamic = s->extra.input_inertia != 0 || s->extra.ripple_1x != 0
                   || s->extra.ripple_roller != 0 || s->extra.thermal_loss_change != 0
-                  || s->extra.run_in_change != 0;
+                  || s->extra.run_in_change != 0 || s->extra.ripple_1x_load != 0
+                  || s->extra.ripple_roller_load != 0;
     m = &CD_MAP.modes[mode];
     cd_solve(&CD_MAP, mode, w_in, tau_out, &r);
     if (r.out_of_range && !s->warned_range
@@ -276,7 +280,7 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     if (dynamic) {
         /* CycloidDrive._dynamic_torque */
         double alpha = (!s->has_w_last || dt <= 0) ? 0.0 : (w_in - s->w_last) / dt;
-        double theta = s->theta, distance = s->distance, loss_in;
+        double theta = s->theta, distance = s->distance, loss_in, dyn;
         if (dt > 0) theta += w_in * dt;
         if (dt > 0) distance += fabs(w_in) * dt;
         if (commit && (dt > 0 || !s->has_w_last)) {
@@ -286,11 +290,18 @@ static void evaluate(Instance *c, double t, double dt, int commit)
             s->has_w_last = 1;
         }
         loss_in = tau_in_gear + tau_out * m->ratio_out;   /* minus the lossless torque */
-        tau_in += cd_dynamic_torque(&s->extra, alpha, theta, m->order, t - s->t_start, loss_in);
+        dyn = cd_dynamic_torque(&s->extra, alpha, theta, m->order, t - s->t_start, loss_in);
+        /* the conservative part (inertia, ripples: d/dt of an energy), not a loss */
+        p_stored = cd_dynamic_torque(&s->extra, alpha, theta, m->order, 0.0, 0.0);
+        if (s->extra.ripple_1x_load != 0 || s->extra.ripple_roller_load != 0) {
+            double ripple = cd_load_ripple_torque(&s->extra, theta, m->order, tau_out);
+            dyn = dyn + ripple;
+            p_stored = p_stored + ripple;
+        }
+        tau_in += dyn;
         if (s->extra.run_in_change != 0)
             tau_in += cd_run_in_torque(&s->extra, distance, loss_in);
-        /* the conservative part (inertia, ripples: d/dt of an energy), not a loss */
-        p_stored = cd_dynamic_torque(&s->extra, alpha, theta, m->order, 0.0, 0.0) * w_in;
+        p_stored = p_stored * w_in;
     }
     s->out[O_TAU_IN] = tau_in;
     s->out[O_P_EXTRA] = (tau_in - tau_in_gear) * w_in;

@@ -101,6 +101,14 @@ DESIGN_PARAMETERS = [
      "in, relative, at the start, decaying as exp(-distance/run_in_distance)", Real),
     ("run_in_distance", "extra", "run_in_distance", "rad", "distance (angle travelled by the "
      "driving shaft) over which the run-in excess decays by 1/e", Real),
+    ("ripple_1x_load", "extra", "ripple_1x_load", "N.m", "load-scaled 1x ripple: amplitude at "
+     "10 N.m of |tau_out|, in proportion", Real),
+    ("ripple_1x_load_phase", "extra", "ripple_1x_load_phase", "rad",
+     "phase of the load-scaled 1x ripple", Real),
+    ("ripple_roller_load", "extra", "ripple_roller_load", "N.m", "load-scaled roller-pass "
+     "ripple: amplitude at 10 N.m of |tau_out|, in proportion", Real),
+    ("ripple_roller_load_phase", "extra", "ripple_roller_load_phase", "rad",
+     "phase of the load-scaled roller-pass ripple", Real),
 ]
 
 #: the design's discovered loss terms ([[extra.discovered]], model_core.discovered) as
@@ -349,7 +357,8 @@ class CycloidDrive(UnitSlave):
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
             self._discovered = bool(ex.discovered)
             self._dynamic_extra = bool(ex.input_inertia or ex.ripple_1x or ex.ripple_roller
-                                       or ex.run_in_change
+                                       or ex.run_in_change or ex.ripple_1x_load
+                                       or ex.ripple_roller_load
                                        or ex.thermal_loss_change)
             unit = core.shaft_speeds(self._mode, 1.0, self._design.z1)
             self._ratio_out = float(unit[b])
@@ -488,6 +497,10 @@ class CycloidDrive(UnitSlave):
         # the conservative part: d/dt of J w^2/2 and of the ripples' potentials
         # -A cos(theta + phi) - A_z/z cos(z theta + phi_z), each times w = dtheta/dt
         stored = float(ex.dynamic_torque(alpha, self._theta, self._order, 0.0, 0.0))
+        if ex.ripple_1x_load or ex.ripple_roller_load:   # zero-mean at a held load: stored
+            ripple = float(ex.load_ripple_torque(self._theta, self._order, tau_out))
+            torque = torque + ripple
+            stored = stored + ripple
         self.P_stored = stored * w_in
         return torque
 
