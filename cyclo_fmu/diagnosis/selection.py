@@ -158,27 +158,19 @@ def stepwise(problem: GramProblem, options: dict, min_explained: float, folds=No
     cur = problem.fit(forced + tuple(start), folds, cv)
     path = [("start", "none", None, cur.bic, cur.cv_rmse)]
     while True:
-        # each effect at its best shape, in the order of their BIC; the first that passes
-        # both tests enters (a candidate that wins the BIC in sample but fails the held-out
-        # test, e.g. a decay fitted to the first seconds, does not stop the selection)
-        per = {}
+        best = None
         for eid, terms in options.items():
             if eid in cur.ids:
                 continue
             for term in terms:
                 f = problem.fit(cur.terms + (term,), folds, cv=False)
-                if f.admissible and (eid not in per or f.bic < per[eid].bic):
-                    per[eid] = f
-        best = None
-        for f in sorted(per.values(), key=lambda f: f.bic):
-            if cur.bic - f.bic < delta_bic:
-                break
-            if cv:
-                f = problem.fit(f.terms, folds, cv=True)
-            if ok(cur, f):
-                best = f
-                break
+                if f.admissible and (best is None or f.bic < best.bic):
+                    best = f
         if best is None:
+            break
+        if cv:
+            best = problem.fit(best.terms, folds, cv=True)
+        if not ok(cur, best):
             break
         cur = best
         # re-choose the shapes of the terms already in, given the new one
