@@ -17,7 +17,7 @@ a shape (an exponent, a time constant), and a form holds each family at most onc
 - ``speed*load`` sgn(w) (|w|/300 rad/s)^p (|tau_out|/10 N*m)^q over both grids;
 - ``temperature`` sgn(w) (T - T0) and ``temperature (reading)`` (T - T0), with a column;
 - ``time``     sgn(w) (t - t0), ``time (reading)`` (t - t0), ``run-in`` sgn(w) exp(-(t-t0)/tau);
-- ``acceleration`` dw/dt;
+- ``acceleration`` dw/dt; ``input torque (reading)`` the model's input torque (with ``model_T_in``);
 - ``order 1x`` and ``order roller pass``: (a + b |tau_out|/10 N*m) sin/cos of the order angle.
 
 The sign convention of the loss features is the one of every loss referred to the driving
@@ -128,6 +128,7 @@ _EVAL = {
     "time (reading)": lambda s, sh: (s["t"] - s["t"][0])[:, None],
     "run-in": lambda s, tau: (_sgn(s) * np.exp(-(s["t"] - s["t"][0]) / tau))[:, None],
     "acceleration": lambda s, sh: s["alpha_in"][:, None],
+    "input torque (reading)": lambda s, sh: s["T_in_model"][:, None],
     "order 1x": lambda s, q: _order(s, 1.0, q),
     "order roller pass": lambda s, q: _order(s, s["order_roller"], q),
 }
@@ -184,6 +185,11 @@ def _reading(family, shape) -> str:
         "run-in": "a loss that decays in time with no temperature change: run-in of the "
                   "contacts",
         "acceleration": "proportional to acceleration: an unmodelled inertia",
+        "input torque (reading)": "in proportion to the input torque, with its sign: a gain "
+                                  "error of the torque transducer, or a loss in proportion to "
+                                  "the transmitted torque (alike in forward driving; "
+                                  "back-driven runs separate them: a loss changes side, a gain "
+                                  "error does not)",
         "order 1x": "once per turn of the driving shaft, its amplitude scaled by the load: "
                     "eccentricity or runout times mesh stiffness",
         "order roller pass": "at the roller-pass order, its amplitude scaled by the load: "
@@ -198,9 +204,10 @@ class Library:
         self.features = list(features)
 
     @classmethod
-    def default(cls, temperature=False) -> "Library":
+    def default(cls, temperature=False, input_torque=False) -> "Library":
         """The physically named dictionary (module docstring); temperature features only when
-        the recording has a temperature column."""
+        the recording has a temperature column, the input torque's reading feature only when
+        the model's input torque is given."""
         f = [Feature("coulomb", "sgn(w_in)", "N*m", _reading("coulomb", None))]
         f += [Feature("speed", f"sgn(w_in)*(|w_in|/{W_REF:g} rad/s)^{p:g}", "N*m",
                       _reading("speed", p), p, 1) for p in SPEED_EXPONENTS]
@@ -220,6 +227,9 @@ class Library:
         f += [Feature("run-in", f"sgn(w_in)*exp(-(t - t0)/{tau:g} s)", "N*m",
                       _reading("run-in", tau), tau, 1) for tau in RUN_IN_TAUS]
         f += [Feature("acceleration", "dw_in/dt", "kg*m^2", _reading("acceleration", None))]
+        if input_torque:
+            f += [Feature("input torque (reading)", "T_in (model)", "1",
+                          _reading("input torque (reading)", None))]
         for fam, arg in (("order 1x", "theta_in"), ("order roller pass", "k*theta_in")):
             f += [Feature(fam, (f"(|tau_out|/{T_REF:g} N*m)*" if q else "")
                           + f"[sin, cos]({arg})", "N*m", _reading(fam, q), q, 1,
@@ -421,6 +431,8 @@ def _design_term(feature, coef):
 
 
 def _term_text(feature, coef) -> str:
+    if len(coef) == 1 and feature.unit == "1":
+        return f"{100 * coef[0]:+.4g} % * {feature.name}"
     if len(coef) == 1:
         unit = feature.unit
         scale, shown = (1e3, "mN*m" + unit[3:]) if unit.startswith("N*m") else (1.0, unit)
@@ -459,10 +471,12 @@ def discover(residual, t, w_in, T_out, *, samples_per_block=None, block=0.01,
         averaging); default: block means of ``residual``.
     weights : array (n_blocks,), optional
         The blocks' weights from the estimator (0: a spike block); default Huber weights.
-    w_out, T_in, model_T_in : arrays, optional
-        The other columns and the fitted model's input torque [N*m]; carried for the report
-        (the dictionary's features read driving speed, load, time, temperature, acceleration
-        and shaft angle).
+    w_out, T_in : arrays, optional
+        The other columns (accepted for the stage's contract; the dictionary's features read
+        driving speed, load, time, temperature, acceleration and shaft angle).
+    model_T_in : array, optional
+        The fitted model's input torque [N*m]: with it the dictionary holds a feature in
+        proportion to it (a transducer gain error's look-alike of a load-proportional loss).
     temperature : array, optional
         Temperature column [degC or K] (temperature features only with it).
     mode, z1 : the operating mode and ring-roller count (the roller-pass order).
@@ -490,8 +504,9 @@ def discover(residual, t, w_in, T_out, *, samples_per_block=None, block=0.01,
     s = {"t": t, "w_in": w_in, "tau_out": -np.asarray(T_out, float),
          "alpha_in": np.gradient(w_s, t), "theta_in": theta,
          "order_roller": roller_pass_order(mode, z1),
-         "temperature": None if temperature is None else np.asarray(temperature, float)}
-    lib = library or Library.default(temperature is not None)
+         "temperature": None if temperature is None else np.asarray(temperature, float),
+         "T_in_model": None if model_T_in is None else np.asarray(model_T_in, float)}
+    lib = library or Library.default(temperature is not None, model_T_in is not None)
     cols = lib.block_columns(s, m, bandwidth)
     y = (np.asarray(residual_blocks, float) if residual_blocks is not None
          else block_means(np.asarray(residual, float), m))

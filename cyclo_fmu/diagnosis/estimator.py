@@ -838,13 +838,13 @@ class Diagnoser:
             weights=st["weights"], temperature=getattr(rec, "temperature", None),
             mode=self.mode, z1=self.design.z1, bandwidth=self.bandwidth,
             n_folds=self.n_folds, min_explained=st["min_expl"], noise=st["noise"],
-            nuisance=P["X"][:, cols] if cols else None)
+            nuisance=P["X"][:, cols] if cols else None, model_T_in=P["T_model_f"])
         out = d.to_json()
         change, i = {}, 0
         for t in S.terms:      # the selected effects' parameter changes next to the form
             k = len(t.cols)
             scale = (1 + rel1) if (t.effect == "friction_miscalibrated" and rel1) else 1.0
-            if d.proposed:
+            if d.proposed and not d.not_in_design:   # applied with a form the design carries
                 change[t.effect] = {n: scale * v for n, v in
                                     zip(t.names, d.nuisance_change[i:i + k])}
             i += k
