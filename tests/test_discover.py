@@ -224,13 +224,15 @@ def _run_fmu(path, params, w, tau_out, dt):
     return out
 
 
-def test_closure_through_the_fmu(py_fmu):
+@pytest.mark.parametrize("case", [CASES[0], CASES[1], CASES[2],
+                                  pytest.param(CASES[3], marks=pytest.mark.slow)])
+def test_closure_through_the_fmu(py_fmu, case):
     """Co-simulation closes the recording: the reducer FMU with the updated design (its
-    discovered load-squared term and the friction level it gave back), stepped along the
-    recording's own speed and load, reproduces the recorded input torque to the noise floor;
-    with the design as given the load-squared loss stays (RMS several times the floor)."""
+    discovered term and the library values it gave back), stepped along the recording's own
+    speed and load, reproduces the recorded input torque to the noise floor; with the design
+    as given the hidden loss stays (RMS several times the floor)."""
     from cyclo_fmu.bench import drive_parameters
-    form, seed, mode, plan = CASES[1]
+    form, seed, mode, plan = case
     r, D = _diagnose(form, seed, mode, plan)
     fixed, _ = D.updated_design()
     assert fixed.extra.discovered
