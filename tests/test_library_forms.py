@@ -142,3 +142,16 @@ def test_load_ripple_closed_form():
     for T in (0.0, 5.0, -10.0):
         amp = np.max(np.abs(ex.load_ripple_torque(th, 14.0, T)))
         assert amp == pytest.approx(0.006 * abs(T) / 10.0, abs=1e-6)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("effect, shape, key, expect", [
+    ("run_in", 1e4, "s0", 1e4), ("low_speed_friction", (30.0, 1.0), "delta", 1.0)])
+def test_hidden_through_the_bench_fmus(effect, shape, key, expect):
+    """The synthesiser's bench engine hides the effect in the reducer FMU's parameters (an SSP
+    co-simulation of motor, reducer, brake and transducers); the diagnosis names it with its
+    shape and size."""
+    r = synthesize(effect, 5, "S1", "small", engine="bench", shape=shape, friction_error=0.0)
+    d = Diagnoser(None, "S1").fit(as_recording(r)).diagnosis_
+    assert [e["id"] for e in d.effects] == [effect] and not d.unexplained["present"]
+    assert d.effects[0]["parameters"][key]["value"] == expect
