@@ -69,8 +69,8 @@ def run(effect, seed, mode="S1", size="medium"):
     cols = []
     for e in chosen:
         eff = EFFECTS[e["id"]]
-        shape = e["parameters"][eff.shape_name]["value"] if eff.shape and eff.shape_name in \
-            e["parameters"] else None
+        shape = eff.shape_from({k: v["value"] for k, v in e["parameters"].items()}) \
+            if eff.shape else None
         cols += list(next(t for t in P["options"][e["id"]] if t.shape == shape).cols)
     X = P["X"][:, cols]
     rmse = lambda e: float(np.sqrt(np.mean(e ** 2)))

@@ -183,6 +183,8 @@ def drive_parameters(design: DriveDesign) -> dict:
                                 int(v) if kind.__name__ == "Integer" else float(v))
     if design.friction.rolling_disc != design.friction.rolling_ring:
         raise ValueError("friction.rolling_disc: the FMU has one rolling coefficient (mu_rolling)")
+    from .slaves.cycloid_drive import discovered_values
+    out.update({f"drive.{k}": v for k, v in discovered_values(design).items() if v != 0.0})
     return out
 
 

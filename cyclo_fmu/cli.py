@@ -511,11 +511,23 @@ def cmd_diagnose(args) -> int:
         print(f"  cannot be told apart from: {', '.join(d.indistinguishable_from)}; "
               f"a run that would: {d.suggested_test}")
     print(f"unexplained: {d.unexplained['statement']}")
+    proposed = d.unexplained.get("proposed")
+    if proposed:
+        print(_proposed_line(proposed))
     print(f"held-out RMSE of input torque: {1e3 * d.rmse_before_Nm:.2f} -> "
           f"{1e3 * d.rmse_after_Nm:.2f} mN*m; zeta_d (Eq. 31): {100 * d.zeta_d_before:.2f} -> "
           f"{100 * d.zeta_d_after:.2f} %; residual whiteness p: {d.whiteness_before:.2g} -> "
           f"{d.whiteness_after:.2g}")
     return 0
+
+
+def _proposed_line(p) -> str:
+    """One line for ``unexplained.proposed`` (diagnosis.discover)."""
+    if not p.get("formula"):
+        return f"  proposed form: none ({p.get('refused')})"
+    return (f"  proposed form: {p['formula']}; held-out RMS {1e3 * p['heldout_rms_before_Nm']:.2f}"
+            f" -> {1e3 * p['heldout_rms_after_Nm']:.2f} mN*m (noise "
+            f"{1e3 * p['noise_Nm']:.2f}); reading: {p['reading']}")
 
 
 EFFECTS_NONE = "the model explains the data within its noise"

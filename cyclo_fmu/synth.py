@@ -188,7 +188,9 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
         sens_nu = (rp(hi, mode, w_in, tau_out)[0] - rp(lo, mode, w_in, tau_out)[0]) / (
             math.log(1.05) - math.log(0.95))
     sig = effect_signals(t, w_in, loss_in, mode, design.z1, temperature, T_in_model=tau_in,
-                         sens_nu=sens_nu)
+                         sens_nu=sens_nu, tau_out=tau_out)
+    if design.extra.discovered:      # a design's discovered loss, as the core evaluates it
+        tau_in = tau_in + design.extra.discovered_torque(w_in, tau_out)
     extra = np.zeros_like(t)
     offset = gain = 0.0
     for eid, (values, eff_shape) in hidden.items():

@@ -16,12 +16,12 @@ from .errors import CycloidInputError
 from .kinematics import MODES, rad_s_to_rpm, rpm_to_rad_s, shaft_speeds, speed_ratio
 from .losses import LOSS_NAMES, PartialLosses, partial_losses, partial_losses_by_position
 from .maps import efficiency_map
-from . import effects, lossmap, rig
+from . import discovered, effects, lossmap, rig
 
 __all__ = [
     "DriveDesign", "Friction", "Lubricant", "design_from_toml", "design_to_toml",
     "OperatingPoint", "kreines_efficiency", "operating_point", "CycloidInputError",
     "MODES", "rad_s_to_rpm", "rpm_to_rad_s", "shaft_speeds", "speed_ratio",
     "LOSS_NAMES", "PartialLosses", "partial_losses", "partial_losses_by_position",
-    "efficiency_map", "effects", "lossmap", "rig",
+    "efficiency_map", "discovered", "effects", "lossmap", "rig",
 ]

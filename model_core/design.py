@@ -161,9 +161,10 @@ class ExtraPhysics:
     drag_torque: float = _f(0.0, "N*m", "load-independent drag at 300 rad/s of the driving "
                             "shaft, growing as (speed)^(2/3) (churning, seals, bearing drag)")
     drag_exponent: float = _f(2.0 / 3.0, "1", "exponent p of the drag's speed law "
-                              "T_drag (|w|/300 rad/s)^p: 2/3 churning, 0 seals, 1 viscous")
+                              "T_drag (|w|/300 rad/s)^p: 2/3 churning, 0 seals, 1 viscous, "
+                              "2 windage (0 to 2)")
     stribeck_torque: float = _f(0.0, "N*m", "extra friction at standstill of the driving shaft, "
-                                "decaying as exp(-(w/w_s)^2)")
+                                "decaying as exp(-(|w|/w_s)^delta)")
     stribeck_speed: float = _f(40.0, "rad/s", "Stribeck speed w_s")
     input_inertia: float = _f(0.0, "kg*m^2", "unmodelled inertia at the driving shaft "
                               "(dynamic: FMU and bench only)")
@@ -194,6 +195,29 @@ class ExtraPhysics:
                                        "per 10 K of the recording's temperature column (replay "
                                        "only)")
 
+    discovered: tuple = _f((), "-", "discovered loss terms (model_core.discovered."
+                           "DiscoveredTerm): a sparse sum of power laws in driving speed and "
+                           "load a diagnosis fitted to a mismatch outside the library; the "
+                           "design file's [[extra.discovered]] tables")
+
+    run_in_change: float = _f(0.0, "1", "excess of the losses of a drive that runs in, relative, "
+                              "at the start; it decays with the sliding distance, "
+                              "exp(-distance/run_in_distance) (no temperature needed; dynamic)")
+    run_in_distance: float = _f(1e4, "rad", "distance (angle travelled by the driving shaft) over "
+                                "which the run-in excess decays by 1/e")
+    ripple_1x_load: float = _f(0.0, "N*m", "part of the 1x ripple's amplitude that grows with "
+                               "the load: amplitude at 10 N*m of |tau_out|, in proportion "
+                               "(transmission error times mesh stiffness; dynamic)")
+    ripple_1x_load_phase: float = _f(0.0, "rad", "phase of the load-scaled 1x ripple")
+    ripple_roller_load: float = _f(0.0, "N*m", "part of the roller-pass ripple's amplitude that "
+                                   "grows with the load: amplitude at 10 N*m of |tau_out| "
+                                   "(dynamic)")
+    ripple_roller_load_phase: float = _f(0.0, "rad", "phase of the load-scaled roller-pass "
+                                         "ripple")
+    stribeck_exponent: float = _f(2.0, "1", "shape exponent delta of the Stribeck decay "
+                                  "exp(-(|w|/w_s)^delta): 1 Tustin's exponential, 2 the Gaussian "
+                                  "(1 to 2)")
+
     #: fields the FMUs do not carry (a diagnosis's replay uses them)
     REPLAY_ONLY = ("thermal_loss_per_10K", "viscosity_ln_change", "viscosity_ln_per_10K",
                    "torque_in_offset", "torque_in_gain_error", "torque_in_zero_drift",
@@ -212,9 +236,35 @@ class ExtraPhysics:
             s, self.drag_exponent)[:, 0]
         if self.stribeck_torque:
             t = t + self.stribeck_torque * EFFECTS["low_speed_friction"].basis(
-                s, self.stribeck_speed)[:, 0]
+                s, (self.stribeck_speed, self.stribeck_exponent))[:, 0]
         return t.reshape(w.shape)
 
+
+    def discovered_torque(self, w, tau_out):
+        """Torque (N*m) of the discovered terms at driving speed w (rad/s) and load torque
+        tau_out (N*m) (model_core.discovered, the one implementation)."""
+        from .discovered import discovered_torque
+        return discovered_torque(self.discovered, w, tau_out)
+
+    def load_ripple_torque(self, theta, order, tau_out):
+        """Ripple whose amplitude grows with the load (N*m): |tau_out|/T_ref (A1L sin(theta +
+        phi1L) + AzL sin(order theta + phizL)), T_ref = 10 N*m (model_core.discovered.T_REF):
+        a transmission error times the mesh stiffness gives a torque ripple in proportion to
+        the load (model_core.effects 'load_ripple'). Next to ``ripple_1x``/``ripple_roller``
+        (the load-independent part) the amplitude is a + b |tau_out|."""
+        import numpy as _np
+        from .discovered import T_REF
+        return (_np.abs(tau_out) / T_REF) * (
+            self.ripple_1x_load * _np.sin(theta + self.ripple_1x_load_phase)
+            + self.ripple_roller_load * _np.sin(order * theta + self.ripple_roller_load_phase))
+
+    def run_in_torque(self, distance, loss_in):
+        """Run-in torque at the driving shaft (N*m): c exp(-distance/s0) loss_in, with the
+        distance the driving shaft has travelled since the start (rad, the integral of |w|) and
+        the model's loss torque referred to it (N*m): the losses of a new drive start c above
+        the model's and settle as its contacts run in (model_core.effects 'run_in')."""
+        import numpy as _np
+        return self.run_in_change * _np.exp(-distance / self.run_in_distance) * loss_in
 
     def dynamic_torque(self, alpha, theta, order, elapsed, loss_in):
         """Inertia, ripple and warm-up torque at the driving shaft (N*m): J*alpha +
@@ -481,9 +531,16 @@ def validate_design(d: DriveDesign) -> None:
         if not lo <= v <= hi:
             raise CycloidInputError("calibration." + name, v, f"must lie between {lo:g} and "
                                     f"{hi:g} (model_core.design.{name.upper()}_BOUNDS)")
-    for name in ("stribeck_speed", "thermal_tau", "viscosity_tau", "torque_in_zero_tau"):
+    if not d.extra.run_in_change >= -1.0:
+        raise CycloidInputError("extra.run_in_change", d.extra.run_in_change,
+                                "must be at least -1 (the losses cannot fall below zero)")
+    for name in ("stribeck_speed", "thermal_tau", "viscosity_tau", "torque_in_zero_tau",
+                 "run_in_distance"):
         if not getattr(d.extra, name) > 0:
             raise CycloidInputError("extra." + name, getattr(d.extra, name), "must be positive")
+    if not 1.0 <= d.extra.stribeck_exponent <= 2.0:
+        raise CycloidInputError("extra.stribeck_exponent", d.extra.stribeck_exponent,
+                                "must lie between 1 (Tustin) and 2 (Gaussian)")
     if not 0.0 <= d.extra.drag_exponent <= 2.0:
         raise CycloidInputError("extra.drag_exponent", d.extra.drag_exponent,
                                 "must lie between 0 and 2")
@@ -496,6 +553,14 @@ def validate_design(d: DriveDesign) -> None:
         if int(v) != v:
             raise CycloidInputError(name, v, "must be a whole number")
         object.__setattr__(d, name, int(v))   # 15.0 -> 15: counts are used as integers
+    from .discovered import DiscoveredTerm, MAX_TERMS
+    disc = d.extra.discovered
+    if not isinstance(disc, tuple) or not all(isinstance(k, DiscoveredTerm) for k in disc):
+        raise CycloidInputError("extra.discovered", disc, "must be a tuple of DiscoveredTerm")
+    if len(disc) > MAX_TERMS:
+        raise CycloidInputError("extra.discovered", len(disc), f"at most {MAX_TERMS} terms")
+    for i, k in enumerate(disc):
+        k.validate(f"extra.discovered[{i}]")
     if not -0.5 < d.extra.torque_in_gain_error < 0.5:
         raise CycloidInputError("extra.torque_in_gain_error", d.extra.torque_in_gain_error,
                                 "must lie between -0.5 and 0.5")
@@ -603,7 +668,7 @@ def validate_design(d: DriveDesign) -> None:
 # -- design files -----------------------------------------------------------------------------
 _SECTIONS = (("geometry", None), ("lubricant", "lubricant"), ("friction", "friction"))
 #: the nested sections of DriveDesign
-_NESTED = ("lubricant", "friction", "extra", "calibration")
+_NESTED = ("lubricant", "friction", "extra", "calibration", "discovered")
 #: the sections of a design file
 SECTIONS = ("model", "geometry", "lubricant", "friction", "extra", "calibration")
 
@@ -676,8 +741,17 @@ def design_to_dict(design: DriveDesign) -> dict:
             "geometry": _section_to_dict(design, skip=MODEL_FIELDS),
             "lubricant": _section_to_dict(design.lubricant),
             "friction": _section_to_dict(design.friction),
-            "extra": _section_to_dict(design.extra),
+            "extra": _extra_to_dict(design.extra),
             "calibration": _section_to_dict(design.calibration)}
+
+
+def _extra_to_dict(extra) -> dict:
+    out = _section_to_dict(extra)
+    if extra.discovered:
+        out["discovered"] = [{"coefficient_Nm": k.coefficient, "speed_exponent":
+                              k.speed_exponent, "load_exponent": k.load_exponent}
+                             for k in extra.discovered]
+    return out
 
 
 def design_from_dict(data: dict) -> DriveDesign:
@@ -695,7 +769,10 @@ def design_from_dict(data: dict) -> DriveDesign:
     fr = Friction(**_section_from_dict(Friction, data.get("friction", {}), "friction"))
     geo = _section_from_dict(DriveDesign, data.get("geometry", {}), "geometry", skip=MODEL_FIELDS)
     geo.update(_section_from_dict(DriveDesign, data.get("model", {}), "model", only=MODEL_FIELDS))
-    ex = ExtraPhysics(**_section_from_dict(ExtraPhysics, data.get("extra", {}), "extra"))
+    extra = dict(data.get("extra", {}))
+    from .discovered import terms_from_toml
+    discovered = terms_from_toml(extra.pop("discovered", []))
+    ex = ExtraPhysics(**_section_from_dict(ExtraPhysics, extra, "extra"), discovered=discovered)
     cal = Calibration(**_section_from_dict(Calibration, data.get("calibration", {}),
                                            "calibration"))
     return DriveDesign(lubricant=lub, friction=fr, extra=ex, calibration=cal, **geo)
@@ -729,9 +806,11 @@ def design_to_toml(design: DriveDesign) -> str:
     """The design as TOML text (lengths in mm, viscosity in mm^2/s, roughness in um)."""
     lines = ["# cyclo-fmu design file: lengths in mm, viscosity in mm^2/s, roughness in um"]
     for section, values in design_to_dict(design).items():
+        values.pop("discovered", None)     # [[extra.discovered]] tables, at the end
         lines.append(f"\n[{section}]")
         lines += [f"{k} = {_toml_value(v)}" for k, v in values.items()]
-    return "\n".join(lines) + "\n"
+    from .discovered import terms_to_toml
+    return "\n".join(lines) + "\n" + terms_to_toml(design.extra.discovered)
 
 
 def design_from_toml(source) -> DriveDesign:

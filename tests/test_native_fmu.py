@@ -352,7 +352,10 @@ def test_agrees_with_python_fmu_every_mode(native, fmu, mode):
 
 EXTRA = dict(drag_torque=0.12, stribeck_torque=0.3, stribeck_speed=25.0, input_inertia=2e-4,
              ripple_1x=0.05, ripple_1x_phase=0.4, ripple_roller=0.03, ripple_roller_phase=-1.1,
-             thermal_loss_change=-0.15, thermal_tau=0.05, drag_exponent=0.5)
+             thermal_loss_change=-0.15, thermal_tau=0.05, drag_exponent=0.5,
+             stribeck_exponent=1.5, run_in_change=0.2, run_in_distance=40.0,
+             ripple_1x_load=0.02, ripple_1x_load_phase=0.7, ripple_roller_load=0.01,
+             ripple_roller_load_phase=-0.3)
 
 
 def test_agrees_with_python_fmu_with_extra_physics(native, fmu):

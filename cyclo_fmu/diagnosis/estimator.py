@@ -225,7 +225,8 @@ class Diagnoser:
                                   tuple(p.unit for p in eff.parameters),
                                   tuple(p.lower for p in eff.parameters),
                                   tuple(p.upper for p in eff.parameters),
-                                  1 if (eff.shape and shape is not None) else 0))
+                                  len(eff.shape_names) if (eff.shape and shape is not None)
+                                  else 0))
             options[eid] = terms
         Gb, groups = R.generic_basis(blocks)
         k0 = sum(c.shape[1] for c in cols)
@@ -326,6 +327,16 @@ class Diagnoser:
         fixed, notes = updated_design(self.design, self.diagnosis_)
         if fixed == self.design:
             return fixed, notes
+        if fixed.extra.discovered != self.design.extra.discovered:
+            # a discovered form (diagnosis.discover): friction level and its coefficients
+            # refitted together on the recording (closure)
+            from .discover import refine_closure
+            fixed = refine_closure(fixed, self._rec, self.mode, self.bandwidth,
+                                   self._first["P"]["m"], self._first["weights"])
+            notes = notes + [
+                "refitted with the discovered form on the recording: friction.mu_boundary "
+                f"{fixed.friction.mu_boundary:.6g}, discovered coefficients "
+                + ", ".join(f"{1e3 * k.coefficient:.4g} mN*m" for k in fixed.extra.discovered)]
         before, after = self.residual_rms(self.design), self.residual_rms(fixed)
         self.diagnosis_.design_check = {"rms_given_Nm": before, "rms_updated_Nm": after}
         if after > before:
@@ -573,8 +584,8 @@ class Diagnoser:
                 for v in params.values():
                     v["unit"] = f"{v['unit']} per 10 K"
             if eff.shape and t.shape is not None:
-                params[eff.shape_name] = {"value": float(t.shape), "unit": eff.shape_unit,
-                                          "ci95": None}
+                for name, (val, unit) in eff.shape_parameters(t.shape).items():
+                    params[name] = {"value": val, "unit": unit, "ci95": None}
             entry = {"id": t.effect, "description": eff.description, "parameters": params,
                      "explained_rms_Nm": expl,
                      "torque_rms_Nm": torque_rms,
@@ -591,6 +602,7 @@ class Diagnoser:
         effects.sort(key=lambda e: -e["explained_rms_Nm"])
         # the unknown: generic basis next to the selection, orders and peaks
         unexplained = self._unexplained(st, r_raw, sig, dt)
+        unexplained["proposed"] = self._discover(rec, st, r_raw, unexplained, rel1)
         # the friction level alone is named unless it may hold part of an unknown
         if not effects and calibration and not (st["friction_doubted"]
                                                 and unexplained["present"]):
@@ -741,7 +753,8 @@ class Diagnoser:
         peaks = R.spectral_peaks(r_raw, dt, min_amplitude=PEAK_MIN_AMPLITUDE_NM,
                                  speed=sig["w_in"], orders=list(orders.values()))
         ex = self.design.extra
-        if "mesh_ripple" in S.ids or ex.ripple_1x or ex.ripple_roller:
+        if ({"mesh_ripple", "load_ripple"} & set(S.ids) or ex.ripple_1x or ex.ripple_roller
+                or ex.ripple_1x_load or ex.ripple_roller_load):
             inside = {}       # the library's orders, fitted: what is left is phase tracking
         if outside or inside:
             present = True
@@ -814,6 +827,34 @@ class Diagnoser:
                     ["friction_miscalibrated"] if doubted else []),
                 "bursts": b, "_orders_all": amps, "step_transient": step_transient,
                 "_smooth": smooth}
+
+    # -- the discovery stage hook (issue 18 item 4; the stage is diagnosis.discover) -------------
+    def _discover(self, rec, st, r_raw, unexplained, rel1=0.0):
+        """``unexplained.proposed``: a sparse closed form fitted to a confirmed smooth remainder
+        (``discover.discover``), its JSON with ``library_change`` (what the selected effects'
+        values become next to it); None when no smooth remainder is confirmed."""
+        if not (unexplained["present"] and unexplained["_smooth"]):
+            return None
+        from .discover import discover
+        P, S = st["P"], st["S"]
+        cols = [c for t in S.terms for c in t.cols]
+        self.discovery_ = d = discover(
+            r_raw, rec.time, rec.speed_in, rec.torque_out, samples_per_block=P["m"],
+            weights=st["weights"], temperature=getattr(rec, "temperature", None),
+            mode=self.mode, z1=self.design.z1, bandwidth=self.bandwidth,
+            n_folds=self.n_folds, min_explained=st["min_expl"], noise=st["noise"],
+            nuisance=P["X"][:, cols] if cols else None, model_T_in=P["T_model_f"])
+        out = d.to_json()
+        change, i = {}, 0
+        for t in S.terms:      # the selected effects' parameter changes next to the form
+            k = len(t.cols)
+            scale = (1 + rel1) if (t.effect == "friction_miscalibrated" and rel1) else 1.0
+            if d.proposed and not d.not_in_design:   # applied with a form the design carries
+                change[t.effect] = {n: scale * v for n, v in
+                                    zip(t.names, d.nuisance_change[i:i + k])}
+            i += k
+        out["library_change"] = change
+        return out
 
     def _lookalikes(self, st) -> dict:
         prob, S, opts = st["prob"], st["S"], st["opts"]

@@ -143,7 +143,7 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
     w_s = uniform_filter1d(w_in, max(1, int(round(SPEED_SMOOTHING / dt))), mode="nearest")
     sig = effect_signals(t, w_s, loss, mode, design.z1, getattr(rec, "temperature", None),
                          T_in_model=T_in, sens_mu=sens_mu, sens_nu=sens_nu, sens_k=sens_k,
-                         sens_idle=sens_idle)
+                         sens_idle=sens_idle, tau_out=tau_out)
     if bandwidth > 0:
         sig["theta_in"] = sig["theta_in"] + w_s / (2 * math.pi * bandwidth)
     T_true = T_in + extra_torque(design.extra, sig)

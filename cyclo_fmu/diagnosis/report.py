@@ -29,15 +29,53 @@ def updated_design(design: DriveDesign, d: Diagnosis):
             continue
         done.add(e["id"])
         eff = EFFECTS[e["id"]]
-        values = {k: v["value"] for k, v in e["parameters"].items()}
-        shape = values.get(eff.shape_name) if eff.shape else None
+        # next to a discovered form the selected effects' values change (``library_change``)
+        change = ((d.unexplained.get("proposed") or {}).get("library_change") or {}).get(
+            e["id"], {})
+        values = {k: v["value"] + change.get(k, 0.0) for k, v in e["parameters"].items()}
+        shape = eff.shape_from(values) if eff.shape else None
         form = e.get("form", "").startswith("per 10 K")
         fixed, more = eff.apply(fixed, values, shape, temperature=form)
         notes += more
     if d.unexplained.get("present"):
         notes.append("a mismatch remains that no library effect explains: "
                      + d.unexplained["statement"])
+    fixed, more = _discovered(fixed, d.unexplained.get("proposed"))
+    notes += more
     return fixed, notes
+
+
+def _discovered(design, proposed):
+    """The discovery stage's steady terms (``unexplained.proposed.design_terms``) added to the
+    design's ``[[extra.discovered]]``; terms the design cannot carry are said in a note."""
+    if not proposed or not proposed.get("formula"):
+        return design, []
+    from model_core.discovered import DiscoveredTerm
+    from .discover import apply_terms
+    terms = [DiscoveredTerm(t["coefficient_Nm"], t["speed_exponent"], t["load_exponent"])
+             for t in proposed.get("design_terms", [])]
+    fixed, notes = apply_terms(design, terms, proposed["formula"])
+    if proposed.get("not_in_design"):
+        notes.append("discovered terms the design does not carry (the FMUs evaluate steady "
+                     "power laws in speed and load only): " + ", ".join(proposed["not_in_design"]))
+    return fixed, notes
+
+
+def _proposed_html(p) -> str:
+    """The discovery stage's proposal (``unexplained.proposed``) for the report."""
+    e = html.escape
+    if not p:
+        return ""
+    if not p.get("formula"):
+        return f"<p>No closed form proposed: {e(str(p.get('refused')))}.</p>"
+    rows = "".join(f"<tr><td>{e(t['feature'])}</td><td>{_fmt(t['coefficient'])} {e(t['unit'])}"
+                   f"</td><td>[{_fmt(t['ci95'][0])}, {_fmt(t['ci95'][1])}]</td>"
+                   f"<td>{100 * t['stability']:.0f} %</td></tr>" for t in p["terms"])
+    return (f"<p>Proposed closed form (written to the updated design): <b>{e(p['formula'])}"
+            f"</b>. Held-out RMS {1e3 * p['heldout_rms_before_Nm']:.3g} &rarr; "
+            f"{1e3 * p['heldout_rms_after_Nm']:.3g} mN*m (noise {1e3 * p['noise_Nm']:.3g}). "
+            f"Reading: {e(p['reading'])}.</p><table><tr><th>feature</th><th>coefficient</th>"
+            f"<th>95 % interval</th><th>stable across folds</th></tr>{rows}</table>")
 
 
 def _figure(d: Diagnosis):
@@ -174,6 +212,7 @@ zeta_d (paper Eq. 31) {100 * d.zeta_d_before:.2f} &rarr; {100 * d.zeta_d_after:.
 {f'<p>Friction level (model calibration; scales {e(friction_level_fields(profile))} together):</p><ul>{cal}</ul>' if cal else ''}
 <h2>What remains</h2>
 <p class="{'warn' if u.get('present') else ''}">{e(u.get('statement', ''))}</p>
+{_proposed_html(u.get('proposed'))}
 {f"<p>A run that would separate look-alikes: {e(d.suggested_test)}</p>" if d.suggested_test else ''}
 <h2>Checks before fitting</h2><ul>{checks or '<li>none</li>'}</ul>
 <h2>Left out</h2><ul>{excl or '<li>nothing</li>'}

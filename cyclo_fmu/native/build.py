@@ -10,7 +10,8 @@ can compile them (FMI 2.0 ``SourceFiles`` and ``sources/buildDescription.xml``).
 
 What is fixed at build time: the design (its geometry, lubricant and friction: the map depends
 on them) and the map's range. What stays a run-time parameter: the mode and the extra physics
-(design ``[extra]``: drag, Stribeck, inertia, ripple, warm-up).
+(design ``[extra]``: drag, Stribeck, inertia, ripple, warm-up); the discovered loss terms
+(``[[extra.discovered]]``) are built in, as the map is.
 """
 from __future__ import annotations
 
@@ -87,6 +88,19 @@ EXTRA = (
     ("thermal_tau", "s", "Time", POSITIVE_MIN, True, "warm-up time constant (> 0)"),
     ("drag_exponent", "1", None, 0.0, False, "exponent p of the drag's speed law "
      "(|w|/300 rad/s)^p (0 to 2)"),
+    ("stribeck_exponent", "1", None, 1.0, False, "shape exponent delta of the Stribeck decay "
+     "exp(-(|w|/w_s)^delta): 1 Tustin, 2 Gaussian (1 to 2)"),
+    ("run_in_change", "1", None, -1.0, False, "excess of the losses of a drive that runs in, "
+     "relative, at the start, decaying as exp(-distance/run_in_distance)"),
+    ("run_in_distance", "rad", "Angle", POSITIVE_MIN, True, "distance (angle travelled by the driving "
+     "shaft) over which the run-in excess decays by 1/e (> 0)"),
+    ("ripple_1x_load", "N.m", "Torque", None, False, "load-scaled 1x ripple: amplitude at 10 N.m "
+     "of |tau_out|, in proportion"),
+    ("ripple_1x_load_phase", "rad", "Angle", None, False, "phase of the load-scaled 1x ripple"),
+    ("ripple_roller_load", "N.m", "Torque", None, False, "load-scaled roller-pass ripple: "
+     "amplitude at 10 N.m of |tau_out|, in proportion"),
+    ("ripple_roller_load_phase", "rad", "Angle", None, False,
+     "phase of the load-scaled roller-pass ripple"),
 )
 
 #: Outputs, in the order of the C state's out[] (value references 10..29), then ``locked``.
@@ -175,6 +189,11 @@ def design_constants(design: DriveDesign):
              "calibrated"))
     names = {o[0] for o in out}
     out += [m for m in more if m[0] not in names]
+    # the discovered loss terms (design [[extra.discovered]]): built in, shown as constants
+    from ..slaves.cycloid_drive import DISCOVERED_PARAMETERS, discovered_values
+    values = discovered_values(design)
+    out += [(name, "Real", values[name], unit, desc) for name, _k, _f, unit, desc, *_ in
+            DISCOVERED_PARAMETERS]
     return out
 
 
@@ -269,6 +288,13 @@ def generate_data_c(design, lt, lw, modes, constants, guid, torque_max, speed_ma
     ex = design.extra
     lines.append("const CDExtra CD_DEFAULT_EXTRA = {"
                  + ", ".join(_hex(getattr(ex, e[0])) for e in EXTRA) + "};")
+    # design [[extra.discovered]] (model_core.discovered), padded to CD_MAX_DISCOVERED
+    from model_core.discovered import MAX_TERMS
+    terms = [(t.coefficient, t.speed_exponent, t.load_exponent) for t in ex.discovered]
+    rows = terms + [(0.0, 0.0, 0.0)] * (MAX_TERMS - len(terms))
+    lines.append(f"const CDTerm CD_DISCOVERED[CD_MAX_DISCOVERED] = {{"
+                 + ", ".join("{" + ", ".join(_hex(v) for v in r) + "}" for r in rows) + "};")
+    lines.append(f"const int CD_N_DISCOVERED = {len(terms)};")
     lines.append(f"const char CD_GUID[] = {_c_string(guid)};")
     lines.append(f"const double CD_MAP_TORQUE_MAX = {_hex(torque_max)};")
     lines.append(f"const double CD_MAP_SPEED_MAX = {_hex(speed_max)};")
@@ -380,7 +406,9 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
     # Outputs: dependencies on the inputs in Step Mode. InitialUnknowns: on inputs and
     # parameters in Initialization Mode (t = start, no step yet: no inertia or warm-up term).
     mode_p = ["mode", "mode_number"]
-    steady = ["drag_torque", "stribeck_torque", "stribeck_speed", "drag_exponent",
+    steady = ["drag_torque", "stribeck_torque", "stribeck_speed", "stribeck_exponent",
+              "drag_exponent", "run_in_change", "run_in_distance", "ripple_1x_load",
+              "ripple_1x_load_phase", "ripple_roller_load", "ripple_roller_load_phase",
               "ripple_1x", "ripple_1x_phase", "ripple_roller", "ripple_roller_phase"]
     # alpha_in acts through J_out (0 by default); declared, so that the dependencies hold for
     # every parameter value

@@ -157,10 +157,36 @@ double cd_steady_torque(const CDExtra *x, double w)
 {
     double t = x->drag_torque * (sign(w) * pow(fabs(w) / CD_W_REF, x->drag_exponent));
     if (x->stribeck_torque != 0) {
-        double q = w / x->stribeck_speed;
-        t = t + x->stribeck_torque * (sign(w) * exp(-(q * q)));
+        double q = fabs(w) / x->stribeck_speed;
+        t = t + x->stribeck_torque * (sign(w) * exp(-pow(q, x->stribeck_exponent)));
     }
     return t;
+}
+
+double cd_run_in_torque(const CDExtra *x, double distance, double loss_in)
+{
+    return x->run_in_change * exp(-distance / x->run_in_distance) * loss_in;
+}
+
+/* model_core.discovered: reference load of the terms (T_REF), N*m */
+#define CD_T_REF 10.0
+
+double cd_load_ripple_torque(const CDExtra *x, double theta, double order, double tau_out)
+{
+    return (fabs(tau_out) / CD_T_REF)
+           * (x->ripple_1x_load * sin(theta + x->ripple_1x_load_phase)
+              + x->ripple_roller_load * sin(order * theta + x->ripple_roller_load_phase));
+}
+
+double cd_discovered_torque(const CDTerm *terms, int n, double w, double tau_out)
+{
+    double total = 0.0;
+    int k;
+    for (k = 0; k < n; k++)
+        total = total + terms[k].coefficient
+                * (sign(w) * pow(fabs(w) / CD_W_REF, terms[k].speed_exponent)
+                   * pow(fabs(tau_out) / CD_T_REF, terms[k].load_exponent));
+    return total;
 }
 
 double cd_dynamic_torque(const CDExtra *x, double alpha, double theta, double order,

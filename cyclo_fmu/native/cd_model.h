@@ -48,9 +48,17 @@ typedef struct {
     double drag_torque, stribeck_torque, stribeck_speed, input_inertia;
     double ripple_1x, ripple_1x_phase, ripple_roller, ripple_roller_phase;
     double thermal_loss_change, thermal_tau, drag_exponent;
+    double stribeck_exponent;  /* delta of exp(-(|w|/w_s)^delta): 1 Tustin .. 2 Gaussian */
+    double run_in_change, run_in_distance;   /* run-in: c exp(-distance/s0) loss_in */
+    double ripple_1x_load, ripple_1x_load_phase, ripple_roller_load, ripple_roller_load_phase;
 } CDExtra;
 
-#define CD_N_EXTRA 11
+#define CD_N_EXTRA 18
+
+/* A discovered loss term (design [[extra.discovered]], model_core.discovered): the torque
+ * coefficient * sgn(w) (|w|/300 rad/s)^speed_exponent (|tau_out|/10 N*m)^load_exponent. */
+#define CD_MAX_DISCOVERED 4    /* model_core.discovered.MAX_TERMS */
+typedef struct { double coefficient, speed_exponent, load_exponent; } CDTerm;
 
 typedef struct {
     double speeds[3], torques[3], losses[CD_N_LOSSES];
@@ -69,6 +77,17 @@ double cd_steady_torque(const CDExtra *x, double w);
 double cd_dynamic_torque(const CDExtra *x, double alpha, double theta, double order,
                          double elapsed, double loss_in);
 
+/* ExtraPhysics.run_in_torque: run-in torque after the driving shaft travelled distance (rad)
+ * at the loss torque loss_in (N*m). */
+double cd_run_in_torque(const CDExtra *x, double distance, double loss_in);
+
+/* ExtraPhysics.load_ripple_torque: the ripple whose amplitude grows with |tau_out| (N*m). */
+double cd_load_ripple_torque(const CDExtra *x, double theta, double order, double tau_out);
+
+/* model_core.discovered.discovered_torque: the sum of n terms at driving speed w (rad/s) and
+ * load torque tau_out (N*m), N*m. */
+double cd_discovered_torque(const CDTerm *terms, int n, double w, double tau_out);
+
 /* Index of a mode string ("S1", " s1 " ...) or -1. */
 int cd_mode_index(const char *mode);
 
@@ -76,6 +95,8 @@ int cd_mode_index(const char *mode);
  * the defaults of the extra physics, the design values shown as constants, the GUID. */
 extern const CDMap CD_MAP;
 extern const CDExtra CD_DEFAULT_EXTRA;
+extern const CDTerm CD_DISCOVERED[CD_MAX_DISCOVERED];   /* built in, as the map */
+extern const int CD_N_DISCOVERED;
 extern const char CD_GUID[];
 extern const double CD_MAP_TORQUE_MAX;   /* N*m, largest |tau_out| of the map */
 extern const double CD_MAP_SPEED_MAX;    /* rad/s, largest |w_in| of the map */

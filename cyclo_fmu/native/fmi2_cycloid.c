@@ -9,7 +9,7 @@
  * cyclo_fmu/native/build.py):
  *   Real     0 w_in, 1 tau_out, 2 alpha_in (inputs)
  *            10..29 outputs, in the order of OUT_NAMES
- *            30..40 extra physics parameters, in the order of CDExtra
+ *            30..47 extra physics parameters, in the order of CDExtra
  *            50 J_out, 51 alpha_ref (parameters of the output inertia)
  *            52 PL_mesh (output: the calibrated mesh loss; out[O_PL_MESH])
  *            100.. constants of the design (generated table)
@@ -52,12 +52,14 @@ enum { O_W_OUT, O_TAU_IN, O_TAU_HOUSING, O_P_LOSS, O_PL1, O_PL2, O_PL3, O_PL5, O
 static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "drag_torque", "stribeck_torque", "stribeck_speed", "input_inertia", "ripple_1x",
     "ripple_1x_phase", "ripple_roller", "ripple_roller_phase", "thermal_loss_change",
-    "thermal_tau", "drag_exponent"};
+    "thermal_tau", "drag_exponent", "stribeck_exponent", "run_in_change", "run_in_distance",
+    "ripple_1x_load", "ripple_1x_load_phase", "ripple_roller_load", "ripple_roller_load_phase"};
 
 enum { PH_INSTANTIATED = 1, PH_INIT, PH_STEP, PH_TERMINATED };
 
 #define STATE_MAGIC 0x43444e53u   /* "CDNS" */
-#define STATE_VERSION 3u
+#define STATE_VERSION 4u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
+                              * load ripple, CDState.distance */
 
 /* Everything that defines the instance's behaviour from here on: inputs, parameters,
  * outputs and the dynamic state. Plain data: copied and serialised as it is. */
@@ -73,6 +75,7 @@ typedef struct {
     int locked;
     int mode_eff;          /* resolved at exitInitializationMode */
     double theta;          /* angle of the driving shaft since the start, rad */
+    double distance;       /* angle it travelled (integral of |w_in|), rad: the run-in's */
     double w_last;         /* driving speed at the last step, rad/s */
     int has_w_last;
     double t_start;
@@ -159,7 +162,10 @@ static double *extra_field(CDExtra *x, int i)
     f[0] = &x->drag_torque; f[1] = &x->stribeck_torque; f[2] = &x->stribeck_speed;
     f[3] = &x->input_inertia; f[4] = &x->ripple_1x; f[5] = &x->ripple_1x_phase;
     f[6] = &x->ripple_roller; f[7] = &x->ripple_roller_phase; f[8] = &x->thermal_loss_change;
-    f[9] = &x->thermal_tau; f[10] = &x->drag_exponent;
+    f[9] = &x->thermal_tau; f[10] = &x->drag_exponent; f[11] = &x->stribeck_exponent;
+    f[12] = &x->run_in_change; f[13] = &x->run_in_distance; f[14] = &x->ripple_1x_load;
+    f[15] = &x->ripple_1x_load_phase; f[16] = &x->ripple_roller_load;
+    f[17] = &x->ripple_roller_load_phase;
     return f[i];
 }
 
@@ -176,6 +182,12 @@ static const char *extra_problem(int i, double v)
         return v >= -1 ? NULL : "must not be below -1";
     case 10:
         return (v >= 0 && v <= 2) ? NULL : "must lie between 0 and 2";
+    case 11:
+        return (v >= 1 && v <= 2) ? NULL : "must lie between 1 (Tustin) and 2 (Gaussian)";
+    case 12:
+        return v >= -1 ? NULL : "must be at least -1";
+    case 13:
+        return v > 0 ? NULL : "must be positive";
     default:
         return NULL;
     }
@@ -239,9 +251,12 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     /* the load including the output inertia's torque */
     double tau_ext = s->tau_out, tau_out = tau_ext - J_r * s->alpha_in;
     double tau_in, tau_in_gear, p_in, p_out, p_stored = 0.0, w_in = s->w_in;
-    int steady = s->extra.drag_torque != 0 || s->extra.stribeck_torque != 0;
+    int steady = s->extra.drag_torque != 0 || s->extra.stribeck_torque != 0
+                 || CD_N_DISCOVERED > 0;
     int dynamic = s->extra.input_inertia != 0 || s->extra.ripple_1x != 0
-                  || s->extra.ripple_roller != 0 || s->extra.thermal_loss_change != 0;
+                  || s->extra.ripple_roller != 0 || s->extra.thermal_loss_change != 0
+                  || s->extra.run_in_change != 0 || s->extra.ripple_1x_load != 0
+                  || s->extra.ripple_roller_load != 0;
     m = &CD_MAP.modes[mode];
     cd_solve(&CD_MAP, mode, w_in, tau_out, &r);
     if (r.out_of_range && !s->warned_range
@@ -265,22 +280,35 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     s->out[O_PL_CHURN] = r.losses[7];
     s->out[O_PL_MESH] = r.losses[8];
     if (steady) tau_in += cd_steady_torque(&s->extra, w_in);
+    if (CD_N_DISCOVERED > 0)   /* design [[extra.discovered]] */
+        tau_in += cd_discovered_torque(CD_DISCOVERED, CD_N_DISCOVERED, w_in, tau_out);
     double inertia = 0.0;   /* input_inertia's torque: stored in the shaft, not reacted */
     if (dynamic) {
         /* CycloidDrive._dynamic_torque */
         double alpha = (!s->has_w_last || dt <= 0) ? 0.0 : (w_in - s->w_last) / dt;
-        double theta = s->theta, loss_in;
+        double theta = s->theta, distance = s->distance, loss_in, dyn;
         if (dt > 0) theta += w_in * dt;
+        if (dt > 0) distance += fabs(w_in) * dt;
         if (commit && (dt > 0 || !s->has_w_last)) {
             s->theta = theta;
+            s->distance = distance;
             s->w_last = w_in;
             s->has_w_last = 1;
         }
         loss_in = tau_in_gear + tau_out * m->ratio_out;   /* minus the lossless torque */
-        tau_in += cd_dynamic_torque(&s->extra, alpha, theta, m->order, t - s->t_start, loss_in);
+        dyn = cd_dynamic_torque(&s->extra, alpha, theta, m->order, t - s->t_start, loss_in);
         inertia = s->extra.input_inertia * alpha;
         /* the conservative part (inertia, ripples: d/dt of an energy), not a loss */
-        p_stored = cd_dynamic_torque(&s->extra, alpha, theta, m->order, 0.0, 0.0) * w_in;
+        p_stored = cd_dynamic_torque(&s->extra, alpha, theta, m->order, 0.0, 0.0);
+        if (s->extra.ripple_1x_load != 0 || s->extra.ripple_roller_load != 0) {
+            double ripple = cd_load_ripple_torque(&s->extra, theta, m->order, tau_out);
+            dyn = dyn + ripple;
+            p_stored = p_stored + ripple;
+        }
+        tau_in += dyn;
+        if (s->extra.run_in_change != 0)
+            tau_in += cd_run_in_torque(&s->extra, distance, loss_in);
+        p_stored = p_stored * w_in;
     }
     s->out[O_TAU_IN] = tau_in;
     /* the support takes what the shafts do not: the gear's reaction and the drag of bearings,
@@ -737,6 +765,7 @@ static const char *state_problem(const CDState *s)
     if (!(isfinite(s->alpha_ref) && s->alpha_ref > 0)) return "alpha_ref";
     if (!isfinite(s->t_start)) return "t_start";
     if (!isfinite(s->theta)) return "theta";
+    if (!(isfinite(s->distance) && s->distance >= 0)) return "distance";
     if (!isfinite(s->w_last)) return "w_last";
     for (i = 0; i < N_OUT; i++)
         if (!isfinite(s->out[i])) return "outputs";

@@ -99,7 +99,49 @@ DESIGN_PARAMETERS = [
      "fraction k of the mesh power: eta0 -> eta0 (1 - k) (0: as derived; 0 to 0.5)", Real),
     ("idle_loss_scale", "calibration", "idle_loss_scale", "1", "calibrated scale on the "
      "load-independent losses (1: as derived; 0 to 10)", Real),
+    # extra physics of the library's newer forms; after the others, so that their value
+    # references stay
+    ("stribeck_exponent", "extra", "stribeck_exponent", "1",
+     "shape exponent delta of the Stribeck decay exp(-(|w|/w_s)^delta): 1 Tustin, 2 Gaussian",
+     Real),
+    ("run_in_change", "extra", "run_in_change", "1", "excess of the losses of a drive that runs "
+     "in, relative, at the start, decaying as exp(-distance/run_in_distance)", Real),
+    ("run_in_distance", "extra", "run_in_distance", "rad", "distance (angle travelled by the "
+     "driving shaft) over which the run-in excess decays by 1/e", Real),
+    ("ripple_1x_load", "extra", "ripple_1x_load", "N.m", "load-scaled 1x ripple: amplitude at "
+     "10 N.m of |tau_out|, in proportion", Real),
+    ("ripple_1x_load_phase", "extra", "ripple_1x_load_phase", "rad",
+     "phase of the load-scaled 1x ripple", Real),
+    ("ripple_roller_load", "extra", "ripple_roller_load", "N.m", "load-scaled roller-pass "
+     "ripple: amplitude at 10 N.m of |tau_out|, in proportion", Real),
+    ("ripple_roller_load_phase", "extra", "ripple_roller_load_phase", "rad",
+     "phase of the load-scaled roller-pass ripple", Real),
 ]
+
+#: the design's discovered loss terms ([[extra.discovered]], model_core.discovered) as
+#: numbered slots (FMU parameter -> DiscoveredTerm field, unit, description, min, max); a slot
+#: whose torque is 0 is empty. Registered after every other variable: the value references of
+#: the older ones stay
+DISCOVERED_SLOTS = core.discovered.MAX_TERMS
+DISCOVERED_PARAMETERS = [
+    (f"discovered{k}_{name}", k - 1, field, unit, desc.format(k=k), lo, hi)
+    for k in range(1, DISCOVERED_SLOTS + 1)
+    for name, field, unit, desc, lo, hi in (
+        ("torque", "coefficient", "N.m", "discovered loss term {k}: torque at 300 rad/s and "
+         "10 N.m load, sgn(w_in) (|w_in|/300 rad/s)^p (|tau_out|/10 N.m)^q (0: unused)",
+         None, None),
+        ("speed_exponent", "speed_exponent", "1", "discovered loss term {k}: exponent p of the "
+         "driving speed", 0.0, core.discovered.MAX_EXPONENT),
+        ("load_exponent", "load_exponent", "1", "discovered loss term {k}: exponent q of the "
+         "load torque", 0.0, core.discovered.MAX_EXPONENT))]
+
+
+def discovered_values(design) -> dict:
+    """The discovered slots' parameter values for a design (empty slots 0)."""
+    terms = design.extra.discovered
+    return {name: float(getattr(terms[k], field)) if k < len(terms) else 0.0
+            for name, k, field, *_ in DISCOVERED_PARAMETERS}
+
 
 #: min/max of the parameters (the modelDescription's; checked at initialization). Lengths,
 #: viscosity, density positive; friction coefficients in [0, 1]: above 1 no lubricated steel
@@ -115,6 +157,8 @@ PARAMETER_LIMITS = dict(
     mu_boundary=(0.0, 1.0), mu_rolling=(0.0, 1.0), thermal_loss_change=(-1.0, None),
     mode_number=(0, 6), map_torque_max=(sys.float_info.min, None),
     map_speed_max=(sys.float_info.min, None),
+    stribeck_exponent=(1.0, 2.0), run_in_change=(-1.0, None),
+    run_in_distance=(sys.float_info.min, None),
     operating_temperature=(0.0, None), mesh_loss_k=(0.0, 0.5), idle_loss_scale=(0.0, 10.0))
 
 #: partial losses with an output each: the paper's load-dependent ones, then the physical
@@ -273,7 +317,10 @@ class CycloidDrive(UnitSlave):
                     "reducer while it slows down (|w_in| falling)", depends=both)
         self.output("PL_mesh", 0.0, "W", f"partial loss PL_mesh: {_LOSS_TEXT['PL_mesh']}",
                     depends=both)
+        for name, _k, _field, unit, desc, lo, hi in DISCOVERED_PARAMETERS:
+            self.parameter(name, 0.0, unit, desc, Real, min=lo, max=hi)
         self._theta = 0.0
+        self._distance = 0.0
         self._slope_key = None
         self._w_last = None
         self._map = None
@@ -292,6 +339,11 @@ class CycloidDrive(UnitSlave):
         base = self._base
         if fr["rolling_ring"] != base.friction.rolling_ring:   # one parameter sets both
             fr["rolling_disc"] = fr["rolling_ring"]
+        slots = [{} for _ in range(DISCOVERED_SLOTS)]
+        for name, k, field, *_ in DISCOVERED_PARAMETERS:
+            slots[k][field] = float(getattr(self, name))
+        ex["discovered"] = tuple(core.discovered.DiscoveredTerm(**x) for x in slots
+                                 if x["coefficient"] != 0.0)
         return dataclasses.replace(base, lubricant=dataclasses.replace(base.lubricant, **lub),
                                    friction=dataclasses.replace(base.friction, **fr),
                                    extra=dataclasses.replace(base.extra, **ex),
@@ -315,7 +367,8 @@ class CycloidDrive(UnitSlave):
         return _MAP_DIR
 
     #: the dynamic state besides the variables (fmi2GetFMUstate)
-    state_attributes = ("_theta", "_w_last", "_slope_key", "_last_inputs", "_warned_range")
+    state_attributes = ("_theta", "_distance", "_w_last", "_slope_key", "_last_inputs",
+                        "_warned_range")
 
     #: no step yet in Initialization Mode: no acceleration, no warm-up
     init_independent = ("input_inertia", "thermal_loss_change", "thermal_tau")
@@ -361,7 +414,10 @@ class CycloidDrive(UnitSlave):
                 self._map_key = map_key
             ex = self._design.extra
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
+            self._discovered = bool(ex.discovered)
             self._dynamic_extra = bool(ex.input_inertia or ex.ripple_1x or ex.ripple_roller
+                                       or ex.run_in_change or ex.ripple_1x_load
+                                       or ex.ripple_roller_load
                                        or ex.thermal_loss_change)
             unit = core.shaft_speeds(self._mode, 1.0, self._design.z1)
             self._ratio_out = float(unit[b])
@@ -370,15 +426,16 @@ class CycloidDrive(UnitSlave):
         except (core.CycloidInputError, TypeError, ValueError) as exc:
             self.fail(f"invalid parameter: {exc}")
         self._theta, self._w_last, self._slope_key = 0.0, None, None
+        self._distance = 0.0
         self._last_inputs = None
 
     def _evaluate_init(self):
         if self._in_init:   # a read in Initialization Mode: commit no dynamic state
-            saved = self._theta, self._w_last
+            saved = self._theta, self._w_last, self._distance
             try:
                 self._update()
             finally:
-                self._theta, self._w_last = saved
+                self._theta, self._w_last, self._distance = saved
         else:               # fmi2ExitInitializationMode: the state starts here
             self._update()
 
@@ -468,10 +525,14 @@ class CycloidDrive(UnitSlave):
                 self.tau_in += float(self._design.extra.steady_torque(w_in))
         else:
             speeds, torques, losses, eta, eta0, locked = self._exact(w_in, tau_out)
+        if self._discovered:     # design [[extra.discovered]] (model_core.discovered)
+            self.tau_in += float(self._design.extra.discovered_torque(w_in, tau_out))
         self.P_stored = 0.0
         self._inertia_torque = 0.0
         if self._dynamic_extra:
             self.tau_in += self._dynamic_torque(t, dt, w_in, tau_out)
+            if self._design.extra.run_in_change:     # after it, as the native FMU adds it
+                self.tau_in += self._run_in
         self.P_extra = (self.tau_in - self._tau_in_gear) * w_in
         self.P_loss = self.tau_in * w_in + tau_out * self.w_out - self.P_stored
         # the support takes what the shafts do not: the gear's reaction and the drag of
@@ -481,7 +542,7 @@ class CycloidDrive(UnitSlave):
         if not (math.isfinite(self.P_loss) and math.isfinite(self.tau_housing)):
             self.fail(f"w_in = {w_in!r} rad/s, tau_out = {tau_out!r} N.m give outputs that "
                       "are not finite numbers (inputs far beyond any drive): refused")
-        if self._steady_extra or self._dynamic_extra:
+        if self._steady_extra or self._dynamic_extra or self._discovered:
             p_in = max(self.tau_in * w_in, tau_out * self.w_out)
             p_out = -min(self.tau_in * w_in, tau_out * self.w_out)
             eta = p_out / p_in if (p_in > 0 and p_out > 0 and not locked) else 0.0
@@ -492,16 +553,22 @@ class CycloidDrive(UnitSlave):
         alpha = 0.0 if (self._w_last is None or dt <= 0) else (w_in - self._w_last) / dt
         if dt > 0:
             self._theta += w_in * dt
+            self._distance += abs(w_in) * dt
             self._w_last = w_in
         elif self._w_last is None:
             self._w_last = w_in
         loss_in = self._tau_in_gear + tau_out * self._ratio_out   # minus the lossless torque
         ex = self._design.extra
         torque = float(ex.dynamic_torque(alpha, self._theta, self._order, t, loss_in))
+        self._run_in = float(ex.run_in_torque(self._distance, loss_in))
         # the conservative part: d/dt of J w^2/2 and of the ripples' potentials
         # -A cos(theta + phi) - A_z/z cos(z theta + phi_z), each times w = dtheta/dt
         stored = float(ex.dynamic_torque(alpha, self._theta, self._order, 0.0, 0.0))
         self._inertia_torque = ex.input_inertia * alpha
+        if ex.ripple_1x_load or ex.ripple_roller_load:   # zero-mean at a held load: stored
+            ripple = float(ex.load_ripple_torque(self._theta, self._order, tau_out))
+            torque = torque + ripple
+            stored = stored + ripple
         self.P_stored = stored * w_in
         return torque
 
