@@ -12,6 +12,8 @@ import math
 import sys
 from pathlib import Path
 
+import numpy as np
+
 
 from model_core import (CycloidInputError, DriveDesign, LOSS_NAMES, design_from_toml,
                         operating_point, rad_s_to_rpm, rpm_to_rad_s)
@@ -38,6 +40,38 @@ def _number(name):
 # and writes them so that a failure leaves nothing half-written
 from .outputs import (output_dir as _output_dir, output_file as _output_file,  # noqa: E402
                       staged_dir as _staged_dir, staged_file as _staged_file)
+
+
+def _same_path(a, b) -> bool:
+    """Whether two paths name one file (resolved; an existing file by its inode)."""
+    pa, pb = Path(a), Path(b)
+    if pa.exists() and pb.exists():
+        return pa.samefile(pb)
+    return pa.resolve() == pb.resolve()
+
+
+def _recording_error(path, exc) -> CycloidInputError:
+    """A reader's or the diagnosis's refusal as the CLI's one line, naming the recording once
+    (the reader's message often starts with the path itself)."""
+    msg = " ".join(str(exc).split())
+    for prefix in (f"recording {str(path)!r}", f"recording {path}"):
+        if msg.startswith(prefix):
+            msg = msg[len(prefix):].lstrip(" ,:")
+            break
+    return CycloidInputError("recording", str(path), msg)
+
+
+#: [characters] longest error line printed: real messages stay below ~400; an echo of a
+#: pathological input (a 20 MB cell) is cut in the middle
+MAX_ERROR_CHARS = 600
+
+
+def _error_line(text) -> str:
+    """One line: whitespace runs (newlines too) collapsed, cut to MAX_ERROR_CHARS."""
+    line = " ".join(str(text).split())
+    if len(line) > MAX_ERROR_CHARS:
+        line = f"{line[:MAX_ERROR_CHARS - 100]} ... {line[-80:]}"
+    return line
 
 
 def _check_seed(seed):
@@ -112,8 +146,8 @@ def _json_num(x):
 def cmd_efficiency(args) -> int:
     design = _load_design(args.design, args.profile)
     a, b, h = parse_mode(args.mode)
-    if not math.isfinite(args.speed):
-        raise CycloidInputError("speed", args.speed, "must be a finite number of r/min")
+    from .limits import check_speed_rpm
+    check_speed_rpm("speed", args.speed)
     if not math.isfinite(args.torque):
         raise CycloidInputError("torque", args.torque, "must be a finite number of N*m")
     if args.torque == 0:
@@ -134,26 +168,56 @@ def cmd_efficiency(args) -> int:
                                 "viscosity; --temperature and --ambient need --profile physical")
     if args.temperature is not None:
         design = thermal.at_temperature(design, args.temperature + KELVIN)
-    if args.ambient is not None:
-        op, temperature = thermal.solve_heat_balance(
-            design.replace(ambient_temperature=args.ambient + KELVIN), a + b,
-            rpm_to_rad_s(args.speed), args.torque)
-        design = thermal.at_temperature(design, temperature)
-    else:
-        op = operating_point(design, a + b, rpm_to_rad_s(args.speed), args.torque)
     from model_core.contact import ring_torque_rating
-    rating = ring_torque_rating(design)
-    T_ring = abs(float(op.torques["1"]))
-    if math.isfinite(T_ring) and T_ring > rating:
-        raise CycloidInputError("torque", args.torque, f"puts {T_ring:.4g} N*m on the ring, beyond "
-                                f"the design's static rating {rating:.4g} N*m (Hertz pressure "
-                                "4000 MPa on the ring rollers, ISO 76)")
+    w_a = rpm_to_rad_s(args.speed)
+
+    def ring_check(d, op_, field, value, what):
+        """Refuse an operating point that overloads the ring (or overflows the model)."""
+        rating = ring_torque_rating(d)
+        T_ring = abs(float(op_.torques["1"])) if op_ is not None else math.inf
+        if not math.isfinite(T_ring) or T_ring > rating:
+            load = (f"puts {T_ring:.4g} N*m on the ring" if math.isfinite(T_ring) else
+                    "puts more torque on the ring than the model can compute")
+            raise CycloidInputError(field, value, f"{what} {load}, beyond the design's static "
+                                    f"rating {rating:.4g} N*m (Hertz pressure 4000 MPa on the "
+                                    "ring rollers, ISO 76)")
+        return T_ring
+
+    # the no-load running torque first: when the drag at this speed alone overloads the ring,
+    # the speed (or the design's drag) is at fault, not the torque
+    with np.errstate(all="ignore"):
+        ring_check(design, operating_point(design, a + b, w_a, T_out=0.0), "speed", args.speed,
+                   "the drive's no-load running torque at this speed")
+    # the ring carries at least about z1 - 2 times a torque applied at the eccentric shaft S and
+    # about half of one applied at the ring or the disc (Table 1's ratios, any efficiency): a
+    # torque whose share alone is beyond the rating is refused before the model runs
+    if abs(args.torque) * ((design.z1 - 2) if a == "S" else 0.5) > ring_torque_rating(design):
+        ring_check(design, None, "torque", args.torque, "it")
+    try:
+        with np.errstate(all="ignore"):
+            if args.ambient is not None:
+                op, temperature = thermal.solve_heat_balance(
+                    design.replace(ambient_temperature=args.ambient + KELVIN), a + b, w_a,
+                    args.torque)
+                design = thermal.at_temperature(design, temperature)
+            else:
+                op = operating_point(design, a + b, w_a, args.torque)
+    except ValueError as exc:          # the model's own refusal (e.g. eta0 out of range)
+        if isinstance(exc, CycloidInputError) and exc.field == "operating_temperature":
+            raise CycloidInputError("torque", args.torque, f"at {args.speed:g} r/min the "
+                                    "housing's steady heat balance puts the grease beyond the "
+                                    "model's 200 degC") from None
+        if isinstance(exc, CycloidInputError):
+            raise
+        raise CycloidInputError("torque", args.torque, f"outside what the model can evaluate "
+                                f"at {args.speed:g} r/min ({exc})") from None
+    T_ring = ring_check(design, op, "torque", args.torque, "it")
     losses = {k: _json_num(v) for k, v in op.losses.as_dict().items()}
     stalled = not bool(op.locked) and not math.isfinite(float(op.torques[b]))
     # the no-load running torque (the drag at the shafts and the gear's losses at zero load):
     # a driving torque below it cannot keep the drive turning unless the load drives it
-    w_a = rpm_to_rad_s(args.speed)
-    no_load = float(operating_point(design, a + b, w_a, T_out=0.0).torques[a])
+    with np.errstate(all="ignore"):
+        no_load = float(operating_point(design, a + b, w_a, T_out=0.0).torques[a])
     below_no_load = bool(args.torque * w_a > 0 and abs(args.torque) < abs(no_load))
     stalled = stalled or below_no_load
     p_in = float(op.input_power)
@@ -176,6 +240,14 @@ def cmd_efficiency(args) -> int:
         "reaction_torque_Nm": _json_num(op.torques[h]),
         "profile": design.profile, "losses": design.losses,
     }
+    if not (stalled or bool(op.locked)):   # a running drive: every number must be finite
+        from .limits import check_finite_result
+        check_finite_result("torque" if abs(args.torque) > abs(no_load) else "speed",
+                            args.torque if abs(args.torque) > abs(no_load) else args.speed,
+                            {"eta": float(op.eta), "eta0": float(op.eta0),
+                             "loss_power": float(op.loss_power),
+                             **{k: float(v) for k, v in op.losses.as_dict().items()},
+                             "output_torque": t_out, "output_speed": w_out})
     if design.profile == "physical":
         from model_core.losses import contact_states
         from model_core.drag import IDLE_NAMES
@@ -254,9 +326,19 @@ def cmd_stiffness(args) -> int:
     rated = args.rated_torque
     if rated is not None and not (math.isfinite(rated) and rated > 0):
         raise CycloidInputError("rated-torque", rated, "must be a positive number of N*m")
+    if rated is not None:
+        from model_core.contact import ring_torque_rating
+        rating = ring_torque_rating(design)
+        if rated > rating:       # with the input locked the ring reacts the output torque
+            raise CycloidInputError("rated-torque", rated, f"beyond the design's static rating "
+                                    f"{rating:.4g} N*m (Hertz pressure 4000 MPa on the ring "
+                                    "rollers, ISO 76)")
     if args.out:
         _output_dir("out", args.out, create=False)
-    values = st.catalogue_values(design, rated)
+    with np.errstate(all="ignore"):
+        values = st.catalogue_values(design, rated)
+    from .limits import check_finite_result
+    check_finite_result("rated-torque", rated, values)
     if args.out:
         from .plots import plot_stiffness
         with _staged_dir("out", args.out) as out:
@@ -384,6 +466,9 @@ def cmd_synth(args) -> int:
     _output_file("out", args.out)
     if truth:
         _output_file("truth", truth)
+        if _same_path(truth, args.out):
+            raise CycloidInputError("truth", truth, "is the recording's own file (--out): the "
+                                    "truth would overwrite the recording; give another name")
     if args.engine == "bench" and (len(effects) > 1 or rise is not None):
         raise CycloidInputError("engine", args.engine, "hides exactly one effect and writes no "
                                 "temperature column; use --engine fast")
@@ -425,7 +510,7 @@ def cmd_diagnose(args) -> int:
                                            columns=args.columns, units=args.units)
         d, result = diagnose_recording(rec, mode, checks, design, progress=True)
     except (RecordingError, DiagnosisError) as exc:
-        raise CycloidInputError("recording", args.recording, str(exc))
+        raise _recording_error(args.recording, exc) from None
     if args.out:
         from .diagnosis import write_diagnosis
         write_diagnosis(args.out, d, design, result, source=str(args.recording))
@@ -674,14 +759,14 @@ def main(argv=None) -> int:
     try:
         return args.func(args)
     except CycloidInputError as exc:
-        print(f"cyclo-fmu: error: {exc}", file=sys.stderr)
+        print(_error_line(f"cyclo-fmu: error: {exc}"), file=sys.stderr)
         return 2
     except BrokenPipeError:         # the reader of stdout left (`| head`): run() stops quietly
         raise
     except OSError as exc:          # a path the command could not read or write
         where = exc.filename if exc.filename is not None else ""
-        print(f"cyclo-fmu: error: {args.command}: {where!r}: {exc.strerror or exc}",
-              file=sys.stderr)
+        print(_error_line(f"cyclo-fmu: error: {args.command}: {where!r}: "
+                          f"{exc.strerror or exc}"), file=sys.stderr)
         return 2
     except MemoryError:
         print(f"cyclo-fmu: error: {args.command}: out of memory (input too large)",
@@ -692,7 +777,8 @@ def main(argv=None) -> int:
             raise
         logged = "; ".join(f"{i}: {m}" for i, m in _FMU_ERRORS[-2:])
         text = " ".join(f"{exc}{f' ({logged})' if logged else ''}".split())
-        print(f"cyclo-fmu: error: {args.command}: FMU failed: {text}", file=sys.stderr)
+        print(_error_line(f"cyclo-fmu: error: {args.command}: FMU failed: {text}"),
+              file=sys.stderr)
         return 2
 
 
