@@ -592,21 +592,34 @@ def cmd_diagnose_batch(args) -> int:
     if not paths:
         raise CycloidInputError("folder", args.folder, "holds no recording (*.csv, *.mf4)")
     design = _load_design(args.design, args.profile)
-    mode = "".join(parse_mode(args.mode)[:2])
+    mode = ("auto" if args.mode.strip().lower() == "auto" else
+            "".join(parse_mode(args.mode)[:2]))
+    from .io.units import parse_units
     try:
         columns = parse_column_map(args.columns) if args.columns else None
     except RecordingError as exc:
         raise CycloidInputError("columns", args.columns, str(exc))
+    try:
+        units = parse_units(args.units) if args.units else None
+    except RecordingError as exc:
+        raise CycloidInputError("units", args.units, str(exc))
     _workers(args)
     with _staged_dir("out", args.out) as out:
-        df = diagnose_batch(folder, out, design, mode, columns=columns,
+        df = diagnose_batch(folder, out, design, mode, columns=columns, units=units,
                             scheduler=args.scheduler, workers=args.workers, serial=args.serial,
                             progress=_progress_on(args))
     bad = int((df["error"] != "").sum())
-    print(f"diagnose-batch: {len(df)} recordings -> {args.out}/summary.csv"
-          f"{f'; {bad} could not be diagnosed (column error)' if bad else ''}")
+    print(f"diagnose-batch: {len(df)} recordings -> {Path(args.out) / 'summary.csv'}: "
+          f"{len(df) - bad} diagnosed, {bad} failed")
     for _, r in df.iterrows():
-        print(f"  {r['recording']}: {r['error'] or r['effect']}")
+        found = f" (mode {r['mode']})" if mode == "auto" else ""
+        what = f"failed: {r['error']}" if r["error"] else f"{r['effect']}{found}"
+        print(f"  {r['recording']}: {what}")
+    if bad:        # partial results are written; the exit status says not all went well
+        print(f"cyclo-fmu: error: diagnose-batch: {bad} of {len(df)} recordings could not be "
+              "diagnosed (their reasons above and in summary.csv, column error)",
+              file=sys.stderr)
+        return 1
     return 0
 
 
@@ -666,7 +679,8 @@ def build_parser() -> argparse.ArgumentParser:
     mx.add_argument("--out", required=True, help="output folder (writes CycloidDrive_<mode>.mo)")
     mx.set_defaults(func=cmd_export_modelica)
     bench = sub.add_parser("bench", help="simulate the motor - reducer - brake test bench (SSP)")
-    bench.add_argument("--mode", default="S1", help="operating mode of the reducer (S1, S2, ...)")
+    bench.add_argument("--mode", default="S1", help="operating mode of the reducer: S1 or S2 "
+                       "(the bench's motor drives the eccentric shaft S; default S1)")
     bench.add_argument("--scenario", default="paper",
                        help="paper (frequency x load series), runup, loadstep, reversal")
     bench.add_argument("--out", default="out/bench", help="output folder (default: out/bench)")
@@ -685,8 +699,11 @@ def build_parser() -> argparse.ArgumentParser:
                     "several separated by commas")
     sy.add_argument("--temperature-rise", type=float, help="K: the recording carries a "
                     "temperature column warming by this much (warm-up effects follow it)")
-    sy.add_argument("--seed", type=int, default=1)
-    sy.add_argument("--mode", default="S1")
+    sy.add_argument("--seed", type=int, default=1, help="seed of the transducer noise and "
+                    "the hidden effect's draw, 0 to 2^63-1 (default 1): the same seed writes "
+                    "the same recording")
+    sy.add_argument("--mode", default="S1", help="operating mode of the recorded reducer: S1 "
+                    "or S2 (the bench drives the eccentric shaft S; default S1)")
     sy.add_argument("--size", default="small", help="tiny (42 s), small (2 min), medium (5), "
                     "large (10)")
     sy.add_argument("--out", required=True, help="recording CSV to write")
@@ -698,8 +715,10 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_profile(sy)
     sy.set_defaults(func=cmd_synth, fmus=True)
-    dg = sub.add_parser("diagnose", help="locate, explain and model the mismatch of a recording")
-    dg.add_argument("recording", help="recording CSV")
+    dg = sub.add_parser("diagnose", help="locate, explain and model the mismatch of a recording "
+                        "(CSV/ASCII or MDF4)")
+    dg.add_argument("recording", help="recording: CSV/ASCII (any common dialect) or MDF4 "
+                    "(.mf4, needs the mdf extra)")
     dg.add_argument("--mode", required=True, help=f"operating mode ({', '.join(MODES)}) or "
                     "auto (inferred from the measured speed ratio and its sign)")
     dg.add_argument("--design", help="design file (TOML)")
@@ -707,7 +726,8 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     dg.add_argument("--units", help="units of columns, overriding anything detected, e.g. "
                     "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")
-    dg.add_argument("--json", action="store_true")
+    dg.add_argument("--json", action="store_true", help="print the diagnosis as one JSON "
+                    "object (the keys of diagnosis.json; strict JSON, null for undefined)")
     _add_profile(dg)
     dg.set_defaults(func=cmd_diagnose)
     sw = sub.add_parser("sweep", help="design study: many designs over the bench envelope "
@@ -723,9 +743,13 @@ def build_parser() -> argparse.ArgumentParser:
     db.add_argument("folder", help="folder of recordings")
     db.add_argument("--out", required=True, help="folder for one result folder per recording "
                     "and summary.csv")
-    db.add_argument("--mode", required=True)
+    db.add_argument("--mode", required=True, help=f"operating mode of every recording "
+                    f"({', '.join(MODES)}) or auto (each recording's mode inferred from its "
+                    "measured speed ratio and its sign)")
     db.add_argument("--design", help="design file (TOML)")
     db.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
+    db.add_argument("--units", help="units of columns, overriding anything detected, e.g. "
+                    "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")
     _cluster_options(db)
     db.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_profile(db)
@@ -751,6 +775,35 @@ def _join_signed_numbers(argv):
     return out
 
 
+_INTERRUPTED = []      # signal numbers received (run() routes SIGINT and SIGTERM here)
+
+
+def _on_signal(signum, frame):
+    """SIGINT/SIGTERM: note it and unwind as Ctrl-C does, so that every staged output is
+    removed on the way out (a slave's Python code may turn the KeyboardInterrupt into an FMU
+    error; the note tells main() what it was)."""
+    _INTERRUPTED.append(signum)
+    raise KeyboardInterrupt
+
+
+def _interrupted(args) -> int:
+    import signal
+    signum = _INTERRUPTED[0] if _INTERRUPTED else signal.SIGINT
+    name = signal.Signals(signum).name
+    print(f"cyclo-fmu: {args.command}: interrupted ({name}); partial outputs removed",
+          file=sys.stderr)
+    return 128 + int(signum)
+
+
+def _user_path(filename) -> str:
+    """The user's file name for a staged temporary (``.out.csv.partial-123.csv`` ->
+    ``out.csv``): internal names stay out of error messages."""
+    import re
+    p = Path(str(filename))
+    m = re.fullmatch(r"\.(.+?)\.partial-\d+(\.[^.]*)?", p.name)
+    return str(p.with_name(m.group(1))) if m else str(filename)
+
+
 def main(argv=None) -> int:
     argv = _join_signed_numbers(list(sys.argv[1:] if argv is None else argv))
     args = build_parser().parse_args(argv)
@@ -758,13 +811,17 @@ def main(argv=None) -> int:
         _collect_fmu_log()
     try:
         return args.func(args)
+    except KeyboardInterrupt:       # Ctrl-C, or SIGTERM through run()'s handler
+        return _interrupted(args)
     except CycloidInputError as exc:
         print(_error_line(f"cyclo-fmu: error: {exc}"), file=sys.stderr)
         return 2
     except BrokenPipeError:         # the reader of stdout left (`| head`): run() stops quietly
         raise
     except OSError as exc:          # a path the command could not read or write
-        where = exc.filename if exc.filename is not None else ""
+        if _INTERRUPTED:
+            return _interrupted(args)
+        where = _user_path(exc.filename) if exc.filename is not None else ""
         print(_error_line(f"cyclo-fmu: error: {args.command}: {where!r}: "
                           f"{exc.strerror or exc}"), file=sys.stderr)
         return 2
@@ -773,6 +830,8 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 2
     except Exception as exc:        # an FMU's error: surface its message in one line
+        if _INTERRUPTED:            # the signal reached a slave's Python code: its FMU
+            return _interrupted(args)   # call failed because of it
         if type(exc).__module__.split(".")[0] != "fmpy":
             raise
         logged = "; ".join(f"{i}: {m}" for i, m in _FMU_ERRORS[-2:])
@@ -792,6 +851,10 @@ def run() -> None:
     # our own process: glibc keeps the loss model's large temporaries on its heap (half of a
     # paper-profile map's time was page faults of freshly mapped arrays; cyclo_fmu.slaves.heap)
     keep_temporaries_on_heap()
+    import signal
+    # this process is the host (no FMU's): SIGTERM unwinds like Ctrl-C, removing staged outputs
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, _on_signal)
     try:
         code = main()
         sys.stdout.flush()
