@@ -48,6 +48,14 @@ MS_SUSPECT_DURATION = 7200.0
 #: [r/min] peak input speed below which r/min and rad/s are both plausible (only a warning:
 #: a genuine low-speed run must pass)
 LOW_SPEED_RPM = 350.0
+#: [1] the measured input torque at loaded forward samples may differ from the design's (its
+#: input torque for the measured output torque and speeds) by up to this factor either way:
+#: a working drive's losses take 5-40 % of its input power, so a model missing all of them, or
+#: twice too lossy, is within a factor 2; a torque unit (x1000 N*mm, x100 N*cm) or another
+#: drive's design lands far outside
+MODEL_TORQUE_FACTOR = 10.0
+#: [1] loaded samples the model is evaluated at for that comparison (an even subsample)
+MODEL_SAMPLES = 64
 #: absolute limits of a measurement at the edge units: beyond them a cell is not a reading
 ABSURD = {"time_s": 1e9, "speed_in_rpm": 1e6, "speed_out_rpm": 1e6, "torque_in_Nm": 1e7,
           "torque_out_Nm": 1e7, "temperature_C": 1e4}
@@ -302,4 +310,43 @@ def check_plausibility(rec, mode, design=None, units_given=()):
     mode, findings = check_mode(rec, mode, design.z1, findings, units_given)
     check_capacity(rec, mode, design, findings, units_given)
     _power_balance(rec, units_given, findings)
+    check_model_level(rec, mode, design, findings, units_given)
     return mode, findings
+
+
+def check_model_level(rec, mode, design, findings, units_given=()):
+    """Measured input torque against the design's at loaded forward samples (median ratio over
+    an even subsample): beyond ``MODEL_TORQUE_FACTOR`` either way the torques' units (even
+    ones given with --units) or the design cannot be right. Needs >= 10 such samples."""
+    from model_core import operating_point
+    P_in = rec.torque_in * rec.speed_in
+    P_out = rec.torque_out * rec.speed_out
+    peak_in, peak_out = _peak(P_in), _peak(P_out)
+    loaded = np.flatnonzero((P_in > POWER_SHARE * peak_in) & (P_out > POWER_SHARE * peak_out))
+    if loaded.size < 10:
+        findings.append(_finding("model_level", "warning", f"only {loaded.size} loaded forward "
+                                 "samples: the torque level is not compared with the design"))
+        return findings
+    k = loaded[np.linspace(0, loaded.size - 1, min(MODEL_SAMPLES, loaded.size)).astype(int)]
+    with np.errstate(all="ignore"):
+        try:
+            op = operating_point(design, mode, rec.speed_in[k], T_out=-rec.torque_out[k])
+            model = np.abs(np.asarray(op.torques[mode[0]], float))
+        except ValueError:       # the design cannot carry these points: check_capacity's job
+            return findings
+    ok = np.isfinite(model) & (model > 0)
+    if ok.sum() < 10:
+        return findings
+    ratio = float(np.median(np.abs(rec.torque_in[k][ok])) / np.median(model[ok]))
+    given = ", ".join(f"{c}={rec.units[c][0]}" for c in ("torque_in_Nm", "torque_out_Nm")
+                      if c in getattr(rec, "units", {}))
+    if not 1 / MODEL_TORQUE_FACTOR <= ratio <= MODEL_TORQUE_FACTOR:
+        _error(_finding("model_level", "error",
+               f"torque_in_Nm: the measured input torque is {ratio:.3g} times what the design "
+               f"needs for the measured output torque and speeds (median over {int(ok.sum())} "
+               f"loaded samples; a drive's losses account for less than {MODEL_TORQUE_FACTOR:g}"
+               f"x): a torque unit is off{f' (read as {given})' if given else ''}, or --design "
+               "is not this drive; check --units and --design"), findings)
+    findings.append(_finding("model_level", "ok", f"measured input torque {ratio:.3g} times the "
+                             f"design's at {int(ok.sum())} loaded samples"))
+    return findings
