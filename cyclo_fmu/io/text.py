@@ -303,6 +303,9 @@ class _Locator:
                 return (f"row {line_no}: bytes that are not {self.d.encoding} (the encoding "
                         f"detected on the first {SNIFF_BYTES // 1024} KiB): "
                         f"{clip(line.strip())}; fix that row or save the file in one encoding")
+            if line.count('"') % 2:
+                return (f"row {line_no}: an unbalanced quote (\") in {clip(line.strip())}: the "
+                        "rows after it would be read as one text cell; fix or delete that row")
             try:
                 cells = _split(line, self.d.delimiter)
             except csv.Error:
@@ -348,6 +351,12 @@ def read_text(path, columns=None, units=None, block=None, chunk_bytes=8 << 20) -
         notes.append(f"units row under the header skipped (line {d.units_line + 1}: "
                      f"{', '.join(u for u in d.units_row if u)})")
     notes += unit_notes
+    used = {j for j, _ in mapping.values()}
+    unread = [h.strip() for j, h in enumerate(d.header) if j not in used and h.strip()]
+    if unread:                                # nothing dropped without a word
+        notes.append(f"{len(unread)} column(s) not read (not a recording column): "
+                     f"{', '.join(clip(h, 40) for h in unread[:5])}"
+                     f"{', ...' if len(unread) > 5 else ''} (map one with --columns KEY=NAME)")
     loc = _Locator(path, d, mapping)
     data_text = text.splitlines()[d.first_data_line:]
     loc.bytes_per_row = (len(raw) * sum(map(len, data_text)) / max(1, len(text))
@@ -381,7 +390,10 @@ def _refuse_binary(raw: bytes, text: str, source: str):
 
 def _fail(loc: _Locator, exc) -> RecordingError:
     msg = loc.first_problem()
-    return RecordingError(msg or f"recording {loc.path!s} cannot be parsed ({exc})")
+    # the parser's own text may quote many lines of the file: one line, clipped
+    why = " ".join(str(exc).split())
+    return RecordingError(msg or f"recording {str(loc.path)!r} cannot be parsed "
+                          f"({why[:200]}{'...' if len(why) > 200 else ''})")
 
 
 def _check_inf(arrs, keys, loc):
