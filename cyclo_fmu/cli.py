@@ -183,16 +183,32 @@ def cmd_efficiency(args) -> int:
                                     "ring rollers, ISO 76)")
         return T_ring
 
-    # the no-load running torque first: when the drag at this speed alone overloads the ring,
-    # the speed (or the design's drag) is at fault, not the torque
+    # the ring's share of a torque at the driving shaft, by the ideal (lossless) torque ratios
+    # of Table 1: 1 when the ring drives, |i| when it is driven, |1 - i| when it is held
+    from model_core.kinematics import speed_ratio
+    i = speed_ratio(a + b, design.z1)
+    ring_share = float(1.0 if a == "1" else abs(i) if b == "1" else abs(1.0 - i))
+    rating = ring_torque_rating(design)
+    # the no-load running torque first: when the drag alone (at this speed, or at this grease
+    # temperature) needs a driving torque beyond what the ring can take, the speed or the
+    # temperature is at fault, not the torque
     with np.errstate(all="ignore"):
-        ring_check(design, operating_point(design, a + b, w_a, T_out=0.0), "speed", args.speed,
-                   "the drive's no-load running torque at this speed")
-    # the ring carries at least about z1 - 2 times a torque applied at the eccentric shaft S and
-    # about half of one applied at the ring or the disc (Table 1's ratios, any efficiency): a
-    # torque whose share alone is beyond the rating is refused before the model runs
-    if abs(args.torque) * ((design.z1 - 2) if a == "S" else 0.5) > ring_torque_rating(design):
-        ring_check(design, None, "torque", args.torque, "it")
+        T0 = float(operating_point(design, a + b, w_a, T_out=0.0).torques[a])
+    if not math.isfinite(T0) or abs(T0) * ring_share > rating:
+        field, value = (("temperature", args.temperature) if args.temperature is not None
+                        else ("speed", args.speed))
+        raise CycloidInputError(field, value, f"the drive's no-load running torque there "
+                                f"({abs(T0):.4g} N*m at {args.speed:g} r/min) alone puts about "
+                                f"{abs(T0) * ring_share:.4g} N*m on the ring, beyond the "
+                                f"design's static rating {rating:.4g} N*m")
+    # a torque whose lossless ring share is beyond twice the rating is refused before the
+    # model runs (1e308 N*m would overflow in it); the model's own ring torque is checked after
+    T_ring_ideal = abs(args.torque) * ring_share
+    if T_ring_ideal > 2 * rating:
+        load = f"about {T_ring_ideal:.4g}" if math.isfinite(T_ring_ideal) else "more than 1e308"
+        raise CycloidInputError("torque", args.torque, f"puts {load} N*m on the ring (lossless), "
+                                f"beyond the design's static rating {rating:.4g} N*m (Hertz "
+                                "pressure 4000 MPa on the ring rollers, ISO 76)")
     try:
         with np.errstate(all="ignore"):
             if args.ambient is not None:
@@ -203,7 +219,8 @@ def cmd_efficiency(args) -> int:
             else:
                 op = operating_point(design, a + b, w_a, args.torque)
     except ValueError as exc:          # the model's own refusal (e.g. eta0 out of range)
-        if isinstance(exc, CycloidInputError) and exc.field == "operating_temperature":
+        if isinstance(exc, CycloidInputError) and \
+                exc.field.startswith("operating_temperature"):
             raise CycloidInputError("torque", args.torque, f"at {args.speed:g} r/min the "
                                     "housing's steady heat balance puts the grease beyond the "
                                     "model's 200 degC") from None
