@@ -304,3 +304,30 @@ def test_design_drag_bound():
         DriveDesign(extra=ExtraPhysics(drag_torque=1.001 * cap))
     with pytest.raises(CycloidInputError, match="extra.stribeck_torque"):
         DriveDesign(extra=ExtraPhysics(stribeck_torque=1.001 * cap))
+
+
+# --- the diagnosis's physical bounds: a fit outside them is not that effect --------------------
+def _selection_problem(slope):
+    """2000 blocks: y = 0.01 + slope * x + noise (0.001); candidates 'offset' (column 0,
+    bounds -1..1) and 'drag' (column 1, bounds 0..1: a drag cannot feed power in)."""
+    from cyclo_fmu.diagnosis.selection import GramProblem, Term
+    rng = np.random.default_rng(3)
+    n = 2000
+    x = np.abs(np.sin(np.linspace(0, 20, n)))
+    X = np.stack([np.ones(n), x], -1)
+    y = 0.01 + slope * x + rng.normal(0, 0.001, n)
+    terms = {"offset": [Term("offset", None, (0,), ("c",), ("N*m",), (-1.0,), (1.0,))],
+             "drag": [Term("drag", None, (1,), ("T",), ("N*m",), (0.0,), (1.0,))]}
+    return GramProblem(X, y, np.ones(n)), terms
+
+
+@pytest.mark.parametrize("slope,named", [(0.02, True), (1e-3, True), (-1e-3, False),
+                                         (-0.02, False)])
+def test_fit_outside_its_bounds_is_not_named(slope, named):
+    from cyclo_fmu.diagnosis.selection import stepwise
+    problem, terms = _selection_problem(slope)
+    fit = problem.fit((terms["offset"][0], terms["drag"][0]))
+    assert fit.admissible == (slope >= 0)
+    sel = stepwise(problem, terms, min_explained=1e-5)
+    assert ("drag" in sel.fit.ids) == named, sel.fit.ids
+    assert "offset" in sel.fit.ids
