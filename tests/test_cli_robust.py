@@ -400,6 +400,14 @@ ISSUE21 = {
     "efficiency_speed_1e9": (
         lambda t: ["efficiency", "--mode", "S1", "--speed", "1e9", "--torque", "1"],
         ["speed = 1000000000.0"], ["torque"]),
+    "efficiency_grease_at_minus_99": (
+        lambda t: ["efficiency", "--mode", "S1", "--speed", "1000", "--torque", "1",
+                   "--temperature", "-99"],
+        ["temperature = -99.0", "no-load running torque"], ["torque = 1.0"]),
+    "efficiency_heat_balance_beyond_200": (
+        lambda t: ["efficiency", "--mode", "S1", "--speed", "1000", "--torque", "300",
+                   "--ambient", "20"],
+        ["torque = 300.0", "heat balance"], ["473.15", "operating_temperature"]),
     "diagnose_20_MB_cell": (
         lambda t: ["diagnose", _huge_cell(t), "--mode", "S1"],
         ["20000001 characters", "is not a number"], []),
