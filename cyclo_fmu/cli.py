@@ -185,9 +185,8 @@ def cmd_efficiency(args) -> int:
 
     # the ring's share of a torque at the driving shaft, by the ideal (lossless) torque ratios
     # of Table 1: 1 when the ring drives, |i| when it is driven, |1 - i| when it is held
-    from model_core.kinematics import speed_ratio
-    i = speed_ratio(a + b, design.z1)
-    ring_share = float(1.0 if a == "1" else abs(i) if b == "1" else abs(1.0 - i))
+    from .limits import ring_share as _ring_share
+    ring_share = _ring_share(a + b, design.z1)
     rating = ring_torque_rating(design)
     # the no-load running torque first: when the drag alone (at this speed, or at this grease
     # temperature) needs a driving torque beyond what the ring can take, the speed or the

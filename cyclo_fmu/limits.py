@@ -48,3 +48,13 @@ def check_finite_result(field: str, value, values: dict) -> None:
         if v is not None and not isinstance(v, (str, bool)) and not math.isfinite(float(v)):
             raise CycloidInputError(field, value, f"the model's {k} is not a finite number "
                                     "there: the input lies outside what the model can resolve")
+
+
+def ring_share(mode: str, z1: int) -> float:
+    """The ring's share of a torque at the driving shaft of ``mode`` by the lossless torque
+    ratios of Table 1 (i = w_a / w_b): 1 when the ring drives, |i| when it is driven, |1 - i|
+    when it is held."""
+    from model_core.kinematics import parse_mode, speed_ratio
+    a, b, _ = parse_mode(mode)
+    i = speed_ratio(a + b, z1)
+    return float(1.0 if a == "1" else abs(i) if b == "1" else abs(1.0 - i))

@@ -186,6 +186,8 @@ def load_spec(path) -> SweepSpec:
         table = [{cols[c]: (v.item() if hasattr(v, "item") else v) for c, v in row.items()}
                  for row in df.to_dict("records")]
         n = len(table)
+        if n == 0:
+            raise CycloidInputError("sweep.table", str(tpath), "has no rows (one design a row)")
     else:
         if not raw:
             raise CycloidInputError("fields", "{}", "name at least one design field to vary")
