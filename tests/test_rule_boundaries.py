@@ -331,3 +331,30 @@ def test_fit_outside_its_bounds_is_not_named(slope, named):
     sel = stepwise(problem, terms, min_explained=1e-5)
     assert ("drag" in sel.fit.ids) == named, sel.fit.ids
     assert "offset" in sel.fit.ids
+
+
+# --- loaded samples (MIN_LOADED = 10) and the output's standstill (1e-3 r/min) ---------------
+def _loaded(k, n=600):
+    """k loaded samples: input torque and output torque high on k samples, ~0 elsewhere."""
+    d = s1(n=n, ripple=False)
+    T = np.full(n, 1e-4)
+    T[:k] = 0.5
+    d["torque_in_Nm"], d["torque_out_Nm"] = T, T * 15 * 0.8
+    return recording_from_arrays(**d, check=False)
+
+
+def test_power_balance_needs_10_loaded_samples():
+    f = checks.check_units(_loaded(10))
+    assert [x for x in f if x["id"] == "power_balance"][-1]["status"] == "ok"
+    f = checks.check_units(_loaded(9))
+    assert [x for x in f if x["id"] == "power_balance"][-1]["status"] == "warning"
+
+
+def test_output_standstill_allows_a_ratio_of_1000():
+    """A z1 = 1000 drive in S1 at 1.5 r/min turns its output at 0.0015 r/min: still turning
+    (OUTPUT_STANDSTILL_RPM = 1e-3 r/min); at 0.0009 r/min it stands still."""
+    r = rec(n_in=1.5, ratio=1000.0, ripple=False)
+    assert checks.check_mode(r, "S1", 1000)[0] == "S1"
+    with pytest.raises(RecordingError, match="only 0 samples where both shafts turn"):
+        checks.check_mode(rec(n_in=1.5, ratio=1.5 / 0.0009, ripple=False),
+                          "S1", 1000)

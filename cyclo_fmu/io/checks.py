@@ -23,6 +23,12 @@ from ..recordings import RecordingError
 STANDSTILL_RPM = 1.0
 #: [1] driven samples needed to judge anything (and to diagnose): 100 samples
 MIN_DRIVEN = 100
+#: [1] loaded samples (both shafts above POWER_SHARE of their peak power) needed to judge the
+#: torque signs and the power balance: fewer are a warning, not a verdict
+MIN_LOADED = 10
+#: [r/min] the output shaft turns when faster than this: STANDSTILL_RPM / MAX_Z1 (a driven
+#: input at the standstill bound reaches the output through a ratio of up to z1 <= 1000)
+OUTPUT_STANDSTILL_RPM = STANDSTILL_RPM * 1e-3
 #: [N*m] an input torque above this looks like N*mm: 1000 N*m at the fast shaft of a
 #: speed reducer is 10 times the largest drives of this kind (paper drive: ~1.3 N*m in)
 N_MM_SUSPECT_NM = 1000.0
@@ -189,7 +195,7 @@ def _power_balance(rec, units_given, findings):
             acc[0] += int(np.count_nonzero(sel))
             acc[1] += float(np.sum(np.abs(pi[sel])))
             acc[2] += float(np.sum(np.abs(po[sel])))
-    if n_loaded < 10:
+    if n_loaded < MIN_LOADED:
         findings.append(_finding("power_balance", "warning",
                         f"only {n_loaded} samples where both shafts carry power: "
                         "power balance and torque signs not judged"))
@@ -206,7 +212,7 @@ def _power_balance(rec, units_given, findings):
                    f"shaft to the load); negate it with --units {col}=-N*m"), findings)
     msgs = []
     for name, (count, pi, po) in sums.items():
-        if count < 10:
+        if count < MIN_LOADED:
             continue
         r = po / pi if name == "forward" else pi / po     # power leaving / power entering
         msgs.append(f"{name}: {count} samples, efficiency {r:.3g}")
@@ -236,7 +242,7 @@ def check_mode(rec, mode: str, z1: int, findings=None, units_given=()):
     n_in, n_out = rec.speed_in[::st] / RPM, rec.speed_out[::st] / RPM
     peak = float(np.max(np.abs(n_in)))
     sel = (np.abs(n_in) > max(STANDSTILL_RPM, POWER_SHARE * peak)) & \
-          (np.abs(n_out) > STANDSTILL_RPM * 1e-3)
+          (np.abs(n_out) > OUTPUT_STANDSTILL_RPM)
     if sel.sum() < MIN_DRIVEN / st:
         _error(_finding("speed_ratio", "error",
                f"speed_out_rpm: only {int(sel.sum()) * st} samples where both shafts turn; the "
@@ -323,7 +329,7 @@ def check_model_level(rec, mode, design, findings, units_given=()):
     P_out = rec.torque_out * rec.speed_out
     peak_in, peak_out = _peak(P_in), _peak(P_out)
     loaded = np.flatnonzero((P_in > POWER_SHARE * peak_in) & (P_out > POWER_SHARE * peak_out))
-    if loaded.size < 10:
+    if loaded.size < MIN_LOADED:
         findings.append(_finding("model_level", "warning", f"only {loaded.size} loaded forward "
                                  "samples: the torque level is not compared with the design"))
         return findings
@@ -335,7 +341,7 @@ def check_model_level(rec, mode, design, findings, units_given=()):
         except ValueError:       # the design cannot carry these points: check_capacity's job
             return findings
     ok = np.isfinite(model) & (model > 0)
-    if ok.sum() < 10:
+    if ok.sum() < MIN_LOADED:
         return findings
     ratio = float(np.median(np.abs(rec.torque_in[k][ok])) / np.median(model[ok]))
     given = ", ".join(f"{c}={rec.units[c][0]}" for c in ("torque_in_Nm", "torque_out_Nm")
