@@ -552,3 +552,19 @@ def test_help_texts():
     assert "S1 or S2" in mode_help and "..." not in mode_help
     dg = _commands()["diagnose"]
     assert "MDF4" in next(a.help for a in dg._actions if a.dest == "recording")
+
+
+def test_output_file_that_is_a_pipe_is_refused_and_kept(tmp_path):
+    """An output path naming a FIFO (or a device such as /dev/full) is refused: the staged
+    write would have replaced it with a plain file."""
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    r = _run(["synth", "--effect", "none", "--size", "tiny", "--out", str(fifo)], tmp_path)
+    _assert_one_line(r, "out", "not a regular file")
+    assert fifo.is_fifo()
+
+
+def test_units_for_an_absent_column_are_refused(tmp_path):
+    path = _model_csv(tmp_path / "r.csv", rows=800)
+    r = _run(["diagnose", str(path), "--mode", "S1", "--units", "temperature_C=degF"], tmp_path)
+    _assert_one_line(r, "temperature_C=degF", "does not have")
