@@ -174,7 +174,7 @@ def cmd_efficiency(args) -> int:
     def ring_check(d, op_, field, value, what):
         """Refuse an operating point that overloads the ring (or overflows the model)."""
         rating = ring_torque_rating(d)
-        T_ring = abs(float(op_.torques["1"])) if op_ is not None else math.inf
+        T_ring = abs(float(op_.torques["1"]))
         if not math.isfinite(T_ring) or T_ring > rating:
             load = (f"puts {T_ring:.4g} N*m on the ring" if math.isfinite(T_ring) else
                     "puts more torque on the ring than the model can compute")
