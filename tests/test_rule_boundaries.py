@@ -358,3 +358,11 @@ def test_output_standstill_allows_a_ratio_of_1000():
     with pytest.raises(RecordingError, match="only 0 samples where both shafts turn"):
         checks.check_mode(rec(n_in=1.5, ratio=1.5 / 0.0009, ripple=False),
                           "S1", 1000)
+
+
+def test_echo_clipping_boundary():
+    """A cell or line is echoed whole up to ECHO_CHARS (60) characters, clipped beyond."""
+    from cyclo_fmu.io.text import ECHO_CHARS, clip
+    assert ECHO_CHARS == 60
+    assert clip("x" * 60) == repr("x" * 60)
+    assert clip("x" * 61) == repr("x" * 60) + "... (61 characters)"
