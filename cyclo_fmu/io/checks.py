@@ -85,6 +85,17 @@ def _stride(n) -> int:
     return max(1, -(-n // MEDIAN_SAMPLES))
 
 
+#: [1] the "peak" that shares such as POWER_SHARE refer to: this quantile of |x| (over an
+#: evenly strided subsample of long recordings), so that one corrupt cell (a spike of 1e5 in a
+#: speed column) cannot make every other sample look idle and switch the checks off
+PEAK_QUANTILE = 0.999
+
+
+def _robust_peak(x) -> float:
+    x = np.abs(np.asarray(x)[::_stride(len(x))])
+    return float(np.quantile(x, PEAK_QUANTILE)) if x.size else 0.0
+
+
 def check_magnitudes(data: dict, where) -> None:
     """Refuse finite but absurd cells (e.g. 1e308) before anything computes with them."""
     for key, lim in ABSURD.items():
@@ -179,8 +190,8 @@ def _power_balance(rec, units_given, findings):
     sl = list(_slices(rec.n))
     P_in = lambda s: rec.torque_in[s] * rec.speed_in[s]           # noqa: E731
     P_out = lambda s: rec.torque_out[s] * rec.speed_out[s]        # noqa: E731
-    max_in = max(float(np.max(np.abs(P_in(s)))) for s in sl)
-    max_out = max(float(np.max(np.abs(P_out(s)))) for s in sl)
+    max_in = _robust_peak(rec.torque_in * rec.speed_in)
+    max_out = _robust_peak(rec.torque_out * rec.speed_out)
     n_loaded = n_mismatch = n_in_pos = 0
     sums = {"forward": [0, 0.0, 0.0], "back-driven": [0, 0.0, 0.0]}   # count, |P_in|, |P_out|
     for s in sl:
@@ -240,7 +251,7 @@ def check_mode(rec, mode: str, z1: int, findings=None, units_given=()):
     findings = [] if findings is None else findings
     st = _stride(rec.n)                       # an evenly strided subsample of long recordings
     n_in, n_out = rec.speed_in[::st] / RPM, rec.speed_out[::st] / RPM
-    peak = float(np.max(np.abs(n_in)))
+    peak = _robust_peak(n_in)
     sel = (np.abs(n_in) > max(STANDSTILL_RPM, POWER_SHARE * peak)) & \
           (np.abs(n_out) > OUTPUT_STANDSTILL_RPM)
     if sel.sum() < MIN_DRIVEN / st:
@@ -327,7 +338,7 @@ def check_model_level(rec, mode, design, findings, units_given=()):
     from model_core import operating_point
     P_in = rec.torque_in * rec.speed_in
     P_out = rec.torque_out * rec.speed_out
-    peak_in, peak_out = _peak(P_in), _peak(P_out)
+    peak_in, peak_out = _robust_peak(P_in), _robust_peak(P_out)
     loaded = np.flatnonzero((P_in > POWER_SHARE * peak_in) & (P_out > POWER_SHARE * peak_out))
     if loaded.size < MIN_LOADED:
         findings.append(_finding("model_level", "warning", f"only {loaded.size} loaded forward "

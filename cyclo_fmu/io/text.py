@@ -296,6 +296,26 @@ class _Locator:
                 return f"row {line_no}"
         return f"data row {k + 1}"
 
+    def cell_of(self, parser_message: str) -> str | None:
+        """The row of a cell the bulk parser refused ("In CSV column #2: ... invalid value
+        '-0.30 '") that the line-wise check reads (spaces around a number): named as written."""
+        m = re.search(r"column #(\d+).*?invalid value '(.*?)'", parser_message, re.S)
+        if not m:
+            return None
+        j, text = int(m.group(1)), m.group(2)
+        if j >= len(self.d.header):
+            return None
+        name = self.d.header[j].strip()
+        for line_no, line in self._rows():
+            try:
+                cells = _split(line, self.d.delimiter)
+            except csv.Error:
+                continue
+            if len(cells) > j and cells[j] == text:
+                return (f"column {name!r}, row {line_no}: {clip(text)} is not a number as "
+                        "written (spaces or characters around it); fix that cell")
+        return None
+
     def first_problem(self) -> str | None:
         width = len(self.d.header)
         for line_no, line in self._rows():
@@ -389,7 +409,7 @@ def _refuse_binary(raw: bytes, text: str, source: str):
 
 
 def _fail(loc: _Locator, exc) -> RecordingError:
-    msg = loc.first_problem()
+    msg = loc.first_problem() or loc.cell_of(str(exc))
     # the parser's own text may quote many lines of the file: one line, clipped
     why = " ".join(str(exc).split())
     return RecordingError(msg or f"recording {str(loc.path)!r} cannot be parsed "
