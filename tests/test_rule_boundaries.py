@@ -366,3 +366,16 @@ def test_echo_clipping_boundary():
     assert ECHO_CHARS == 60
     assert clip("x" * 60) == repr("x" * 60)
     assert clip("x" * 61) == repr("x" * 60) + "... (61 characters)"
+
+
+def test_one_corrupt_cell_does_not_switch_the_checks_off():
+    """A single 99999 r/min cell: the mode check still judges the ratio on every other sample
+    (peaks are the 99.9th percentile, PEAK_QUANTILE), and the power balance still runs."""
+    d = s1(n=2000)
+    d["speed_in_rpm"] = d["speed_in_rpm"].copy()
+    d["speed_in_rpm"][700] = 99999.0
+    r = recording_from_arrays(**d, check=False)
+    mode, f = checks.check_mode(r, "S1", 15)
+    assert mode == "S1" and "2000 driven samples" in f[-1]["message"]
+    f = checks.check_units(r)
+    assert [x for x in f if x["id"] == "power_balance"][-1]["status"] == "ok"
