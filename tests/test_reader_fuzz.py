@@ -234,3 +234,46 @@ def test_reader_fuzz(tmp_path_factory, base, m):
 @given(m=MUTATIONS)
 def test_reader_fuzz_600(tmp_path_factory, base, m):
     event(_check_outcome(tmp_path_factory.mktemp("fuzz"), base, *m))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(24))
+def test_diagnose_cli_on_mutated_recordings(tmp_path_factory, seed):
+    """The whole command on a mutated 42 s recording (synth, tiny): exit 0, or one line and
+    exit 2; never a traceback (the checks and the diagnosis after the reader included)."""
+    import os
+    import random
+    import subprocess
+    import sys
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=str(root))
+    base = tmp_path_factory.getbasetemp() / "cli_fuzz_base.csv"
+    if not base.exists():
+        subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "synth", "--effect", "none",
+                        "--size", "tiny", "--out", str(base)], env=env, check=True,
+                       capture_output=True, timeout=300)
+    raw = base.read_bytes()
+    rng = random.Random(seed)
+    kind = ["flip", "insert", "cell", "dup_line", "truncate", "delete"][seed % 6]
+    p = rng.randrange(len(raw))
+    if kind == "flip":
+        raw = _flip(raw, p, rng.randrange(256))
+    elif kind == "insert":
+        raw = _insert(raw, p, bytes(rng.randrange(256) for _ in range(rng.randint(1, 6))))
+    elif kind == "cell":
+        raw = _cell(raw, p, rng.randrange(5), rng.choice([b"", b"nan", b"1e308", b"abc",
+                                                         b"-5", b"99999"]))
+    elif kind == "dup_line":
+        raw = _dup_line(raw, p)
+    elif kind == "truncate":
+        raw = _truncate(raw, p)
+    else:
+        raw = _delete(raw, p, rng.randint(1, 50000))
+    f = tmp_path_factory.mktemp("cli_fuzz") / f"m_{kind}.csv"
+    f.write_bytes(raw)
+    r = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "diagnose", str(f), "--mode",
+                        "auto"], env=env, capture_output=True, text=True, timeout=600)
+    assert "Traceback" not in r.stderr, r.stderr[-2000:]
+    assert r.returncode == 0 or (r.returncode == 2 and
+                                 len(r.stderr.strip().splitlines()) == 1), r.stderr[-500:]
