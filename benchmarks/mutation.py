@@ -223,7 +223,8 @@ def main(argv=None):
             lines.append(f"\n{kind}: {killed} of {len(sub)} killed "
                          f"({100 * killed / len(sub):.0f} %)")
     killed = sum(r[3].startswith("killed") for r in rows)
-    lines.append(f"\nall: {killed} of {len(rows)} killed ({100 * killed / max(1, len(rows)):.0f} %)")
+    share = 100 * killed / max(1, len(rows))
+    lines.append(f"\nall: {killed} of {len(rows)} killed ({share:.0f} %)")
     text = "\n".join(lines) + "\n"
     print(text)
     Path(args.out).write_text(text)

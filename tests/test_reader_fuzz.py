@@ -17,7 +17,6 @@ Default run: 50 examples; ``-m slow``: 600. Hypothesis is derandomised (tests/co
 a failure replays.
 """
 import codecs
-import math
 
 import numpy as np
 import pytest

@@ -68,7 +68,8 @@ def _task(design, mode, columns, out, item, units=None):
     except (ValueError, OSError) as exc:     # RecordingError, CycloidInputError, unreadable
         row["error"] = " ".join(str(exc).split())
         return row
-    row.update(mode=result["mode"], effect=result["effect"], rmse_before_mNm=1e3 * result["rmse_before_Nm"],
+    row.update(mode=result["mode"], effect=result["effect"],
+               rmse_before_mNm=1e3 * result["rmse_before_Nm"],
                rmse_after_mNm=1e3 * result["rmse_after_Nm"],
                zeta_d_before=result["zeta_d_before"], zeta_d_after=result["zeta_d_after"])
     return row
