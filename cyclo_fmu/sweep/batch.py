@@ -68,6 +68,10 @@ def _task(design, mode, columns, out, item, units=None):
     except (ValueError, OSError) as exc:     # RecordingError, CycloidInputError, unreadable
         row["error"] = " ".join(str(exc).split())
         return row
+    except Exception as exc:     # noqa: BLE001 - a fault on one file must not end the batch:
+        # it is that file's row, named as an internal error (a bug to report, not bad input)
+        row["error"] = " ".join(f"internal error ({type(exc).__name__}: {exc})".split())[:500]
+        return row
     row.update(mode=result["mode"], effect=result["effect"],
                rmse_before_mNm=1e3 * result["rmse_before_Nm"],
                rmse_after_mNm=1e3 * result["rmse_after_Nm"],
