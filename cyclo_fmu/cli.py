@@ -191,9 +191,18 @@ def cmd_efficiency(args) -> int:
     # the no-load running torque first: when the drag alone (at this speed, or at this grease
     # temperature) needs a driving torque beyond what the ring can take, the speed or the
     # temperature is at fault, not the torque
-    with np.errstate(all="ignore"):
-        T0 = float(operating_point(design, a + b, w_a, T_out=0.0).torques[a])
-    if not math.isfinite(T0) or abs(T0) * ring_share > rating:
+    try:
+        with np.errstate(all="ignore"):
+            T0 = float(operating_point(design, a + b, w_a, T_out=0.0).torques[a])
+    except ValueError as exc:
+        if isinstance(exc, CycloidInputError):
+            raise
+        T0 = math.nan
+    if not math.isfinite(T0):        # the model cannot evaluate this design at all here
+        raise CycloidInputError("design", args.design or "default", f"the model cannot "
+                                f"evaluate this design at {args.speed:g} r/min even at no load "
+                                "(its no-load running torque is not a finite number)")
+    if abs(T0) * ring_share > rating:
         field, value = (("temperature", args.temperature) if args.temperature is not None
                         else ("speed", args.speed))
         raise CycloidInputError(field, value, f"the drive's no-load running torque there "
@@ -227,7 +236,11 @@ def cmd_efficiency(args) -> int:
             raise
         raise CycloidInputError("torque", args.torque, f"outside what the model can evaluate "
                                 f"at {args.speed:g} r/min ({exc})") from None
-    T_ring = ring_check(design, op, "torque", args.torque, "it")
+    T0_share = abs(T0) * ring_share
+    T_ring = ring_check(design, op, "torque", args.torque,
+                        "it" if T0_share <= 0.5 * rating else
+                        f"with the no-load running torque {abs(T0):.4g} N*m (about "
+                        f"{T0_share:.4g} N*m of the ring's share) it")
     losses = {k: _json_num(v) for k, v in op.losses.as_dict().items()}
     stalled = not bool(op.locked) and not math.isfinite(float(op.torques[b]))
     # the no-load running torque (the drag at the shafts and the gear's losses at zero load):
@@ -351,8 +364,15 @@ def cmd_stiffness(args) -> int:
                                     "rollers, ISO 76)")
     if args.out:
         _output_dir("out", args.out, create=False)
-    with np.errstate(all="ignore"):
-        values = st.catalogue_values(design, rated)
+    try:
+        with np.errstate(all="ignore"):
+            values = st.catalogue_values(design, rated)
+    except ValueError as exc:
+        if isinstance(exc, CycloidInputError):
+            raise
+        raise CycloidInputError("design", args.design or "default", "the contact model cannot "
+                                f"evaluate this design ({' '.join(str(exc).split())[:200]})"
+                                ) from None
     from .limits import check_finite_result
     check_finite_result("rated-torque", rated, values)
     if args.out:

@@ -366,6 +366,11 @@ MAX_N_POSITIONS = 4096
 #: Upper bound on one contact array, z1^2 x n_positions float64 values [B]: 512 MiB, a quarter
 #: of a small machine's memory, so that a design can never exhaust it.
 MAX_CONTACT_ARRAY_BYTES = 512 * 2 ** 20
+#: Lower bound on the catalogue viscosities [m^2/s]: 1 mm^2/s, water's; no lubricating oil is
+#: thinner (the thinnest ISO VG 2 oils have about 2 mm^2/s at 40 degC), and the Walther line
+#: of ASTM D341 (log log (nu + 0.7), model_core.thermal) is undefined from 0.3 mm^2/s down,
+#: where the model would return NaN.
+MIN_VISCOSITY = 1e-6
 #: Upper bound on a friction coefficient [1]: dry clean steel on steel reaches about 0.6-0.8;
 #: above 1 the sliding contacts would self-lock the drive in every mode.
 MAX_FRICTION_COEFFICIENT = 1.0
@@ -474,6 +479,12 @@ def validate_design(d: DriveDesign) -> None:
     if not lub.kinematic_viscosity_100 < lub.kinematic_viscosity:
         raise CycloidInputError("lubricant.kinematic_viscosity_100", lub.kinematic_viscosity_100,
                                 "must be below the 40 degC viscosity (oils thin when hot)")
+    for name in ("kinematic_viscosity_100", "kinematic_viscosity"):
+        if getattr(lub, name) < MIN_VISCOSITY:
+            raise CycloidInputError("lubricant." + name, getattr(lub, name),
+                                    f"below {MIN_VISCOSITY * 1e6:g} mm^2/s (water's): no "
+                                    "lubricating oil is that thin, and the Walther viscosity-"
+                                    "temperature line (ASTM D341) fails below 0.3 mm^2/s")
     for f in dataclasses.fields(fr):
         if getattr(fr, f.name) < 0:
             raise CycloidInputError("friction." + f.name, getattr(fr, f.name), "must not be negative")

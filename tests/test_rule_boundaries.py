@@ -379,3 +379,13 @@ def test_one_corrupt_cell_does_not_switch_the_checks_off():
     assert mode == "S1" and "2000 driven samples" in f[-1]["message"]
     f = checks.check_units(r)
     assert [x for x in f if x["id"] == "power_balance"][-1]["status"] == "ok"
+
+
+def test_viscosity_floor():
+    """Catalogue viscosities below water's 1 mm^2/s are refused (the Walther line is undefined
+    from 0.3 mm^2/s down); 1 mm^2/s at 100 degC is accepted."""
+    from model_core.design import Lubricant
+    DriveDesign(lubricant=Lubricant(kinematic_viscosity=20e-6, kinematic_viscosity_100=1.0e-6))
+    with pytest.raises(CycloidInputError, match="lubricant.kinematic_viscosity_100"):
+        DriveDesign(lubricant=Lubricant(kinematic_viscosity=20e-6,
+                                        kinematic_viscosity_100=0.99e-6))
