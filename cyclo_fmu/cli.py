@@ -12,6 +12,8 @@ import math
 import sys
 from pathlib import Path
 
+import numpy as np
+
 
 from model_core import (CycloidInputError, DriveDesign, LOSS_NAMES, design_from_toml,
                         operating_point, rad_s_to_rpm, rpm_to_rad_s)
@@ -38,6 +40,38 @@ def _number(name):
 # and writes them so that a failure leaves nothing half-written
 from .outputs import (output_dir as _output_dir, output_file as _output_file,  # noqa: E402
                       staged_dir as _staged_dir, staged_file as _staged_file)
+
+
+def _same_path(a, b) -> bool:
+    """Whether two paths name one file (resolved; an existing file by its inode)."""
+    pa, pb = Path(a), Path(b)
+    if pa.exists() and pb.exists():
+        return pa.samefile(pb)
+    return pa.resolve() == pb.resolve()
+
+
+def _recording_error(path, exc) -> CycloidInputError:
+    """A reader's or the diagnosis's refusal as the CLI's one line, naming the recording once
+    (the reader's message often starts with the path itself)."""
+    msg = " ".join(str(exc).split())
+    for prefix in (f"recording {str(path)!r}", f"recording {path}"):
+        if msg.startswith(prefix):
+            msg = msg[len(prefix):].lstrip(" ,:")
+            break
+    return CycloidInputError("recording", str(path), msg)
+
+
+#: [characters] longest error line printed: real messages stay below ~400; an echo of a
+#: pathological input (a 20 MB cell) is cut in the middle
+MAX_ERROR_CHARS = 600
+
+
+def _error_line(text) -> str:
+    """One line: whitespace runs (newlines too) collapsed, cut to MAX_ERROR_CHARS."""
+    line = " ".join(str(text).split())
+    if len(line) > MAX_ERROR_CHARS:
+        line = f"{line[:MAX_ERROR_CHARS - 100]} ... {line[-80:]}"
+    return line
 
 
 def _check_seed(seed):
@@ -113,8 +147,8 @@ def _json_num(x):
 def cmd_efficiency(args) -> int:
     design = _load_design(args.design, args.profile)
     a, b, h = parse_mode(args.mode)
-    if not math.isfinite(args.speed):
-        raise CycloidInputError("speed", args.speed, "must be a finite number of r/min")
+    from .limits import check_speed_rpm
+    check_speed_rpm("speed", args.speed)
     if not math.isfinite(args.torque):
         raise CycloidInputError("torque", args.torque, "must be a finite number of N*m")
     if args.torque == 0:
@@ -135,31 +169,95 @@ def cmd_efficiency(args) -> int:
                                 "viscosity; --temperature and --ambient need --profile physical")
     if args.temperature is not None:
         design = thermal.at_temperature(design, args.temperature + KELVIN)
-    if args.ambient is not None:
-        op, temperature = thermal.solve_heat_balance(
-            design.replace(ambient_temperature=args.ambient + KELVIN), a + b,
-            rpm_to_rad_s(args.speed), args.torque)
-        design = thermal.at_temperature(design, temperature)
-    else:
-        op = operating_point(design, a + b, rpm_to_rad_s(args.speed), args.torque)
-    from model_core.stiffness import static_torque_rating
+    from model_core.stiffness import ring_torque_rating, static_torque_rating
+    w_a = rpm_to_rad_s(args.speed)
     rated = static_torque_rating(design)
-    rating = rated["rating_Nm"]
+    limit_text = (f"the ring's share of the static rating, limited by {rated['limiting']}: "
+                  f"{rated['descriptions'][rated['limiting']]}")
+
+    def ring_check(d, op_, field, value, what):
+        """Refuse an operating point that overloads the ring (or overflows the model)."""
+        rating = ring_torque_rating(d)
+        T_ring = abs(float(op_.torques["1"]))
+        if not math.isfinite(T_ring) or T_ring > rating:
+            load = (f"puts {T_ring:.4g} N*m on the ring" if math.isfinite(T_ring) else
+                    "puts more torque on the ring than the model can compute")
+            raise CycloidInputError(field, value, f"{what} {load}, beyond the design's static "
+                                    f"rating {rating:.4g} N*m ({limit_text})")
+        return T_ring
+
+    # the ring's share of a torque at the driving shaft, by the ideal (lossless) torque ratios
+    # of Table 1: 1 when the ring drives, |i| when it is driven, |1 - i| when it is held
+    from .limits import ring_share as _ring_share
+    ring_share = _ring_share(a + b, design.z1)
+    rating = ring_torque_rating(design)   # = rated['rating_Nm'] / i0
+    # the no-load running torque first: when the drag alone (at this speed, or at this grease
+    # temperature) needs a driving torque beyond what the ring can take, the speed or the
+    # temperature is at fault, not the torque
+    try:
+        with np.errstate(all="ignore"):
+            T0 = float(operating_point(design, a + b, w_a, T_out=0.0).torques[a])
+    except ValueError as exc:
+        if isinstance(exc, CycloidInputError):
+            raise
+        T0 = math.nan
+    if not math.isfinite(T0):        # the model cannot evaluate this design at all here
+        raise CycloidInputError("design", args.design or "default", f"the model cannot "
+                                f"evaluate this design at {args.speed:g} r/min even at no load "
+                                "(its no-load running torque is not a finite number)")
+    if abs(T0) * ring_share > rating:
+        field, value = (("temperature", args.temperature) if args.temperature is not None
+                        else ("speed", args.speed))
+        raise CycloidInputError(field, value, f"the drive's no-load running torque there "
+                                f"({abs(T0):.4g} N*m at {args.speed:g} r/min) alone puts about "
+                                f"{abs(T0) * ring_share:.4g} N*m on the ring, beyond the "
+                                f"design's static rating {rating:.4g} N*m")
+    # a torque whose lossless ring share is beyond twice the rating is refused before the
+    # model runs (1e308 N*m would overflow in it); the model's own ring torque is checked after
+    T_ring_ideal = abs(args.torque) * ring_share
+    if T_ring_ideal > 2 * rating:
+        load = f"about {T_ring_ideal:.4g}" if math.isfinite(T_ring_ideal) else "more than 1e308"
+        raise CycloidInputError("torque", args.torque, f"puts {load} N*m on the ring (lossless), "
+                                f"beyond the design's static rating {rating:.4g} N*m "
+                                f"({limit_text})")
+    try:
+        with np.errstate(all="ignore"):
+            if args.ambient is not None:
+                op, temperature = thermal.solve_heat_balance(
+                    design.replace(ambient_temperature=args.ambient + KELVIN), a + b, w_a,
+                    args.torque)
+                design = thermal.at_temperature(design, temperature)
+            else:
+                op = operating_point(design, a + b, w_a, args.torque)
+    except ValueError as exc:          # the model's own refusal (e.g. eta0 out of range)
+        if isinstance(exc, CycloidInputError) and \
+                exc.field.startswith("operating_temperature"):
+            raise CycloidInputError("torque", args.torque, f"at {args.speed:g} r/min the "
+                                    "housing's steady heat balance puts the grease beyond the "
+                                    "model's 200 degC") from None
+        if isinstance(exc, CycloidInputError):
+            raise
+        raise CycloidInputError("torque", args.torque, f"outside what the model can evaluate "
+                                f"at {args.speed:g} r/min ({exc})") from None
+    T0_share = abs(T0) * ring_share
+    T_ring = ring_check(design, op, "torque", args.torque,
+                        "it" if T0_share <= 0.5 * rating else
+                        f"with the no-load running torque {abs(T0):.4g} N*m (about "
+                        f"{T0_share:.4g} N*m of the ring's share) it")
     # the output torque of one gear path: the disc's torque, or the ring's times i0 (the ring
     # rollers' torque about the ring axis is z1/z_c times the gear's)
-    T_ring = abs(float(op.torques["1"]))
     T_path = max(abs(float(op.torques["2"])), design.i0 * T_ring)
-    if math.isfinite(T_path) and T_path > rating:
+    if math.isfinite(T_path) and T_path > rated["rating_Nm"]:
         raise CycloidInputError("torque", args.torque, f"puts {T_path:.4g} N*m through the "
-                                f"gears, beyond the design's static rating {rating:.4g} N*m "
-                                f"(limited by {rated['limiting']}: "
+                                f"gears, beyond the design's static rating "
+                                f"{rated['rating_Nm']:.4g} N*m (limited by {rated['limiting']}: "
                                 f"{rated['descriptions'][rated['limiting']]})")
     losses = {k: _json_num(v) for k, v in op.losses.as_dict().items()}
     stalled = not bool(op.locked) and not math.isfinite(float(op.torques[b]))
     # the no-load running torque (the drag at the shafts and the gear's losses at zero load):
     # a driving torque below it cannot keep the drive turning unless the load drives it
-    w_a = rpm_to_rad_s(args.speed)
-    no_load = float(operating_point(design, a + b, w_a, T_out=0.0).torques[a])
+    with np.errstate(all="ignore"):
+        no_load = float(operating_point(design, a + b, w_a, T_out=0.0).torques[a])
     below_no_load = bool(args.torque * w_a > 0 and abs(args.torque) < abs(no_load))
     stalled = stalled or below_no_load
     p_in = float(op.input_power)
@@ -182,6 +280,14 @@ def cmd_efficiency(args) -> int:
         "reaction_torque_Nm": _json_num(op.torques[h]),
         "profile": design.profile, "losses": design.losses,
     }
+    if not (stalled or bool(op.locked)):   # a running drive: every number must be finite
+        from .limits import check_finite_result
+        check_finite_result("torque" if abs(args.torque) > abs(no_load) else "speed",
+                            args.torque if abs(args.torque) > abs(no_load) else args.speed,
+                            {"eta": float(op.eta), "eta0": float(op.eta0),
+                             "loss_power": float(op.loss_power),
+                             **{k: float(v) for k, v in op.losses.as_dict().items()},
+                             "output_torque": t_out, "output_speed": w_out})
     if not design.calibration.is_default:
         # a calibrated value is reported as calibrated, with what it was fitted to
         result["mesh_loss_W"] = _json_num(op.losses.PL_mesh)
@@ -285,9 +391,25 @@ def cmd_stiffness(args) -> int:
     rated = args.rated_torque
     if rated is not None and not (math.isfinite(rated) and rated > 0):
         raise CycloidInputError("rated-torque", rated, "must be a positive number of N*m")
+    if rated is not None:
+        r = st.static_torque_rating(design)     # an output torque, as --rated-torque
+        if rated > r["rating_Nm"]:
+            raise CycloidInputError("rated-torque", rated, f"beyond the design's static rating "
+                                    f"{r['rating_Nm']:.4g} N*m (limited by {r['limiting']}: "
+                                    f"{r['descriptions'][r['limiting']]})")
     if args.out:
         _output_dir("out", args.out, create=False)
-    values = st.catalogue_values(design, rated)
+    try:
+        with np.errstate(all="ignore"):
+            values = st.catalogue_values(design, rated)
+    except ValueError as exc:
+        if isinstance(exc, CycloidInputError):
+            raise
+        raise CycloidInputError("design", args.design or "default", "the contact model cannot "
+                                f"evaluate this design ({' '.join(str(exc).split())[:200]})"
+                                ) from None
+    from .limits import check_finite_result
+    check_finite_result("rated-torque", rated, values)
     if args.out:
         from .plots import plot_stiffness
         with _staged_dir("out", args.out) as out:
@@ -428,6 +550,9 @@ def cmd_synth(args) -> int:
     _output_file("out", args.out)
     if truth:
         _output_file("truth", truth)
+        if _same_path(truth, args.out):
+            raise CycloidInputError("truth", truth, "is the recording's own file (--out): the "
+                                    "truth would overwrite the recording; give another name")
     if args.engine == "bench" and (len(effects) > 1 or rise is not None):
         raise CycloidInputError("engine", args.engine, "hides exactly one effect and writes no "
                                 "temperature column; use --engine fast")
@@ -471,7 +596,7 @@ def cmd_diagnose(args) -> int:
         d, result = diagnose_recording(rec, mode, checks, design, progress=True,
                                        calibrate=args.calibrate)
     except (RecordingError, DiagnosisError) as exc:
-        raise CycloidInputError("recording", args.recording, str(exc))
+        raise _recording_error(args.recording, exc) from None
     if args.out:
         from .diagnosis import write_diagnosis
         write_diagnosis(args.out, d, design, result, source=str(args.recording))
@@ -576,22 +701,35 @@ def cmd_diagnose_batch(args) -> int:
     if not paths:
         raise CycloidInputError("folder", args.folder, "holds no recording (*.csv, *.mf4)")
     design = _load_design(args.design, args.profile)
-    mode = "".join(parse_mode(args.mode)[:2])
+    mode = ("auto" if args.mode.strip().lower() == "auto" else
+            "".join(parse_mode(args.mode)[:2]))
+    from .io.units import parse_units
     try:
         columns = parse_column_map(args.columns) if args.columns else None
     except RecordingError as exc:
         raise CycloidInputError("columns", args.columns, str(exc))
+    try:
+        units = parse_units(args.units) if args.units else None
+    except RecordingError as exc:
+        raise CycloidInputError("units", args.units, str(exc))
     _workers(args)
     with _staged_dir("out", args.out) as out:
-        df = diagnose_batch(folder, out, design, mode, columns=columns,
+        df = diagnose_batch(folder, out, design, mode, columns=columns, units=units,
                             calibrate=args.calibrate,
                             scheduler=args.scheduler, workers=args.workers, serial=args.serial,
                             progress=_progress_on(args))
     bad = int((df["error"] != "").sum())
-    print(f"diagnose-batch: {len(df)} recordings -> {args.out}/summary.csv"
-          f"{f'; {bad} could not be diagnosed (column error)' if bad else ''}")
+    print(f"diagnose-batch: {len(df)} recordings -> {Path(args.out) / 'summary.csv'}: "
+          f"{len(df) - bad} diagnosed, {bad} failed")
     for _, r in df.iterrows():
-        print(f"  {r['recording']}: {r['error'] or r['effect']}")
+        found = f" (mode {r['mode']})" if mode == "auto" else ""
+        what = f"failed: {r['error']}" if r["error"] else f"{r['effect']}{found}"
+        print(f"  {r['recording']}: {what}")
+    if bad:        # partial results are written; the exit status says not all went well
+        print(f"cyclo-fmu: error: diagnose-batch: {bad} of {len(df)} recordings could not be "
+              "diagnosed (their reasons above and in summary.csv, column error)",
+              file=sys.stderr)
+        return 1
     return 0
 
 
@@ -663,7 +801,8 @@ def build_parser() -> argparse.ArgumentParser:
     mx.add_argument("--out", required=True, help="output folder (writes CycloidDrive_<mode>.mo)")
     mx.set_defaults(func=cmd_export_modelica)
     bench = sub.add_parser("bench", help="simulate the motor - reducer - brake test bench (SSP)")
-    bench.add_argument("--mode", default="S1", help="operating mode of the reducer (S1, S2, ...)")
+    bench.add_argument("--mode", default="S1", help="operating mode of the reducer: S1 or S2 "
+                       "(the bench's motor drives the eccentric shaft S; default S1)")
     bench.add_argument("--scenario", default="paper",
                        help="paper (frequency x load series), runup, loadstep, reversal")
     bench.add_argument("--out", default="out/bench", help="output folder (default: out/bench)")
@@ -687,8 +826,11 @@ def build_parser() -> argparse.ArgumentParser:
                     "several separated by commas")
     sy.add_argument("--temperature-rise", type=float, help="K: the recording carries a "
                     "temperature column warming by this much (warm-up effects follow it)")
-    sy.add_argument("--seed", type=int, default=1)
-    sy.add_argument("--mode", default="S1")
+    sy.add_argument("--seed", type=int, default=1, help="seed of the transducer noise and "
+                    "the hidden effect's draw, 0 to 2^63-1 (default 1): the same seed writes "
+                    "the same recording")
+    sy.add_argument("--mode", default="S1", help="operating mode of the recorded reducer: S1 "
+                    "or S2 (the bench drives the eccentric shaft S; default S1)")
     sy.add_argument("--size", default="small", help="tiny (42 s), small (2 min), medium (5), "
                     "large (10)")
     sy.add_argument("--out", required=True, help="recording CSV to write")
@@ -700,8 +842,10 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_profile(sy)
     sy.set_defaults(func=cmd_synth, fmus=True)
-    dg = sub.add_parser("diagnose", help="locate, explain and model the mismatch of a recording")
-    dg.add_argument("recording", help="recording CSV")
+    dg = sub.add_parser("diagnose", help="locate, explain and model the mismatch of a recording "
+                        "(CSV/ASCII or MDF4)")
+    dg.add_argument("recording", help="recording: CSV/ASCII (any common dialect) or MDF4 "
+                    "(.mf4, needs the mdf extra)")
     dg.add_argument("--mode", required=True, help=f"operating mode ({', '.join(MODES)}) or "
                     "auto (inferred from the measured speed ratio and its sign)")
     dg.add_argument("--design", help="design file (TOML) or preset name (mackic-rig)")
@@ -714,7 +858,8 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     dg.add_argument("--units", help="units of columns, overriding anything detected, e.g. "
                     "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")
-    dg.add_argument("--json", action="store_true")
+    dg.add_argument("--json", action="store_true", help="print the diagnosis as one JSON "
+                    "object (the keys of diagnosis.json; strict JSON, null for undefined)")
     _add_profile(dg)
     dg.set_defaults(func=cmd_diagnose)
     sw = sub.add_parser("sweep", help="design study: many designs over the bench envelope "
@@ -730,11 +875,15 @@ def build_parser() -> argparse.ArgumentParser:
     db.add_argument("folder", help="folder of recordings")
     db.add_argument("--out", required=True, help="folder for one result folder per recording "
                     "and summary.csv")
-    db.add_argument("--mode", required=True)
+    db.add_argument("--mode", required=True, help=f"operating mode of every recording "
+                    f"({', '.join(MODES)}) or auto (each recording's mode inferred from its "
+                    "measured speed ratio and its sign)")
     db.add_argument("--design", help="design file (TOML) or preset name (mackic-rig)")
     db.add_argument("--calibrate", action="store_true", help="also fit the calibration "
                     "effects (mesh_loss, idle_loss_scale; see diagnose --calibrate)")
     db.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
+    db.add_argument("--units", help="units of columns, overriding anything detected, e.g. "
+                    "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")
     _cluster_options(db)
     db.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_profile(db)
@@ -760,6 +909,35 @@ def _join_signed_numbers(argv):
     return out
 
 
+_INTERRUPTED = []      # signal numbers received (run() routes SIGINT and SIGTERM here)
+
+
+def _on_signal(signum, frame):
+    """SIGINT/SIGTERM: note it and unwind as Ctrl-C does, so that every staged output is
+    removed on the way out (a slave's Python code may turn the KeyboardInterrupt into an FMU
+    error; the note tells main() what it was)."""
+    _INTERRUPTED.append(signum)
+    raise KeyboardInterrupt
+
+
+def _interrupted(args) -> int:
+    import signal
+    signum = _INTERRUPTED[0] if _INTERRUPTED else signal.SIGINT
+    name = signal.Signals(signum).name
+    print(f"cyclo-fmu: {args.command}: interrupted ({name}); partial outputs removed",
+          file=sys.stderr)
+    return 128 + int(signum)
+
+
+def _user_path(filename) -> str:
+    """The user's file name for a staged temporary (``.out.csv.partial-123.csv`` ->
+    ``out.csv``): internal names stay out of error messages."""
+    import re
+    p = Path(str(filename))
+    m = re.fullmatch(r"\.(.+?)\.partial-\d+(\.[^.]*)?", p.name)
+    return str(p.with_name(m.group(1))) if m else str(filename)
+
+
 def main(argv=None) -> int:
     argv = _join_signed_numbers(list(sys.argv[1:] if argv is None else argv))
     args = build_parser().parse_args(argv)
@@ -767,26 +945,33 @@ def main(argv=None) -> int:
         _collect_fmu_log()
     try:
         return args.func(args)
+    except KeyboardInterrupt:       # Ctrl-C, or SIGTERM through run()'s handler
+        return _interrupted(args)
     except CycloidInputError as exc:
-        print(f"cyclo-fmu: error: {exc}", file=sys.stderr)
+        print(_error_line(f"cyclo-fmu: error: {exc}"), file=sys.stderr)
         return 2
     except BrokenPipeError:         # the reader of stdout left (`| head`): run() stops quietly
         raise
     except OSError as exc:          # a path the command could not read or write
-        where = exc.filename if exc.filename is not None else ""
-        print(f"cyclo-fmu: error: {args.command}: {where!r}: {exc.strerror or exc}",
-              file=sys.stderr)
+        if _INTERRUPTED:
+            return _interrupted(args)
+        where = _user_path(exc.filename) if exc.filename is not None else ""
+        print(_error_line(f"cyclo-fmu: error: {args.command}: {where!r}: "
+                          f"{exc.strerror or exc}"), file=sys.stderr)
         return 2
     except MemoryError:
         print(f"cyclo-fmu: error: {args.command}: out of memory (input too large)",
               file=sys.stderr)
         return 2
     except Exception as exc:        # an FMU's error: surface its message in one line
+        if _INTERRUPTED:            # the signal reached a slave's Python code: its FMU
+            return _interrupted(args)   # call failed because of it
         if type(exc).__module__.split(".")[0] != "fmpy":
             raise
         logged = "; ".join(f"{i}: {m}" for i, m in _FMU_ERRORS[-2:])
         text = " ".join(f"{exc}{f' ({logged})' if logged else ''}".split())
-        print(f"cyclo-fmu: error: {args.command}: FMU failed: {text}", file=sys.stderr)
+        print(_error_line(f"cyclo-fmu: error: {args.command}: FMU failed: {text}"),
+              file=sys.stderr)
         return 2
 
 
@@ -800,6 +985,10 @@ def run() -> None:
     # our own process: glibc keeps the loss model's large temporaries on its heap (half of a
     # paper-profile map's time was page faults of freshly mapped arrays; cyclo_fmu.slaves.heap)
     keep_temporaries_on_heap()
+    import signal
+    # this process is the host (no FMU's): SIGTERM unwinds like Ctrl-C, removing staged outputs
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, _on_signal)
     try:
         code = main()
         sys.stdout.flush()

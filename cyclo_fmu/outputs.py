@@ -52,6 +52,10 @@ def output_file(field: str, path) -> Path:
     p = Path(path)
     if p.is_dir():
         raise CycloidInputError(field, str(path), "is a folder, not a file")
+    if p.exists() and not p.is_file():
+        # a device, FIFO or socket: the staged write would replace it with a plain file
+        raise CycloidInputError(field, str(path), "is not a regular file (a device or a "
+                                "pipe?); give a file name")
     parent = p.parent
     if not parent.exists():
         raise CycloidInputError(field, str(path), f"folder {parent} does not exist")

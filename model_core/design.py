@@ -509,6 +509,11 @@ MAX_N_POSITIONS = 4096
 #: Upper bound on one contact array, z1^2 x n_positions float64 values [B]: 512 MiB, a quarter
 #: of a small machine's memory, so that a design can never exhaust it.
 MAX_CONTACT_ARRAY_BYTES = 512 * 2 ** 20
+#: Lower bound on the catalogue viscosities [m^2/s]: 1 mm^2/s, water's; no lubricating oil is
+#: thinner (the thinnest ISO VG 2 oils have about 2 mm^2/s at 40 degC), and the Walther line
+#: of ASTM D341 (log log (nu + 0.7), model_core.thermal) is undefined from 0.3 mm^2/s down,
+#: where the model would return NaN.
+MIN_VISCOSITY = 1e-6
 #: Upper bound on a friction coefficient [1]: dry clean steel on steel reaches about 0.6-0.8;
 #: above 1 the sliding contacts would self-lock the drive in every mode.
 MAX_FRICTION_COEFFICIENT = 1.0
@@ -632,22 +637,27 @@ def validate_design(d: DriveDesign) -> None:
     for name, allowed in (("profile", PROFILES), ("losses", LOSS_SCOPES)):
         if getattr(d, name) not in allowed:
             raise CycloidInputError(name, getattr(d, name), f"must be one of {', '.join(allowed)}")
-    if not 173.15 < d.ambient_temperature < 473.15:
-        raise CycloidInputError("ambient_temperature", d.ambient_temperature,
-                                "must lie between -100 and 200 degC (in K inside)")
-    if not 173.15 < d.operating_temperature < 473.15:
-        raise CycloidInputError("operating_temperature", d.operating_temperature,
-                                "must lie between -100 and 200 degC (in K inside)")
+    for name in ("ambient_temperature", "operating_temperature"):
+        v = getattr(d, name)
+        if not 173.15 < v < 473.15:     # echoed in degC, the unit the user gave it in
+            raise CycloidInputError(name + "_degC", float(f"{v - KELVIN:.10g}"),
+                                    "must lie between -100 and 200 degC")
     if d.temperature_model not in TEMPERATURE_MODELS:
         raise CycloidInputError("temperature_model", d.temperature_model,
                                 f"must be one of {', '.join(TEMPERATURE_MODELS)}")
     lub, fr = d.lubricant, d.friction
-    if not lub.kinematic_viscosity_100 < lub.kinematic_viscosity:
-        raise CycloidInputError("lubricant.kinematic_viscosity_100", lub.kinematic_viscosity_100,
-                                "must be below the 40 degC viscosity (oils thin when hot)")
     for name in ("kinematic_viscosity", "kinematic_viscosity_100", "density"):
         if not getattr(lub, name) > 0:
             raise CycloidInputError("lubricant." + name, getattr(lub, name), "must be positive")
+    if not lub.kinematic_viscosity_100 < lub.kinematic_viscosity:
+        raise CycloidInputError("lubricant.kinematic_viscosity_100", lub.kinematic_viscosity_100,
+                                "must be below the 40 degC viscosity (oils thin when hot)")
+    for name in ("kinematic_viscosity_100", "kinematic_viscosity"):
+        if getattr(lub, name) < MIN_VISCOSITY:
+            raise CycloidInputError("lubricant." + name, getattr(lub, name),
+                                    f"below {MIN_VISCOSITY * 1e6:g} mm^2/s (water's): no "
+                                    "lubricating oil is that thin, and the Walther viscosity-"
+                                    "temperature line (ASTM D341) fails below 0.3 mm^2/s")
     for f in dataclasses.fields(fr):
         if getattr(fr, f.name) < 0:
             raise CycloidInputError("friction." + f.name, getattr(fr, f.name), "must not be negative")
@@ -663,6 +673,29 @@ def validate_design(d: DriveDesign) -> None:
     if fr.mu_full_film > fr.mu_boundary:
         raise CycloidInputError("friction.mu_full_film", fr.mu_full_film,
                                 f"must not exceed mu_boundary = {fr.mu_boundary}")
+    _check_extra_torques(d)
+
+
+#: [N*m] extra torques at the driving shaft up to this are accepted without computing the
+#: drive's static rating (0.5 ms): the paper's drive is driven with at most 0.85 N*m
+EXTRA_TORQUE_CHEAP = 1.0
+
+
+def _check_extra_torques(d: DriveDesign) -> None:
+    """A drag (or standstill friction) at the driving shaft S that alone needs more torque than
+    the ring can take statically (its Hertz rating, ``stiffness.ring_torque_rating``, over the
+    ratio z1 - 1) stalls any such drive: refused, naming the field."""
+    ex = d.extra
+    for name in ("drag_torque", "stribeck_torque"):
+        v = getattr(ex, name)
+        if v <= EXTRA_TORQUE_CHEAP:
+            continue
+        from .stiffness import ring_torque_rating
+        cap = ring_torque_rating(d) / (d.z1 - 1)
+        if v > cap:
+            raise CycloidInputError("extra." + name, v, f"needs more than the {cap:.4g} N*m the "
+                                    "drive can take at its driving shaft (the ring's static "
+                                    "rating over z1 - 1): it could not turn")
 
 
 # -- design files -----------------------------------------------------------------------------
@@ -769,13 +802,39 @@ def design_from_dict(data: dict) -> DriveDesign:
     fr = Friction(**_section_from_dict(Friction, data.get("friction", {}), "friction"))
     geo = _section_from_dict(DriveDesign, data.get("geometry", {}), "geometry", skip=MODEL_FIELDS)
     geo.update(_section_from_dict(DriveDesign, data.get("model", {}), "model", only=MODEL_FIELDS))
-    extra = dict(data.get("extra", {}))
-    from .discovered import terms_from_toml
-    discovered = terms_from_toml(extra.pop("discovered", []))
-    ex = ExtraPhysics(**_section_from_dict(ExtraPhysics, extra, "extra"), discovered=discovered)
-    cal = Calibration(**_section_from_dict(Calibration, data.get("calibration", {}),
-                                           "calibration"))
-    return DriveDesign(lubricant=lub, friction=fr, extra=ex, calibration=cal, **geo)
+    try:
+        extra = dict(data.get("extra", {}))
+        from .discovered import terms_from_toml
+        discovered = terms_from_toml(extra.pop("discovered", []))
+        ex = ExtraPhysics(**_section_from_dict(ExtraPhysics, extra, "extra"),
+                          discovered=discovered)
+        cal = Calibration(**_section_from_dict(Calibration, data.get("calibration", {}),
+                                               "calibration"))
+        return DriveDesign(lubricant=lub, friction=fr, extra=ex, calibration=cal, **geo)
+    except CycloidInputError as exc:
+        raise _in_file_terms(exc) from None
+
+
+def _in_file_terms(exc: CycloidInputError) -> CycloidInputError:
+    """The error of a design built from a file, restated with the file's key and unit
+    (``lubricant.kinematic_viscosity = -5e-06`` -> ``[lubricant].kinematic_viscosity_mm2_s =
+    -5.0``), so that it names what the user wrote."""
+    section, _, name = exc.field.rpartition(".")
+    if not section and name.endswith("_degC") and name[:-5] in MODEL_FIELDS:
+        return CycloidInputError(f"[model].{name}", exc.value, exc.reason)
+    cls = {"": DriveDesign, "lubricant": Lubricant, "friction": Friction,
+           "extra": ExtraPhysics, "calibration": Calibration}.get(section)
+    f = {x.name: x for x in dataclasses.fields(cls)}.get(name) if cls else None
+    if f is None or not isinstance(exc.value, (int, float)) or isinstance(exc.value, bool):
+        return exc
+    value = exc.value
+    if isinstance(f.default, float):
+        scale = f.metadata.get("scale", 1.0)
+        if scale is not None:
+            value = float(f"{_from_si(float(value), scale):.12g}")
+    if not section:
+        section = "model" if name in MODEL_FIELDS else "geometry"
+    return CycloidInputError(f"[{section}].{_toml_key(f)}", value, exc.reason)
 
 
 def _toml_value(v) -> str:

@@ -462,6 +462,14 @@ def _element_loads(design, T_out):
 
 
 @functools.lru_cache(maxsize=32)
+def ring_torque_rating(design) -> float:
+    """The torque on the ring [N*m] at which the drive reaches its static rating
+    (:func:`static_torque_rating`, an output torque): the rating over i0, since the ring path's
+    output torque is i0 times the ring's. The limit the command line and the design checks
+    compare a ring torque with."""
+    return static_torque_rating(design)["rating_Nm"] / design.i0
+
+
 def static_torque_rating(design) -> dict:
     """Static torque rating of the drive [N*m, output torque]: the minimum over its elements of
     the torque at which each reaches its static limit (RATING_DESCRIPTIONS), the limiting one

@@ -43,7 +43,7 @@ def test_efficiency_text_mentions_losses():
 ])
 def test_bad_input_one_line(args, word):
     r = run("efficiency", *args)
-    assert r.returncode != 0
+    assert r.returncode == 2, (r.returncode, r.stderr)
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and word in lines[0], r.stderr
 
@@ -52,7 +52,7 @@ def test_invalid_design_file(tmp_path):
     f = tmp_path / "bad.toml"
     f.write_text("[geometry]\nlam = 0.8\n")
     r = run("efficiency", "--mode", "S1", "--speed", "100", "--torque", "1", "--design", str(f))
-    assert r.returncode != 0
+    assert r.returncode == 2, (r.returncode, r.stderr)
     assert len(r.stderr.strip().splitlines()) == 1 and "lam" in r.stderr
 
 

@@ -23,6 +23,12 @@ from ..recordings import RecordingError
 STANDSTILL_RPM = 1.0
 #: [1] driven samples needed to judge anything (and to diagnose): 100 samples
 MIN_DRIVEN = 100
+#: [1] loaded samples (both shafts above POWER_SHARE of their peak power) needed to judge the
+#: torque signs and the power balance: fewer are a warning, not a verdict
+MIN_LOADED = 10
+#: [r/min] the output shaft turns when faster than this: STANDSTILL_RPM / MAX_Z1 (a driven
+#: input at the standstill bound reaches the output through a ratio of up to z1 <= 1000)
+OUTPUT_STANDSTILL_RPM = STANDSTILL_RPM * 1e-3
 #: [N*m] an input torque above this looks like N*mm: 1000 N*m at the fast shaft of a
 #: speed reducer is 10 times the largest drives of this kind (paper drive: ~1.3 N*m in)
 N_MM_SUSPECT_NM = 1000.0
@@ -48,6 +54,14 @@ MS_SUSPECT_DURATION = 7200.0
 #: [r/min] peak input speed below which r/min and rad/s are both plausible (only a warning:
 #: a genuine low-speed run must pass)
 LOW_SPEED_RPM = 350.0
+#: [1] the measured input torque at loaded forward samples may differ from the design's (its
+#: input torque for the measured output torque and speeds) by up to this factor either way:
+#: a working drive's losses take 5-40 % of its input power, so a model missing all of them, or
+#: twice too lossy, is within a factor 2; a torque unit (x1000 N*mm, x100 N*cm) or another
+#: drive's design lands far outside
+MODEL_TORQUE_FACTOR = 10.0
+#: [1] loaded samples the model is evaluated at for that comparison (an even subsample)
+MODEL_SAMPLES = 64
 #: absolute limits of a measurement at the edge units: beyond them a cell is not a reading
 ABSURD = {"time_s": 1e9, "speed_in_rpm": 1e6, "speed_out_rpm": 1e6, "torque_in_Nm": 1e7,
           "torque_out_Nm": 1e7, "temperature_C": 1e4}
@@ -69,6 +83,17 @@ def _peak(x) -> float:
 
 def _stride(n) -> int:
     return max(1, -(-n // MEDIAN_SAMPLES))
+
+
+#: [1] the "peak" that shares such as POWER_SHARE refer to: this quantile of |x| (over an
+#: evenly strided subsample of long recordings), so that one corrupt cell (a spike of 1e5 in a
+#: speed column) cannot make every other sample look idle and switch the checks off
+PEAK_QUANTILE = 0.999
+
+
+def _robust_peak(x) -> float:
+    x = np.abs(np.asarray(x)[::_stride(len(x))])
+    return float(np.quantile(x, PEAK_QUANTILE)) if x.size else 0.0
 
 
 def check_magnitudes(data: dict, where) -> None:
@@ -165,8 +190,8 @@ def _power_balance(rec, units_given, findings):
     sl = list(_slices(rec.n))
     P_in = lambda s: rec.torque_in[s] * rec.speed_in[s]           # noqa: E731
     P_out = lambda s: rec.torque_out[s] * rec.speed_out[s]        # noqa: E731
-    max_in = max(float(np.max(np.abs(P_in(s)))) for s in sl)
-    max_out = max(float(np.max(np.abs(P_out(s)))) for s in sl)
+    max_in = _robust_peak(rec.torque_in * rec.speed_in)
+    max_out = _robust_peak(rec.torque_out * rec.speed_out)
     n_loaded = n_mismatch = n_in_pos = 0
     sums = {"forward": [0, 0.0, 0.0], "back-driven": [0, 0.0, 0.0]}   # count, |P_in|, |P_out|
     for s in sl:
@@ -181,7 +206,7 @@ def _power_balance(rec, units_given, findings):
             acc[0] += int(np.count_nonzero(sel))
             acc[1] += float(np.sum(np.abs(pi[sel])))
             acc[2] += float(np.sum(np.abs(po[sel])))
-    if n_loaded < 10:
+    if n_loaded < MIN_LOADED:
         findings.append(_finding("power_balance", "warning",
                         f"only {n_loaded} samples where both shafts carry power: "
                         "power balance and torque signs not judged"))
@@ -198,7 +223,7 @@ def _power_balance(rec, units_given, findings):
                    f"shaft to the load); negate it with --units {col}=-N*m"), findings)
     msgs = []
     for name, (count, pi, po) in sums.items():
-        if count < 10:
+        if count < MIN_LOADED:
             continue
         r = po / pi if name == "forward" else pi / po     # power leaving / power entering
         msgs.append(f"{name}: {count} samples, efficiency {r:.3g}")
@@ -226,9 +251,9 @@ def check_mode(rec, mode: str, z1: int, findings=None, units_given=()):
     findings = [] if findings is None else findings
     st = _stride(rec.n)                       # an evenly strided subsample of long recordings
     n_in, n_out = rec.speed_in[::st] / RPM, rec.speed_out[::st] / RPM
-    peak = float(np.max(np.abs(n_in)))
+    peak = _robust_peak(n_in)
     sel = (np.abs(n_in) > max(STANDSTILL_RPM, POWER_SHARE * peak)) & \
-          (np.abs(n_out) > STANDSTILL_RPM * 1e-3)
+          (np.abs(n_out) > OUTPUT_STANDSTILL_RPM)
     if sel.sum() < MIN_DRIVEN / st:
         _error(_finding("speed_ratio", "error",
                f"speed_out_rpm: only {int(sel.sum()) * st} samples where both shafts turn; the "
@@ -302,4 +327,43 @@ def check_plausibility(rec, mode, design=None, units_given=()):
     mode, findings = check_mode(rec, mode, design.z1, findings, units_given)
     check_capacity(rec, mode, design, findings, units_given)
     _power_balance(rec, units_given, findings)
+    check_model_level(rec, mode, design, findings, units_given)
     return mode, findings
+
+
+def check_model_level(rec, mode, design, findings, units_given=()):
+    """Measured input torque against the design's at loaded forward samples (median ratio over
+    an even subsample): beyond ``MODEL_TORQUE_FACTOR`` either way the torques' units (even
+    ones given with --units) or the design cannot be right. Needs >= 10 such samples."""
+    from model_core import operating_point
+    P_in = rec.torque_in * rec.speed_in
+    P_out = rec.torque_out * rec.speed_out
+    peak_in, peak_out = _robust_peak(P_in), _robust_peak(P_out)
+    loaded = np.flatnonzero((P_in > POWER_SHARE * peak_in) & (P_out > POWER_SHARE * peak_out))
+    if loaded.size < MIN_LOADED:
+        findings.append(_finding("model_level", "warning", f"only {loaded.size} loaded forward "
+                                 "samples: the torque level is not compared with the design"))
+        return findings
+    k = loaded[np.linspace(0, loaded.size - 1, min(MODEL_SAMPLES, loaded.size)).astype(int)]
+    with np.errstate(all="ignore"):
+        try:
+            op = operating_point(design, mode, rec.speed_in[k], T_out=-rec.torque_out[k])
+            model = np.abs(np.asarray(op.torques[mode[0]], float))
+        except ValueError:       # the design cannot carry these points: check_capacity's job
+            return findings
+    ok = np.isfinite(model) & (model > 0)
+    if ok.sum() < MIN_LOADED:
+        return findings
+    ratio = float(np.median(np.abs(rec.torque_in[k][ok])) / np.median(model[ok]))
+    given = ", ".join(f"{c}={rec.units[c][0]}" for c in ("torque_in_Nm", "torque_out_Nm")
+                      if c in getattr(rec, "units", {}))
+    if not 1 / MODEL_TORQUE_FACTOR <= ratio <= MODEL_TORQUE_FACTOR:
+        _error(_finding("model_level", "error",
+               f"torque_in_Nm: the measured input torque is {ratio:.3g} times what the design "
+               f"needs for the measured output torque and speeds (median over {int(ok.sum())} "
+               f"loaded samples; a drive's losses account for less than {MODEL_TORQUE_FACTOR:g}"
+               f"x): a torque unit is off{f' (read as {given})' if given else ''}, or --design "
+               "is not this drive; check --units and --design"), findings)
+    findings.append(_finding("model_level", "ok", f"measured input torque {ratio:.3g} times the "
+                             f"design's at {int(ok.sum())} loaded samples"))
+    return findings

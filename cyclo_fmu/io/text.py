@@ -110,13 +110,35 @@ def _best_dialect(lines):
     return best
 
 
+#: characters of a cell or line echoed in an error message (a 20 MB cell is not echoed whole)
+ECHO_CHARS = 60
+
+
+def clip(text: str, n: int = ECHO_CHARS) -> str:
+    """``repr`` of ``text`` cut to ``n`` characters, saying how long it was."""
+    text = str(text)
+    if len(text) <= n:
+        return repr(text)
+    return f"{text[:n]!r}... ({len(text)} characters)"
+
+
 def sniff(text: str, encoding: str, source: str) -> Dialect:
     lines = text.splitlines()
+    cut = False
     if len(text) >= SNIFF_BYTES // 2 and not text.endswith("\n") and lines:
         lines = lines[:-1]                     # the sample may end mid-line
+        cut = True
     if not any(l.strip() for l in lines):
+        if cut:
+            raise RecordingError(f"recording {source!r}: its first {SNIFF_BYTES // 1024} KiB "
+                                 "hold no line break (one line longer than that is no "
+                                 "recording's row); a CSV/ASCII recording has one sample a line")
         raise RecordingError(f"recording {source!r} is empty")
     best = _best_dialect(lines[:SNIFF_LINES]) or _best_dialect(lines[SNIFF_LINES:])
+    if best is None and cut and len(lines) < SNIFF_LINES:
+        raise RecordingError(f"recording {source!r}, line {len(lines) + 1}: longer than "
+                             f"{SNIFF_BYTES // 1024} KiB with no line break (no recording's "
+                             "row is); a CSV/ASCII recording has one sample a line")
     if best is None:
         first = next(l for l in lines if l.strip())
         delim = max(_DELIMS[:3], key=first.count) if any(d in first for d in _DELIMS[:3]) else " "
@@ -124,7 +146,7 @@ def sniff(text: str, encoding: str, source: str) -> Dialect:
         if all(_is_num(c, ".") for c in cells):
             raise RecordingError(f"recording {source!r} has too few columns to be a recording")
         raise RecordingError(f"recording {source!r} has no samples (only text lines, the "
-                             f"first is {first.strip()[:60]!r})")
+                             f"first is {clip(first.strip())})")
     _, delim, decimal, width = best
     cells = [_split(l, delim) if l.strip() else None for l in lines]
     num = [c is not None and len(c) == width and _numeric(c, decimal) for c in cells]
@@ -141,7 +163,7 @@ def sniff(text: str, encoding: str, source: str) -> Dialect:
     if not above:
         raise RecordingError(
             f"recording {source!r} has no header row; the first row is "
-            f"{lines[start].strip()[:80]!r}, expected names like "
+            f"{clip(lines[start].strip())}, expected names like "
             "time_s,speed_in_rpm,torque_in_Nm,speed_out_rpm,torque_out_Nm")
     # header: the last text line of the data's width above the data; a line between it and
     # the data is a units row
@@ -259,7 +281,8 @@ class _Locator:
         self.path, self.d, self.mapping = path, d, mapping
 
     def _rows(self):
-        with open(self.path, encoding=self.d.encoding, newline="") as f:
+        # bytes the detected encoding cannot decode (beyond the sniffed sample) show as U+FFFD
+        with open(self.path, encoding=self.d.encoding, errors="replace", newline="") as f:
             for i, line in enumerate(f):
                 if i < self.d.first_data_line:
                     continue
@@ -273,20 +296,50 @@ class _Locator:
                 return f"row {line_no}"
         return f"data row {k + 1}"
 
+    def cell_of(self, parser_message: str) -> str | None:
+        """The row of a cell the bulk parser refused ("In CSV column #2: ... invalid value
+        '-0.30 '") that the line-wise check reads (spaces around a number): named as written."""
+        m = re.search(r"column #(\d+).*?invalid value '(.*?)'", parser_message, re.S)
+        if not m:
+            return None
+        j, text = int(m.group(1)), m.group(2)
+        if j >= len(self.d.header):
+            return None
+        name = self.d.header[j].strip()
+        for line_no, line in self._rows():
+            try:
+                cells = _split(line, self.d.delimiter)
+            except csv.Error:
+                continue
+            if len(cells) > j and cells[j] == text:
+                return (f"column {name!r}, row {line_no}: {clip(text)} is not a number as "
+                        "written (spaces or characters around it); fix that cell")
+        return None
+
     def first_problem(self) -> str | None:
         width = len(self.d.header)
         for line_no, line in self._rows():
-            cells = _split(line, self.d.delimiter)
+            if "\ufffd" in line:
+                return (f"row {line_no}: bytes that are not {self.d.encoding} (the encoding "
+                        f"detected on the first {SNIFF_BYTES // 1024} KiB): "
+                        f"{clip(line.strip())}; fix that row or save the file in one encoding")
+            if line.count('"') % 2:
+                return (f"row {line_no}: an unbalanced quote (\") in {clip(line.strip())}: the "
+                        "rows after it would be read as one text cell; fix or delete that row")
+            try:
+                cells = _split(line, self.d.delimiter)
+            except csv.Error:
+                return f"row {line_no}: {clip(line.strip())} cannot be split into fields"
             if len(cells) != width:
                 return (f"row {line_no} has {len(cells)} fields, the header has {width} "
-                        f"({line.strip()[:60]!r}); fix or delete that row")
+                        f"({clip(line.strip())}); fix or delete that row")
             for key, (j, name) in self.mapping.items():
                 text = cells[j].strip()
                 label = repr(name) if name == key else f"{name!r} ({key})"
                 if text and not _is_num(text, self.d.decimal):
-                    return f"column {label}, row {line_no}: {text!r} is not a number"
+                    return f"column {label}, row {line_no}: {clip(text)} is not a number"
                 if text and math.isinf(float(text.replace(",", "."))):
-                    return f"column {label}, row {line_no}: {text!r} is not a number"
+                    return f"column {label}, row {line_no}: {clip(text)} is not a number"
         return None
 
 
@@ -318,6 +371,12 @@ def read_text(path, columns=None, units=None, block=None, chunk_bytes=8 << 20) -
         notes.append(f"units row under the header skipped (line {d.units_line + 1}: "
                      f"{', '.join(u for u in d.units_row if u)})")
     notes += unit_notes
+    used = {j for j, _ in mapping.values()}
+    unread = [h.strip() for j, h in enumerate(d.header) if j not in used and h.strip()]
+    if unread:                                # nothing dropped without a word
+        notes.append(f"{len(unread)} column(s) not read (not a recording column): "
+                     f"{', '.join(clip(h, 40) for h in unread[:5])}"
+                     f"{', ...' if len(unread) > 5 else ''} (map one with --columns KEY=NAME)")
     loc = _Locator(path, d, mapping)
     data_text = text.splitlines()[d.first_data_line:]
     loc.bytes_per_row = (len(raw) * sum(map(len, data_text)) / max(1, len(text))
@@ -350,8 +409,11 @@ def _refuse_binary(raw: bytes, text: str, source: str):
 
 
 def _fail(loc: _Locator, exc) -> RecordingError:
-    msg = loc.first_problem()
-    return RecordingError(msg or f"recording {loc.path!s} cannot be parsed ({exc})")
+    msg = loc.first_problem() or loc.cell_of(str(exc))
+    # the parser's own text may quote many lines of the file: one line, clipped
+    why = " ".join(str(exc).split())
+    return RecordingError(msg or f"recording {str(loc.path)!r} cannot be parsed "
+                          f"({why[:200]}{'...' if len(why) > 200 else ''})")
 
 
 def _check_inf(arrs, keys, loc):

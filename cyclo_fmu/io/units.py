@@ -209,6 +209,11 @@ def map_columns(header, columns: dict | None, units: dict | None):
                 label = f"{columns[key]!r} ({key})"
             raise RecordingError(f"column {label} is missing; found: {', '.join(names)} "
                                  f"(map it with --columns {key}=NAME)")
+    for key, unit in units.items():            # an override for nothing is not ignored
+        if key not in mapping:
+            raise RecordingError(f"units: {key}={unit} names a column the recording does not "
+                                 f"have (found: {', '.join(names)}); drop it or map the column "
+                                 f"with --columns {key}=NAME")
     out = {}
     for key, j in mapping.items():
         out[key] = (j, names[j])

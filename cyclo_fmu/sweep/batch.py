@@ -80,10 +80,11 @@ def diagnose_recording(rec, mode, checks, design, progress=False, calibrate=Fals
     return d, result
 
 
-def diagnose_one(path, design, mode, columns=None, calibrate=False):
-    """Read and diagnose one recording: ``(diagnosis, result dict)``."""
+def diagnose_one(path, design, mode, columns=None, units=None, calibrate=False):
+    """Read and diagnose one recording: ``(diagnosis, result dict)``; ``mode`` may be 'auto'
+    (resolved per recording from its speed ratio)."""
     from cyclo_fmu.io import load_recording
-    rec, mode, checks = load_recording(path, mode, design, columns=columns)
+    rec, mode, checks = load_recording(path, mode, design, columns=columns, units=units)
     return diagnose_recording(rec, mode, checks, design, calibrate=calibrate)
 
 
@@ -99,34 +100,41 @@ def _folder_names(paths) -> dict:
             for p in paths}
 
 
-def _task(design, mode, columns, out, item, calibrate=False):
+def _task(design, mode, columns, out, item, units=None, calibrate=False):
     path, name = item
     from cyclo_fmu.diagnosis import write_diagnosis
-    row = {"recording": path.name, "folder": name, "effect": "", "error": ""}
+    row = {"recording": path.name, "folder": name, "mode": "", "effect": "", "error": ""}
     try:
-        d, result = diagnose_one(path, design, mode, columns, calibrate)
+        d, result = diagnose_one(path, design, mode, columns, units, calibrate)
         write_diagnosis(Path(out) / name, d, design, result, source=path.name)
     except (ValueError, OSError) as exc:     # RecordingError, CycloidInputError, unreadable
         row["error"] = " ".join(str(exc).split())
         return row
-    row.update(effect=result["effect"], rmse_before_mNm=1e3 * result["rmse_before_Nm"],
+    except Exception as exc:     # noqa: BLE001 - a fault on one file must not end the batch:
+        # it is that file's row, named as an internal error (a bug to report, not bad input)
+        row["error"] = " ".join(f"internal error ({type(exc).__name__}: {exc})".split())[:500]
+        return row
+    row.update(mode=result["mode"], effect=result["effect"],
+               rmse_before_mNm=1e3 * result["rmse_before_Nm"],
                rmse_after_mNm=1e3 * result["rmse_after_Nm"],
                zeta_d_before=result["zeta_d_before"], zeta_d_after=result["zeta_d_after"])
     return row
 
 
-def diagnose_batch(folder, out, design, mode, *, columns=None, scheduler=None, workers=None,
-                   serial=False, progress=True, calibrate=False):
+def diagnose_batch(folder, out, design, mode, *, columns=None, units=None, scheduler=None,
+                   workers=None, serial=False, progress=True, calibrate=False):
     """Diagnose every recording of ``folder`` into ``out``; returns the summary DataFrame (also
-    written as ``out/summary.csv``)."""
+    written as ``out/summary.csv``; a recording that could not be diagnosed is a row with its
+    reason in ``error``). ``mode`` may be 'auto'; ``units`` as ``diagnose --units``."""
     import pandas as pd
     from .cluster import run_tasks
     paths = find_recordings(folder)
     names = _folder_names(paths)
-    rows = run_tasks(partial(_task, design, mode, columns, str(out), calibrate=calibrate),
+    rows = run_tasks(partial(_task, design, mode, columns, str(out), units=units,
+                             calibrate=calibrate),
                      [(p, names[p]) for p in paths], scheduler=scheduler, workers=workers,
                      progress=progress, desc="diagnose", serial=serial)
-    df = pd.DataFrame(rows, columns=["recording", "folder", "effect", "rmse_before_mNm",
+    df = pd.DataFrame(rows, columns=["recording", "folder", "mode", "effect", "rmse_before_mNm",
                                      "rmse_after_mNm", "zeta_d_before", "zeta_d_after", "error"])
     df.to_csv(Path(out) / "summary.csv", index=False)
     return df

@@ -67,6 +67,9 @@ def evaluate_design(spec, design_id: int, values: dict) -> list:
         return [{**base, "mode": m, "error": str(exc)} for m in spec.modes]
     stiff = stiffness_columns(design)
     env = spec.envelope
+    from model_core.stiffness import ring_torque_rating
+    from ..limits import ring_share
+    rating = ring_torque_rating(design)
     # a calibrated design says so, with what it was fitted to (design [calibration])
     cal = {} if design.calibration.is_default else {
         "calibrated": True, "calibration_mesh_loss_k": design.calibration.mesh_loss_k,
@@ -74,10 +77,20 @@ def evaluate_design(spec, design_id: int, values: dict) -> list:
         "calibration_source": design.calibration.source}
     for mode in spec.modes:
         row = {**base, "mode": mode, **stiff, **cal}
+        # the envelope's largest torque against this design's static rating (lossless ring
+        # share): beyond it the numbers would be a plausible-looking answer for a broken drive
+        T_ring = env.torque_max * ring_share(mode, design.z1)
+        if T_ring > rating:
+            row["error"] = (f"envelope.torque_max = {env.torque_max!r}: puts about "
+                            f"{T_ring:.4g} N*m on the ring in mode {mode}, beyond this design's "
+                            f"static rating {rating:.4g} N*m")
+            rows.append(row)
+            continue
         try:
-            m = efficiency_map(design, mode, env.speeds(), env.torques())
-        except CycloidInputError as exc:
-            row["error"] = str(exc)
+            with np.errstate(all="ignore"):
+                m = efficiency_map(design, mode, env.speeds(), env.torques())
+        except ValueError as exc:          # CycloidInputError, or the model out of its range
+            row["error"] = " ".join(str(exc).split())
             rows.append(row)
             continue
         row["error"] = ""

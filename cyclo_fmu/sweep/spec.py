@@ -112,6 +112,34 @@ def _number(field, v):
     return v
 
 
+def check_envelope(env: BenchEnvelope) -> None:
+    """Refuse an envelope the model cannot evaluate, naming the field: grid sizes whole numbers
+    1-1000; input speeds within the running range of ``cyclo_fmu.limits`` (min <= max); input
+    torques positive (no power flows at zero torque: the efficiency is undefined), min <= max."""
+    from ..limits import check_speed_rpm
+    for k in ("n_speed", "n_torque"):
+        v = getattr(env, k)
+        if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 1000:
+            raise CycloidInputError(f"envelope.{k}", v, "must be a whole number from 1 to 1000")
+    for k in ("speed_min_rpm", "speed_max_rpm"):
+        v = getattr(env, k)
+        check_speed_rpm(f"envelope.{k}", v)
+        if v < 0:
+            raise CycloidInputError(f"envelope.{k}", v, "must be positive (the envelope's "
+                                    "speeds are magnitudes; the mode sets the direction)")
+    if env.speed_max_rpm < env.speed_min_rpm:
+        raise CycloidInputError("envelope.speed_max_rpm", env.speed_max_rpm,
+                                f"must not be below speed_min_rpm = {env.speed_min_rpm:g}")
+    for k in ("torque_min", "torque_max"):
+        v = getattr(env, k)
+        if not v > 0:
+            raise CycloidInputError(f"envelope.{k}", v, "must be a positive torque in N*m (no "
+                                    "power flows at zero torque: the efficiency is undefined)")
+    if env.torque_max < env.torque_min:
+        raise CycloidInputError("envelope.torque_max", env.torque_max,
+                                f"must not be below torque_min = {env.torque_min:g}")
+
+
 def load_spec(path) -> SweepSpec:
     """Read and check a sweep spec (TOML); every error names the field."""
     path = Path(path)
@@ -127,10 +155,16 @@ def load_spec(path) -> SweepSpec:
     if unknown:
         raise CycloidInputError("spec", sorted(unknown)[0], "unknown section (known: sweep, "
                                 "envelope, fields)")
+    for section in ("sweep", "envelope", "fields"):
+        if not isinstance(data.get(section, {}), dict):
+            raise CycloidInputError(section, data[section], f"must be a table ([{section}])")
     sw = data.get("sweep", {})
     method = sw.get("method", "grid")
     if method not in METHODS:
         raise CycloidInputError("sweep.method", method, f"must be one of {', '.join(METHODS)}")
+    for key in ("base", "table"):
+        if key in sw and not (isinstance(sw[key], str) and sw[key].strip()):
+            raise CycloidInputError(f"sweep.{key}", sw[key], "must be a file name (a string)")
     base_design = _base_design(path, sw["base"]) if "base" in sw else DriveDesign()
     base = design_to_dict(base_design)
     modes = sw.get("modes", ["S1", "S2"])
@@ -145,8 +179,7 @@ def load_spec(path) -> SweepSpec:
             raise CycloidInputError(f"envelope.{k}", v, f"unknown (known: {', '.join(sorted(known))})")
         _number(f"envelope.{k}", v)
     envelope = BenchEnvelope(**env_kw)
-    if not (1 <= envelope.n_speed <= 1000 and 1 <= envelope.n_torque <= 1000):
-        raise CycloidInputError("envelope.n_speed", envelope.n_speed, "grid sizes must be 1-1000")
+    check_envelope(envelope)
     fields, table, n = {}, None, 0
     raw = data.get("fields", {})
     if method == "table":
@@ -162,6 +195,8 @@ def load_spec(path) -> SweepSpec:
         table = [{cols[c]: (v.item() if hasattr(v, "item") else v) for c, v in row.items()}
                  for row in df.to_dict("records")]
         n = len(table)
+        if n == 0:
+            raise CycloidInputError("sweep.table", str(tpath), "has no rows (one design a row)")
     else:
         if not raw:
             raise CycloidInputError("fields", "{}", "name at least one design field to vary")
