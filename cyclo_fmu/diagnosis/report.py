@@ -11,7 +11,7 @@ import numpy as np
 from model_core import DriveDesign
 from model_core.effects import EFFECTS
 
-from .estimator import Diagnosis
+from .result import Diagnosis
 
 
 def updated_design(design: DriveDesign, d: Diagnosis):
