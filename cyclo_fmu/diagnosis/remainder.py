@@ -74,11 +74,15 @@ class Remainder:
 
 
 def structure(P, prob, S, tw):
-    """(present, best fit with a group of the generic basis, Check, RMS in the fit)."""
+    """(present, best fit with a group of the generic basis, Check, RMS in the fit).
+
+    The statistic is the largest RSS drop any group makes (the twins take the same maximum);
+    the group reported (what the remainder is, its RMS) is the one with the smallest held-out
+    error (the whole basis always fits best in sample, and would report its overfit)."""
     fits = [prob.fit(S.terms + (b,)) for b in P.structure]
-    best = min(fits, key=lambda f: f.rss)
-    stat = S.rss - best.rss
+    stat = S.rss - min(f.rss for f in fits)
     chk = tw.check(stat, tw.gain(S.terms, [(b,) for b in P.structure]), FALSE_ALARM)
+    best = min(fits, key=lambda f: f.cv_mse)
     rms = fit_rms(prob, S, best)
     return chk.stands and rms >= MIN_EXPLAINED_NM, best, chk, rms
 
@@ -266,6 +270,32 @@ def _burst_parts(b, claims, P):
     return parts, step, bool(rev), rms
 
 
+def _lines(P, S, r, design, mode, rng):
+    """Shaft orders (judged against their off-order twins) and fixed-frequency peaks of the
+    sample-level residual ``r``: (statement parts, library orders left, other orders, peaks,
+    {order: (amplitude, Check)})."""
+    orders = _orders(design, mode, P.sig)
+    k = P.sig["order_roller"]
+    lib = ("1x", f"order {k:g} (roller pass)")
+    oc = order_claims(r, P.sig, orders, P.dt, rng)
+    standing = {n: a for n, (a, c) in oc.items() if c is not None and c.stands}
+    outside = {n: a for n, a in standing.items() if n not in lib}
+    inside = {n: a for n, a in standing.items() if n in lib}
+    ex = design.extra
+    if "mesh_ripple" in S.ids or ex.ripple_1x or ex.ripple_roller:
+        inside = {}       # the library's orders, fitted: what is left is phase tracking
+    parts = []
+    if outside or inside:
+        parts.append("the residual holds shaft orders: " + ", ".join(
+            f"{n} ({1e3 * a:.2f} mN*m)" for n, a in {**inside, **outside}.items()))
+    peaks = R.spectral_peaks(r, P.dt, min_amplitude=PEAK_MIN_AMPLITUDE_NM,
+                             speed=P.sig["w_in"], orders=list(orders.values()))
+    if peaks:
+        parts.append("the residual spectrum peaks at " + ", ".join(
+            f"{f:.2f} Hz ({1e3 * a:.2f} mN*m)" for f, a in peaks))
+    return parts, inside, outside, peaks, oc
+
+
 def remainder(P, sel, J, rec, design, mode) -> Remainder:
     """Stage ``remainder`` on the problem ``P``, the selection ``sel`` and the twins ``J``."""
     prob, tw, S = sel.prob, J.twins, J.S
@@ -285,27 +315,10 @@ def remainder(P, sel, J, rec, design, mode) -> Remainder:
     parts, follows = _smooth_part(P, prob, S, with_g, present, rms, dominant, sel.min_expl)
     smooth = present
     r_raw, r, _ = _sample_residual(P, S, with_g, rec)
-    orders = _orders(design, mode, P.sig)
-    k = P.sig["order_roller"]
-    lib = ("1x", f"order {k:g} (roller pass)")
-    oc = order_claims(r, P.sig, orders, P.dt, rng)
-    standing = {n: a for n, (a, c) in oc.items() if c is not None and c.stands}
-    outside = {n: a for n, a in standing.items() if n not in lib}
-    inside = {n: a for n, a in standing.items() if n in lib}
-    ex = design.extra
-    if "mesh_ripple" in S.ids or ex.ripple_1x or ex.ripple_roller:
-        inside = {}       # the library's orders, fitted: what is left is phase tracking
+    lparts, inside, outside, peaks, oc = _lines(P, S, r, design, mode, rng)
     claims["orders"] = {n: c.to_json() for n, (a, c) in oc.items() if c is not None}
-    if outside or inside:
-        present = True
-        parts.append("the residual holds shaft orders: " + ", ".join(
-            f"{n} ({1e3 * a:.2f} mN*m)" for n, a in {**inside, **outside}.items()))
-    peaks = R.spectral_peaks(r, P.dt, min_amplitude=PEAK_MIN_AMPLITUDE_NM,
-                             speed=P.sig["w_in"], orders=list(orders.values()))
-    if peaks:
-        present = True
-        parts.append("the residual spectrum peaks at " + ", ".join(
-            f"{f:.2f} Hz ({1e3 * a:.2f} mN*m)" for f, a in peaks))
+    present = present or bool(lparts)
+    parts += lparts
     y_after = P.y - (P.X[:, [i for t in S.terms for i in t.cols]] @ S.coef
                      if S.terms else 0.0)
     b, bc = burst_claims(P, y_after, sel.spikes, rng)

@@ -174,6 +174,24 @@ def _order_coverage(speed, orders, fs, freqs, n_seg, nper):
     return (half[:-1] | half[1:]).T
 
 
+def _level(S, cols, width):
+    """Mean spectrum over the segments ``cols`` of the spectrogram ``S`` and its local level:
+    the larger of the median over ``width`` bins (+-5 Hz) and the medians of the two flanks
+    (NaN where the lower flank would reach the DC bin)."""
+    from scipy.ndimage import median_filter
+    P = S[:, cols].mean(1)
+    base = median_filter(P, size=width, mode="nearest")
+    m3 = np.median(np.lib.stride_tricks.sliding_window_view(P, 3), axis=-1)  # P[j:j+3]
+    flank = np.full((2, P.size), np.nan)
+    k = PEAK_FLANK_BINS
+    i = np.arange(P.size)
+    low_ok = i - k - 2 >= 1
+    flank[0, low_ok] = m3[i[low_ok] - k - 2]
+    high_ok = i + k + 2 <= P.size - 1
+    flank[1, high_ok] = m3[i[high_ok] + k]
+    return P, np.where(low_ok, np.fmax(base, np.fmax(flank[0], flank[1])), np.nan)
+
+
 def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=2.5, speed=None,
                    orders=()) -> list:
     """Narrow peaks of the residual's spectrum at fixed frequencies (Welch: 2 s Hann segments,
@@ -218,20 +236,7 @@ def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=2.5, speed=None,
     usable = _order_coverage(speed, orders, fs, f, n_seg, nper) if judged else None
 
     def level(cols):
-        """Mean spectrum over the segments ``cols`` and its local level: the larger of the
-        median over +-5 Hz and the medians of the two flanks (NaN where the lower flank would
-        reach the DC bin)."""
-        P = S[:, cols].mean(1)
-        base = median_filter(P, size=width, mode="nearest")
-        m3 = np.median(np.lib.stride_tricks.sliding_window_view(P, 3), axis=-1)  # P[j:j+3]
-        flank = np.full((2, P.size), np.nan)
-        k = PEAK_FLANK_BINS
-        i = np.arange(P.size)
-        low_ok = i - k - 2 >= 1
-        flank[0, low_ok] = m3[i[low_ok] - k - 2]
-        high_ok = i + k + 2 <= P.size - 1
-        flank[1, high_ok] = m3[i[high_ok] + k]
-        return P, np.where(low_ok, np.fmax(base, np.fmax(flank[0], flank[1])), np.nan)
+        return _level(S, cols, width)
 
     def stands(P, base, i, share):
         return bool(np.max(P[i - 1:i + 2]) > share * factor * base[i])
