@@ -102,7 +102,10 @@ def withdraw(P, prob, S, with_g, tw, alpha, forced):
         rest = tuple(x for x in beside if x != t)
         stat = prob.fit(rest, cv=False).rss - with_g.rss
         chk = tw.check(stat, tw.rss(rest) - tw.rss(beside), alpha)
-        if chk.stands and math.sqrt(max(stat, 0.0) / prob.swt) >= MIN_EXPLAINED_NM:
+        # beyond its twins beside the basis the basis cannot replace it; the friction level,
+        # the model's own coefficient, must also hold a reportable size there to be named
+        if chk.stands and (t.effect != "friction_miscalibrated"
+                           or math.sqrt(max(stat, 0.0) / prob.swt) >= MIN_EXPLAINED_NM):
             continue
         explains = prob.fit(tuple(x for x in S.terms if x != t), cv=False).rss - S.rss
         if t.effect == "friction_miscalibrated":
