@@ -89,33 +89,36 @@ def structure(P, prob, S, tw):
 
 def withdraw(P, prob, S, with_g, tw, alpha, forced):
     """Effects that the generic basis could stand in for: (S, withdrawn, dominant,
-    friction_doubted)."""
-    b = with_g.terms[-1]
+    friction_doubted). An effect keeps its place beside the whole generic basis (the most
+    capable stand-in for an unknown) when its drop-one statistic there lies beyond its twins
+    and is of a reportable size (``MIN_EXPLAINED_NM``: a long recording makes a shape
+    difference of no practical size significant); otherwise it is named only if it explains
+    ``DOMINANCE`` times the RMS the basis adds beside the selection, and withdrawn if not (one
+    at a time, the weakest first: a withdrawal changes what the others explain)."""
+    b = P.generic
     g_adds = S.rss - with_g.rss
-    withdrawn, dominant, doubted = [], [], False
+    weak, dominant, doubted = [], [], False
     for t in S.terms:
-        # (the friction level, forced after its re-linearisation, is still judged: doubted,
-        # it stays in the fit as the model's own coefficient but is not named)
         if t.effect in forced and t.effect != "friction_miscalibrated":
             continue
         beside = tuple(S.terms) + (b,)
         rest = tuple(x for x in beside if x != t)
-        stat = prob.fit(rest, cv=False).rss - with_g.rss
+        stat = prob.fit(rest, cv=False).rss - prob.fit(beside, cv=False).rss
         chk = tw.check(stat, tw.rss(rest) - tw.rss(beside), alpha)
-        # beyond its twins beside the basis the basis cannot replace it; the friction level,
-        # the model's own coefficient, must also hold a reportable size there to be named
-        if chk.stands and (t.effect != "friction_miscalibrated"
-                           or math.sqrt(max(stat, 0.0) / prob.swt) >= MIN_EXPLAINED_NM):
+        if chk.stands and math.sqrt(max(stat, 0.0) / prob.swt) >= MIN_EXPLAINED_NM:
             continue
         explains = prob.fit(tuple(x for x in S.terms if x != t), cv=False).rss - S.rss
         if t.effect == "friction_miscalibrated":
-            doubted = True
+            doubted = True        # the model's own coefficient: stays in the fit, not named
         elif explains >= DOMINANCE ** 2 * g_adds:      # RSS: squares of the RMS
             dominant.append(t.effect)
         else:
-            withdrawn.append(t.effect)
-    if withdrawn:
-        S = prob.fit(tuple(t for t in S.terms if t.effect not in withdrawn))
+            weak.append((explains, t))
+    withdrawn = []
+    if weak:
+        t = min(weak, key=lambda x: x[0])[1]
+        withdrawn = [t.effect]
+        S = prob.fit(tuple(x for x in S.terms if x != t))
         while not S.admissible:
             out = [t for t in S.terms if t.effect not in forced and not np.all(
                 (S.of(t)[0] >= t.lower) & (S.of(t)[0] <= t.upper))]
