@@ -145,10 +145,11 @@ def _order_coverage(speed, orders, fs, freqs, n_seg, nper):
     """Which frequency bins ``freqs`` (Hz) a shaft order reaches within each of ``n_seg``
     half-overlapping segments of ``nper`` samples of the sample-level input speed (rad/s):
     boolean (n_freq, n_seg), widened by ``ORDER_EXCLUSION_HZ`` (the orders folded about the
-    Nyquist frequency). A segment is two half-segments; each half is represented by its sorted
-    speeds taken so densely that the fastest order moves less than a bin between two of them
-    (a sweep leaves no gap); a half-segment with a speed that is not finite is taken to reach
-    every bin."""
+    Nyquist frequency). A segment is two half-segments; within a half-segment the speed moves
+    continuously (a motor's speed has no jumps), so an order reaches every frequency between
+    its values at the half's lowest and highest speed; a half-segment with a speed that is not
+    finite is taken to reach every bin. (Intervals, one per order and half-segment, marked in a
+    difference array: no per-sample temporaries.)"""
     df = freqs[1] - freqs[0]
     nf = freqs.size
     h = nper - nper // 2
@@ -158,18 +159,25 @@ def _order_coverage(speed, orders, fs, freqs, n_seg, nper):
         w = np.concatenate([w, np.full(n_half * h - w.size, w[-1] if w.size else 0.0)])
     w = w.reshape(n_half, h)
     bad = ~np.isfinite(w).all(1)
-    w = np.sort(np.where(np.isfinite(w), w, 0.0), axis=1)
-    k = np.abs(np.asarray(orders, float))
-    spread = float(np.max(w[:, -1] - w[:, 0])) * float(k.max()) / (2 * math.pi)   # Hz
-    n_pts = int(min(h, max(33, math.ceil(spread / df) + 2)))
-    ws = w[:, np.rint(np.linspace(0, h - 1, n_pts)).astype(int)]               # (n_half, n_pts)
-    f = folded(ws[:, None, :] * k[None, :, None] / (2 * math.pi), fs)
-    pad = int(math.ceil(ORDER_EXCLUSION_HZ / df))
-    bins = np.rint(f.reshape(n_half, -1) / df).astype(int)
-    bins = (bins[:, :, None] + np.arange(-pad, pad + 1)).reshape(n_half, -1)
-    half = np.zeros((n_half, nf + 2 * pad + 1), bool)
-    half[np.arange(n_half)[:, None], np.clip(bins, -1, nf) % (nf + 2 * pad + 1)] = True
-    half = half[:, :nf]
+    w = np.where(np.isfinite(w), w, 0.0)
+    lo_w, hi_w = w.min(1), w.max(1)
+    fn = fs / 2
+    pad = ORDER_EXCLUSION_HZ
+    marks = np.zeros((n_half, nf + 1), np.int32)
+    for k in np.abs(np.asarray(orders, float)):
+        a_all, b_all = k * lo_w / (2 * math.pi), k * hi_w / (2 * math.pi)
+        for i in range(n_half):
+            a, b = a_all[i], b_all[i]
+            for z in range(int(a // fn), int(b // fn) + 1):
+                lo, hi = max(a, z * fn) - z * fn, min(b, (z + 1) * fn) - z * fn
+                if z % 2:                       # an odd Nyquist zone folds back
+                    lo, hi = fn - hi, fn - lo
+                i0 = max(int(math.floor((lo - pad) / df + 0.5)), 0)
+                i1 = min(int(math.floor((hi + pad) / df + 0.5)), nf - 1)
+                if i1 >= i0:
+                    marks[i, i0] += 1
+                    marks[i, i1 + 1] -= 1
+    half = np.cumsum(marks, 1)[:, :nf] > 0
     half[bad] = True
     return (half[:-1] | half[1:]).T
 
