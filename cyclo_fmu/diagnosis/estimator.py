@@ -190,13 +190,15 @@ class Diagnoser:
         extra physics and transducer corrections included), robust weights and spike
         exclusions of the diagnosis applied: how well a design explains the recording."""
         rec, P0 = self._rec, self._P0
+        w = self._weights
+        if design == self.design:          # the first replay's residual
+            return float(np.sqrt(np.sum(w * P0.y ** 2) / max(np.sum(w), 1e-300)))
         rp = replay(design, self.mode, rec, self.bandwidth,
                     (P0.sig["sens_mu"], P0.sig["sens_nu"]))
         from .problem import masked_means
         n = len(P0.y) * P0.m
         y = masked_means((rec.torque_in - first_order(rp.T_model, P0.dt, self.bandwidth))[:n],
                          P0.mask[:n], P0.m)
-        w = self._weights
         return float(np.sqrt(np.sum(w * y * y) / max(np.sum(w), 1e-300)))
 
     def updated_design(self):

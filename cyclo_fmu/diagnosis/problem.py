@@ -93,14 +93,16 @@ def jump_mask(t, w_in, T_model, noise, dt) -> np.ndarray:
 def masked_means(x, mask, m):
     """Block means over the compared samples only (the plain mean where none is)."""
     from .replay import block_means
-    f = block_means(mask.astype(float), m)
-    plain = block_means(x, m)
     if mask.all():
-        return plain
-    mm = mask.reshape(-1, *([1] * (x.ndim - 1))) if x.ndim > 1 else mask
-    s = block_means(np.where(mm, x, 0.0), m)
-    fr = f.reshape(-1, *([1] * (x.ndim - 1))) if x.ndim > 1 else f
-    return np.where(fr > 0, s / np.maximum(fr, 1e-300), plain)
+        return block_means(x, m)
+    n = (len(x) // m) * m
+    x = x[:n].reshape(-1, m, *x.shape[1:])
+    mk = mask[:n].reshape(-1, m)
+    cnt = mk.sum(1)
+    mk = mk.reshape(mk.shape + (1,) * (x.ndim - 2))
+    s = np.where(mk, x, 0.0).sum(1)
+    c = cnt.reshape(cnt.shape + (1,) * (x.ndim - 2))
+    return np.where(c > 0, s / np.maximum(c, 1), x.mean(1))
 
 
 def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m):

@@ -80,13 +80,12 @@ class GramProblem:
         self.G, self.c, self.yy, self.sw = [], [], [], []
         # kept for the twins (``twins.make_twins``): scaled and weighted columns, the folds
         self.Xs, self.w = Xs, w
-        self.Xw = Xs * w[:, None]
         bounds = np.searchsorted(folds, np.arange(n_folds + 1))
         self.fold_slices = [slice(int(bounds[f]), int(bounds[f + 1])) for f in range(n_folds)]
         for f in range(n_folds):
             sel = self.fold_slices[f]
             Xf, yf, wf = Xs[sel], y[sel], w[sel]
-            Xw = self.Xw[sel]
+            Xw = Xf * wf[:, None]
             self.G.append(Xw.T @ Xf)
             self.c.append(Xw.T @ yf)
             self.yy.append(float(wf @ (yf * yf)))

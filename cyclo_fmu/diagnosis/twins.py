@@ -162,10 +162,9 @@ def make_twins(prob, noise_resid, weights, rng=None, n=N_TWINS, keep_noise=False
         if keep is not None:
             keep.append(Y)
         for f, sel in enumerate(prob.fold_slices):
-            Yf = Y[sel]
-            Xw = prob.Xw[sel]
-            C[f][:, k0:k0 + k] = Xw.T @ Yf
-            yy[f][k0:k0 + k] = np.einsum("i,ij,ij->j", prob.w[sel], Yf, Yf)
+            Yw = Y[sel] * prob.w[sel, None]
+            C[f][:, k0:k0 + k] = prob.Xs[sel].T @ Yw
+            yy[f][k0:k0 + k] = np.einsum("ij,ij->j", Yw, Y[sel])
     return Twins(prob, n, a, C, yy, np.hstack(keep) if keep else None)
 
 
