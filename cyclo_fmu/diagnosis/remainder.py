@@ -158,7 +158,8 @@ def order_claims(r, sig, orders, dt, rng):
         k = orders[name]
         off = {f"{name} {d:+.2f}": k * (1 + d) for d in OFF_ORDERS
                if np.all(np.abs(k * (1 + d) - ks) > 0.03 * ks)}
-        twins = np.array([x for x, _ in R.order_amplitudes(r, sig, off, dt).values()])
+        twins = np.array([x for x, _ in R.order_amplitudes(r, sig, off, dt,
+                                                            others=ks).values()])
         if len(twins) < 4:
             out[name] = (a, None)
             continue

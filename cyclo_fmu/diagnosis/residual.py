@@ -100,17 +100,25 @@ def generic_basis(blocks: dict) -> tuple:
 ORDER_NYQUIST_SHARE = 0.4
 
 
-def order_amplitudes(r, sig, orders, dt) -> dict:
+def order_amplitudes(r, sig, orders, dt, others=()) -> dict:
     """Amplitudes (N*m) of the sample-level residual ``r`` at orders of the input speed, by
     least squares on sin/cos of the shaft angle over the moving samples where the order's
-    frequency stays below ``ORDER_NYQUIST_SHARE`` of the sampling rate, with the standard error
-    of one amplitude: {name: (amplitude, se)}."""
+    frequency stays below ``ORDER_NYQUIST_SHARE`` of the sampling rate and where no other order
+    (of ``orders`` and ``others``), folded about the Nyquist frequency, comes within
+    ``ORDER_EXCLUSION_HZ`` of it (at 200 Hz the roller pass of a 1000 r/min shaft folds onto
+    its 2x), with the standard error of one amplitude: {name: (amplitude, se)}."""
     th = sig["theta_in"]
     w = np.abs(sig["w_in"])
+    f1 = w / (2 * math.pi)
+    fs = 1.0 / dt
     moving = w > MOVING_SHARE * max(np.max(w), 1e-12)
+    ks = sorted(set(list(orders.values()) + list(others)))
     out = {}
     for name, k in orders.items():
-        sel = moving & (k * w / (2 * math.pi) < ORDER_NYQUIST_SHARE / dt)
+        sel = moving & (k * f1 < ORDER_NYQUIST_SHARE * fs)
+        for k2 in ks:
+            if abs(k2 - k) > 1e-9 * k and k2 * np.max(f1[sel], initial=0.0) >= fs / 2:
+                sel &= np.abs(folded(k2 * f1, fs) - k * f1) > ORDER_EXCLUSION_HZ
         if sel.sum() < 100:
             continue
         B = np.stack([np.ones(sel.sum()), np.sin(k * th[sel]), np.cos(k * th[sel])], -1)
