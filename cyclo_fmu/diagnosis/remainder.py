@@ -7,7 +7,8 @@ Claims and their statistics (``twins`` for the false-alarm rate and the fitted t
   on the twins' noise; judged at ``FALSE_ALARM``. Reported when it also explains at least
   ``MIN_EXPLAINED_NM`` (a physical limit, not a significance one).
 - *a named effect next to that structure* (does it keep its place, or could the unknown hold
-  it?): its drop-one statistic beside the selection and the basis, judged as in stage twins; an
+  it?): its drop-one statistic beside the selection and the group of the basis that best
+  stands in for it, judged as in stage twins; an
   effect whose statistic the twins reach there, and that explains less than the basis adds, is
   withdrawn unless it explains ``DOMINANCE`` times the RMS the basis adds (then named and the
   rest reported as unexplained).
@@ -89,18 +90,20 @@ def structure(P, prob, S, tw):
 
 def withdraw(P, prob, S, with_g, tw, alpha, forced):
     """Effects that the generic basis could stand in for: (S, withdrawn, dominant,
-    friction_doubted). An effect keeps its place beside the whole generic basis (the most
-    capable stand-in for an unknown) when its drop-one statistic there lies beyond its twins
-    and is of a reportable size (``MIN_EXPLAINED_NM``: a long recording makes a shape
+    friction_doubted). An effect keeps its place beside the group of the generic basis that
+    best stands in for it (the group with which the rest of the selection fits best without
+    it) when its drop-one statistic there lies beyond its twins and is of a reportable size (``MIN_EXPLAINED_NM``: a long recording makes a shape
     difference of no practical size significant); otherwise it is named only if it explains
     ``DOMINANCE`` times the RMS the basis adds beside the selection, and withdrawn if not (one
     at a time, the weakest first: a withdrawal changes what the others explain)."""
-    b = P.generic
+    groups = [g for g in P.structure if g != P.generic]
     g_adds = S.rss - with_g.rss
     weak, dominant, doubted = [], [], False
     for t in S.terms:
         if t.effect in forced and t.effect != "friction_miscalibrated":
             continue
+        others = tuple(x for x in S.terms if x != t)
+        b = min(groups, key=lambda g: prob.fit(others + (g,), cv=False).rss)
         beside = tuple(S.terms) + (b,)
         rest = tuple(x for x in beside if x != t)
         stat = prob.fit(rest, cv=False).rss - prob.fit(beside, cv=False).rss
