@@ -131,6 +131,9 @@ class Diagnoser:
         if fr is not None and abs(fr[0]) > FRICTION_RELINEARISE:
             from model_core.design import scale_friction_level
             rel1 = float(fr[0])
+            # the first analysis's columns are not needed again (its fits keep their Gram
+            # matrices): freed before the second replay, which would hold both at its peak
+            P0.X, first.prob.Xs = None, None
             P = build_problem(rec, scale_friction_level(self.design, 1 + rel1), self.mode,
                               self.candidates, self.bandwidth, self.block,
                               # the friction level's own sensitivity is reused (forced, it
