@@ -274,6 +274,8 @@ class ModeMap:
 
 #: [1] headroom of a replay's map over the recording's largest torque and speed
 REPLAY_MARGIN = 1.05
+#: samples per chunk of a replay (bounds its temporaries to about 20 MB)
+REPLAY_CHUNK = 65536
 
 
 def replay_input_torque(design, mode, w_in, tau_out, grid=None):
@@ -304,6 +306,11 @@ def replay_input_torque(design, mode, w_in, tau_out, grid=None):
     wmax = float(np.max(np.abs(w_in))) * REPLAY_MARGIN + 1e-6
     m = ModeMap(design, mode, tmax, wmax) if grid is None else \
         ModeMap(design, mode, tmax, wmax, n_torque=grid[0], n_speed=grid[1])
-    tau_in = m.solve_arrays(w_in, tau_out)["tau_in"]
+    # in chunks: solve_arrays holds some thirty temporaries of the samples' length (185 MB
+    # at 600 000 samples in one piece); the map is the same for every chunk
+    tau_in = np.empty_like(w_in)
+    for k0 in range(0, w_in.size, REPLAY_CHUNK):
+        sl = slice(k0, k0 + REPLAY_CHUNK)
+        tau_in[sl] = m.solve_arrays(w_in[sl], tau_out[sl])["tau_in"]
     lossless = -tau_out * m.ratio[m._k]
     return tau_in, tau_in - lossless

@@ -116,28 +116,27 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
     advanced by its group delay 1/(2 pi f_c) (at the roller-pass order of 2800 r/min the
     0.16 ms of a 1 kHz transducer are 0.65 rad of phase). ``sensitivities``: (sens_mu,
     sens_nu) or (sens_mu, sens_nu, sens_k, sens_idle) of an earlier replay to reuse (a
-    re-linearised replay at a nearby design; with two, the calibration's are computed)."""
+    re-linearised replay at a nearby design); one given as None, or the calibration's when
+    only two are given, is computed at ``design``."""
     t, w_in, T_out = rec.time, rec.speed_in, rec.torque_out
     tau_out = -T_out
     T_in, loss = replay_input_torque(design, mode, w_in, tau_out)
-    if sensitivities is None:
-        h = SENSITIVITY_STEP
-        dln = math.log(1 + h) - math.log(1 - h)
-        g = SENSITIVITY_GRID
+    h = SENSITIVITY_STEP
+    dln = math.log(1 + h) - math.log(1 - h)
+    g = SENSITIVITY_GRID
 
-        def diff(**k):
-            up = {n: 1 + h for n in k}
-            dn = {n: 1 - h for n in k}
-            return (replay_input_torque(_scaled(design, **up), mode, w_in, tau_out, g)[0]
-                    - replay_input_torque(_scaled(design, **dn), mode, w_in, tau_out, g)[0]) / dln
-        sens_mu = diff(mu=1)
-        sens_nu = diff(nu=1)
+    def diff(**k):
+        up = {n: 1 + h for n in k}
+        dn = {n: 1 - h for n in k}
+        return (replay_input_torque(_scaled(design, **up), mode, w_in, tau_out, g)[0]
+                - replay_input_torque(_scaled(design, **dn), mode, w_in, tau_out, g)[0]) / dln
+    given = tuple(sensitivities) if sensitivities is not None else ()
+    sens_mu, sens_nu, sens_k, sens_idle = given + (None,) * (4 - len(given))
+    # (a sensitivity passed as None is computed at this design)
+    sens_mu = diff(mu=1) if sens_mu is None else sens_mu
+    sens_nu = diff(nu=1) if sens_nu is None else sens_nu
+    if sens_k is None or sens_idle is None:
         sens_k, sens_idle = calibration_sensitivities(design, mode, w_in, tau_out)
-    elif len(sensitivities) == 2:
-        sens_mu, sens_nu = sensitivities
-        sens_k, sens_idle = calibration_sensitivities(design, mode, w_in, tau_out)
-    else:
-        sens_mu, sens_nu, sens_k, sens_idle = sensitivities
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
     from scipy.ndimage import uniform_filter1d
     w_s = uniform_filter1d(w_in, max(1, int(round(SPEED_SMOOTHING / dt))), mode="nearest")

@@ -13,7 +13,7 @@ from model_core import DriveDesign
 from model_core.effects import EFFECTS
 
 from ..fmt import friction_level_fields, unit_suffix
-from .estimator import Diagnosis
+from .result import Diagnosis
 
 
 def updated_design(design: DriveDesign, d: Diagnosis):
@@ -163,7 +163,7 @@ def _fmt(v):
 
 
 def write_report(d: Diagnosis, path, result: dict, source: str = "",
-                 profile: str = "physical") -> None:
+                 profile: str = "physical", png: bytes = None) -> None:
     """A self-contained HTML report (figures embedded) an engineer can attach to a test report:
     the statement, the effects with their parameters and intervals, what remains, the checks,
     the evidence table and the residual before and after, over time and over the map.
@@ -194,7 +194,8 @@ def write_report(d: Diagnosis, path, result: dict, source: str = "",
     u = d.unexplained
     cal = "".join(f"<li>{e(k)} = {_fmt(v['value'])}{e(unit_suffix(v['unit']))}</li>"
                   for k, v in d.calibration.items())
-    img = _png(_figure(d))
+    # (``png``: the figure already drawn for diagnosis.png, embedded as it is)
+    img = base64.b64encode(png).decode("ascii") if png is not None else _png(_figure(d))
     text = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>cyclo-fmu diagnosis: {e(source)}</title>
 <style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;line-height:1.4}}
@@ -232,9 +233,17 @@ def write_diagnosis(out_dir, d, design, result, source=""):
     import json
     from model_core import design_to_toml
     from ..outputs import staged_dir
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
     with staged_dir("out", out_dir) as out:
-        plot_diagnosis(d, out)
-        write_report(d, out / "report.html", result, source, design.profile)
+        fig = _figure(d)           # drawn once: the PNG file and the report's embedded image
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=100)
+        plt.close(fig)
+        (out / "diagnosis.png").write_bytes(buf.getvalue())
+        write_report(d, out / "report.html", result, source, design.profile,
+                     png=buf.getvalue())
         (out / "diagnosis.json").write_text(json.dumps(result, indent=2))
         fixed, notes = d.updated or updated_design(design, d)
         (out / "design_updated.toml").write_text(design_to_toml(fixed) + "".join(

@@ -100,17 +100,25 @@ def generic_basis(blocks: dict) -> tuple:
 ORDER_NYQUIST_SHARE = 0.4
 
 
-def order_amplitudes(r, sig, orders, dt) -> dict:
+def order_amplitudes(r, sig, orders, dt, others=()) -> dict:
     """Amplitudes (N*m) of the sample-level residual ``r`` at orders of the input speed, by
     least squares on sin/cos of the shaft angle over the moving samples where the order's
-    frequency stays below ``ORDER_NYQUIST_SHARE`` of the sampling rate, with the standard error
-    of one amplitude: {name: (amplitude, se)}."""
+    frequency stays below ``ORDER_NYQUIST_SHARE`` of the sampling rate and where no other order
+    (of ``orders`` and ``others``), folded about the Nyquist frequency, comes within
+    ``ORDER_EXCLUSION_HZ`` of it (at 200 Hz the roller pass of a 1000 r/min shaft folds onto
+    its 2x), with the standard error of one amplitude: {name: (amplitude, se)}."""
     th = sig["theta_in"]
     w = np.abs(sig["w_in"])
+    f1 = w / (2 * math.pi)
+    fs = 1.0 / dt
     moving = w > MOVING_SHARE * max(np.max(w), 1e-12)
+    ks = sorted(set(list(orders.values()) + list(others)))
     out = {}
     for name, k in orders.items():
-        sel = moving & (k * w / (2 * math.pi) < ORDER_NYQUIST_SHARE / dt)
+        sel = moving & (k * f1 < ORDER_NYQUIST_SHARE * fs)
+        for k2 in ks:
+            if abs(k2 - k) > 1e-9 * k and k2 * np.max(f1[sel], initial=0.0) >= fs / 2:
+                sel &= np.abs(folded(k2 * f1, fs) - k * f1) > ORDER_EXCLUSION_HZ
         if sel.sum() < 100:
             continue
         B = np.stack([np.ones(sel.sum()), np.sin(k * th[sel]), np.cos(k * th[sel])], -1)
@@ -145,10 +153,11 @@ def _order_coverage(speed, orders, fs, freqs, n_seg, nper):
     """Which frequency bins ``freqs`` (Hz) a shaft order reaches within each of ``n_seg``
     half-overlapping segments of ``nper`` samples of the sample-level input speed (rad/s):
     boolean (n_freq, n_seg), widened by ``ORDER_EXCLUSION_HZ`` (the orders folded about the
-    Nyquist frequency). A segment is two half-segments; each half is represented by its sorted
-    speeds taken so densely that the fastest order moves less than a bin between two of them
-    (a sweep leaves no gap); a half-segment with a speed that is not finite is taken to reach
-    every bin."""
+    Nyquist frequency). A segment is two half-segments; within a half-segment the speed moves
+    continuously (a motor's speed has no jumps), so an order reaches every frequency between
+    its values at the half's lowest and highest speed; a half-segment with a speed that is not
+    finite is taken to reach every bin. (Intervals, one per order and half-segment, marked in a
+    difference array: no per-sample temporaries.)"""
     df = freqs[1] - freqs[0]
     nf = freqs.size
     h = nper - nper // 2
@@ -158,20 +167,45 @@ def _order_coverage(speed, orders, fs, freqs, n_seg, nper):
         w = np.concatenate([w, np.full(n_half * h - w.size, w[-1] if w.size else 0.0)])
     w = w.reshape(n_half, h)
     bad = ~np.isfinite(w).all(1)
-    w = np.sort(np.where(np.isfinite(w), w, 0.0), axis=1)
-    k = np.abs(np.asarray(orders, float))
-    spread = float(np.max(w[:, -1] - w[:, 0])) * float(k.max()) / (2 * math.pi)   # Hz
-    n_pts = int(min(h, max(33, math.ceil(spread / df) + 2)))
-    ws = w[:, np.rint(np.linspace(0, h - 1, n_pts)).astype(int)]               # (n_half, n_pts)
-    f = folded(ws[:, None, :] * k[None, :, None] / (2 * math.pi), fs)
-    pad = int(math.ceil(ORDER_EXCLUSION_HZ / df))
-    bins = np.rint(f.reshape(n_half, -1) / df).astype(int)
-    bins = (bins[:, :, None] + np.arange(-pad, pad + 1)).reshape(n_half, -1)
-    half = np.zeros((n_half, nf + 2 * pad + 1), bool)
-    half[np.arange(n_half)[:, None], np.clip(bins, -1, nf) % (nf + 2 * pad + 1)] = True
-    half = half[:, :nf]
+    w = np.where(np.isfinite(w), w, 0.0)
+    lo_w, hi_w = w.min(1), w.max(1)
+    fn = fs / 2
+    pad = ORDER_EXCLUSION_HZ
+    marks = np.zeros((n_half, nf + 1), np.int32)
+    for k in np.abs(np.asarray(orders, float)):
+        a_all, b_all = k * lo_w / (2 * math.pi), k * hi_w / (2 * math.pi)
+        for i in range(n_half):
+            a, b = a_all[i], b_all[i]
+            for z in range(int(a // fn), int(b // fn) + 1):
+                lo, hi = max(a, z * fn) - z * fn, min(b, (z + 1) * fn) - z * fn
+                if z % 2:                       # an odd Nyquist zone folds back
+                    lo, hi = fn - hi, fn - lo
+                i0 = max(int(math.floor((lo - pad) / df + 0.5)), 0)
+                i1 = min(int(math.floor((hi + pad) / df + 0.5)), nf - 1)
+                if i1 >= i0:
+                    marks[i, i0] += 1
+                    marks[i, i1 + 1] -= 1
+    half = np.cumsum(marks, 1)[:, :nf] > 0
     half[bad] = True
     return (half[:-1] | half[1:]).T
+
+
+def _level(S, cols, width):
+    """Mean spectrum over the segments ``cols`` of the spectrogram ``S`` and its local level:
+    the larger of the median over ``width`` bins (+-5 Hz) and the medians of the two flanks
+    (NaN where the lower flank would reach the DC bin)."""
+    from scipy.ndimage import median_filter
+    P = S[:, cols].mean(1)
+    base = median_filter(P, size=width, mode="nearest")
+    m3 = np.median(np.lib.stride_tricks.sliding_window_view(P, 3), axis=-1)  # P[j:j+3]
+    flank = np.full((2, P.size), np.nan)
+    k = PEAK_FLANK_BINS
+    i = np.arange(P.size)
+    low_ok = i - k - 2 >= 1
+    flank[0, low_ok] = m3[i[low_ok] - k - 2]
+    high_ok = i + k + 2 <= P.size - 1
+    flank[1, high_ok] = m3[i[high_ok] + k]
+    return P, np.where(low_ok, np.fmax(base, np.fmax(flank[0], flank[1])), np.nan)
 
 
 def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=2.5, speed=None,
@@ -218,20 +252,7 @@ def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=2.5, speed=None,
     usable = _order_coverage(speed, orders, fs, f, n_seg, nper) if judged else None
 
     def level(cols):
-        """Mean spectrum over the segments ``cols`` and its local level: the larger of the
-        median over +-5 Hz and the medians of the two flanks (NaN where the lower flank would
-        reach the DC bin)."""
-        P = S[:, cols].mean(1)
-        base = median_filter(P, size=width, mode="nearest")
-        m3 = np.median(np.lib.stride_tricks.sliding_window_view(P, 3), axis=-1)  # P[j:j+3]
-        flank = np.full((2, P.size), np.nan)
-        k = PEAK_FLANK_BINS
-        i = np.arange(P.size)
-        low_ok = i - k - 2 >= 1
-        flank[0, low_ok] = m3[i[low_ok] - k - 2]
-        high_ok = i + k + 2 <= P.size - 1
-        flank[1, high_ok] = m3[i[high_ok] + k]
-        return P, np.where(low_ok, np.fmax(base, np.fmax(flank[0], flank[1])), np.nan)
+        return _level(S, cols, width)
 
     def stands(P, base, i, share):
         return bool(np.max(P[i - 1:i + 2]) > share * factor * base[i])

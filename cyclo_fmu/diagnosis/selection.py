@@ -6,7 +6,8 @@ its residual sum of squares and its blocked cross-validation error then cost a s
 unknowns, so forward and backward stepwise selection, the stability of the selection across
 folds and the look-alike tests are cheap even for an hour at 10 kHz.
 
-Decision rules (named, with their units, in ``estimator``): a term enters when it lowers the
+Proposal rules (named, with their units, in ``select_effects``; the twins of stage
+``twins`` then judge every proposed effect): a term enters when it lowers the
 BIC by at least ``DELTA_BIC`` ('very strong' evidence on the Kass-Raftery scale) *and* the
 held-out RMS it explains is at least ``min_explained`` N*m (long recordings make tiny,
 meaningless terms significant), and only while its parameters lie inside their physical
@@ -78,8 +79,12 @@ class GramProblem:
         self.scale = scale
         Xs = X / scale
         self.G, self.c, self.yy, self.sw = [], [], [], []
+        # kept for the twins (``twins.make_twins``): scaled and weighted columns, the folds
+        self.Xs, self.w = Xs, w
+        bounds = np.searchsorted(folds, np.arange(n_folds + 1))
+        self.fold_slices = [slice(int(bounds[f]), int(bounds[f + 1])) for f in range(n_folds)]
         for f in range(n_folds):
-            sel = folds == f
+            sel = self.fold_slices[f]
             Xf, yf, wf = Xs[sel], y[sel], w[sel]
             Xw = Xf * wf[:, None]
             self.G.append(Xw.T @ Xf)

@@ -1,0 +1,183 @@
+"""Stage ``replay``: the recording through the model and the regression problem in block means.
+
+The model is replayed per sample (``replay.replay``: vectorised through the map) and its
+output is block-averaged exactly as the measurement is: the residual of a block is the mean,
+over the block's samples, of measured minus model input torque, never the model evaluated at
+block-mean inputs (the mean of the model is not the model of the means where the model is
+discontinuous or bends: speed reversals, the drag's sign, zero crossings, ramp corners).
+
+One artifact remains at sample level: where the model *jumps* between two samples (the
+friction and the drag change sign when the speed does; a load step), the samples do not say
+where inside the interval the jump happened, and a torque channel settles through it with its
+own dynamics. Those samples are not compared (``jump_mask``): the model's value there is not
+defined by the samples. The window is a named physical limit (``SETTLE_S``), not a tuned one.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from model_core.effects import EFFECTS
+
+from . import residual as R
+from .replay import Replay, first_order, replay
+from .selection import Term
+
+#: [N*m] below this output torque the recording carries no load (load-dependent terms dropped)
+MIN_LOAD = 0.05
+#: [s] settling window around an instant where the model jumps (a speed reversal, a step of
+#: the model's input torque): 5 ms, five time constants of a 160 Hz first-order torque channel
+#: (the slowest transducer class a reducer bench uses; HBM T22: 1 kHz) and one sample of a
+#: 200 Hz logger. Inside it the model's value is not defined by the samples; a transient that
+#: lasts longer (backlash taken up over tens of ms, a torque channel 20 ms late) stays visible
+SETTLE_S = 0.005
+#: [1] a change of the model's input torque between two samples larger than this many times
+#: the torque channel's sample noise is a jump the samples do not resolve (a load step); a
+#: ramp changes the model by less than the noise per sample, and the mean of a straight ramp
+#: over a sample interval is its value at the sample (no artifact)
+JUMP_NOISE = 3.0
+
+_DRIFT_LOADED = ("friction_miscalibrated", "torque_sensor_gain", "thermal_drift",
+                 "viscosity_drift")
+
+
+@dataclass
+class Problem:
+    """The regression problem of one recording under one design (block means, SI).
+
+    ``y``: block-mean residual (measured - model input torque, N*m); ``X``: every candidate's
+    columns, then the generic basis; ``options``: {effect: [Term]}; ``valid``: the share of
+    each block's samples compared (0 where the model jumps through the whole block)."""
+    rp: Replay
+    sig: dict
+    y: np.ndarray
+    X: np.ndarray
+    options: dict
+    generic: Term
+    steady: list
+    structure: list
+    groups: list
+    blocks: dict
+    m: int
+    dt: float
+    T_model_f: np.ndarray
+    loaded: bool
+    mask: np.ndarray = field(repr=False, default=None)
+    valid: np.ndarray = field(repr=False, default=None)
+    noise_sample: float = 0.0
+    bandwidth: float = 0.0
+
+    def __getitem__(self, key):          # the dict interface of earlier versions
+        return getattr(self, key)
+
+
+def jump_mask(t, w_in, T_model, noise, dt) -> np.ndarray:
+    """Samples compared (True) and not (False: within ``SETTLE_S`` of a sample interval where
+    the speed changes sign or the model's input torque changes by more than ``JUMP_NOISE``
+    times the torque channel's sample noise ``noise`` N*m)."""
+    n = len(t)
+    s = np.signbit(w_in)
+    jump = np.zeros(n, bool)
+    jump[:-1] = (s[1:] != s[:-1]) | (np.abs(np.diff(T_model)) > JUMP_NOISE * max(noise, 1e-12))
+    k = int(np.ceil(SETTLE_S / dt))
+    if not jump.any():
+        return np.ones(n, bool)
+    # dilate by k samples on each side (the jump's interval is [i, i+1])
+    c = np.concatenate([[0], np.cumsum(jump)])
+    lo = np.clip(np.arange(n) - k - 1, 0, n)
+    hi = np.clip(np.arange(n) + k + 1, 0, n)
+    return (c[hi] - c[lo]) == 0
+
+
+def masked_means(x, mask, m):
+    """Block means over the compared samples only (the plain mean where none is)."""
+    from .replay import block_means
+    if mask.all():
+        return block_means(x, m)
+    n = (len(x) // m) * m
+    x = x[:n].reshape(-1, m, *x.shape[1:])
+    mk = mask[:n].reshape(-1, m)
+    cnt = mk.sum(1)
+    mk = mk.reshape(mk.shape + (1,) * (x.ndim - 2))
+    s = np.where(mk, x, 0.0).sum(1)
+    c = cnt.reshape(cnt.shape + (1,) * (x.ndim - 2))
+    return np.where(c > 0, s / np.maximum(c, 1), x.mean(1))
+
+
+def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m):
+    cols, options = [], {}
+    for eid in candidates:
+        eff = EFFECTS[eid]
+        if any(P_sig.get(r) is None for r in eff.requires):
+            continue
+        if not loaded and eid in _DRIFT_LOADED:
+            continue
+        terms = []
+        for shape in eff.shapes(P_sig):
+            B = masked_means(first_order(eff.basis(P_sig, shape), dt, bandwidth), mask, m)
+            k0 = sum(c.shape[1] for c in cols)
+            cols.append(B)
+            terms.append(Term(eid, shape, tuple(range(k0, k0 + B.shape[1])),
+                              tuple(p.name for p in eff.parameters),
+                              tuple(p.unit for p in eff.parameters),
+                              tuple(p.lower for p in eff.parameters),
+                              tuple(p.upper for p in eff.parameters),
+                              len(eff.shape_names) if (eff.shape and shape is not None)
+                              else 0))
+        options[eid] = terms
+    return cols, options
+
+
+def _structure(Gb, groups, k0):
+    """The generic basis as Terms: whole, each group alone and the steady (operating point)
+    part. A group that holds nothing (e.g. time polynomials) extrapolates badly into a
+    held-out time-ordered fold and would hide, in the whole basis's held-out error, what
+    another group explains; so each is tried alone too."""
+    def part(keep):
+        idx = [i for i, g in enumerate(groups) if keep(g)]
+        return Term("generic", None, tuple(k0 + i for i in idx), tuple(groups[i] for i in idx),
+                    ("N*m",) * len(idx), (-np.inf,) * len(idx), (np.inf,) * len(idx))
+    generic = part(lambda g: True)
+    names = list(dict.fromkeys(groups))
+    steady = [part(lambda g: g.startswith("operating point"))] + [
+        part(lambda g, n=n: g == n) for n in names if n.startswith("operating point")]
+    structure = [generic] + [part(lambda g, n=n: g == n) for n in names] + steady[:1]
+    return generic, steady, structure
+
+
+def build_problem(rec, design, mode, candidates, bandwidth, block,
+                  sensitivities=None) -> Problem:
+    """Stage ``replay``: replay ``rec`` through ``design`` per sample, mask the jumps, and form
+    the block-mean regression problem."""
+    t = rec.time
+    dt = float(np.median(np.diff(t)))
+    rp = replay(design, mode, rec, bandwidth, sensitivities)
+    sig = rp.signals
+    T_model_f = first_order(rp.T_model, dt, bandwidth)
+    m = max(1, int(round(block / dt)))
+    noise = R.robust_sigma(np.diff(rec.torque_in)) / np.sqrt(2)
+    mask = jump_mask(t, rec.speed_in, rp.T_model, noise, dt)
+    n = (len(t) // m) * m
+    mask_b = mask[:n]
+    valid = mask_b.reshape(-1, m).mean(1)
+
+    def mean(x):
+        return masked_means(x[:n], mask_b, m)
+    y = mean(rec.torque_in - T_model_f)
+    temp = getattr(rec, "temperature", None)
+    blocks = {"t": mean(t), "w_in": mean(rec.speed_in), "T_out": mean(rec.torque_out),
+              "T_in": mean(rec.torque_in), "alpha": mean(sig["alpha_in"]),
+              "temperature": mean(temp) if temp is not None else None}
+    loaded = float(np.max(np.abs(rec.torque_out))) >= MIN_LOAD
+    sig_n = {k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == t.shape else v)
+             for k, v in sig.items()}
+    cols, options = _candidates(sig_n, candidates, loaded, dt, bandwidth, mask_b, m)
+    Gb, groups = R.generic_basis(blocks)
+    k0 = sum(c.shape[1] for c in cols)
+    generic, steady, structure = _structure(Gb, groups, k0)
+    X = np.hstack(cols + [Gb]) if cols else Gb
+    return Problem(rp=rp, sig=sig, y=y, X=X, options=options, generic=generic, steady=steady,
+                   structure=structure, groups=groups, blocks=blocks, m=m, dt=dt,
+                   T_model_f=T_model_f, loaded=loaded, mask=mask, valid=valid,
+                   noise_sample=noise, bandwidth=bandwidth)

@@ -1,0 +1,372 @@
+"""Stage ``remainder``: what the selected effects leave, each claim judged against twins.
+
+Claims and their statistics (``twins`` for the false-alarm rate and the fitted tails):
+
+- *smooth structure* (the generic basis, whole or one of its groups, beside the selection):
+  the residual sum of squares the best group removes; twins: the same maximum over the groups
+  on the twins' noise; judged at ``FALSE_ALARM``. Reported when it also explains at least
+  ``MIN_EXPLAINED_NM`` (a physical limit, not a significance one).
+- *a named effect next to that structure* (does it keep its place, or could the unknown hold
+  it?): its drop-one statistic beside the selection and the group of the basis that best
+  stands in for it, judged as in stage twins; an
+  effect whose statistic the twins reach there, and that explains less than the basis adds, is
+  withdrawn unless it explains ``DOMINANCE`` times the RMS the basis adds (then named and the
+  rest reported as unexplained).
+- *shaft orders*: the amplitude at an order of the input speed; twins: the amplitudes at
+  ``OFF_ORDERS`` nearby non-orders of the same residual and speed (no shaft is phase-locked to
+  them, their noise has the same colour), an exponential tail (a sine-cosine amplitude squared
+  in noise is chi-square with 2 degrees of freedom) fitted to them; judged at FALSE_ALARM
+  over the orders analysed.
+- *bursts at events* (speed reversals, torque reversals, load or speed steps): the mean rank
+  of the squared block residual within ``residual.EVENT_WINDOW`` of the events; twins: the recording's own block residual shifted in time by ``N_TWINS`` random
+  offsets (colour, spikes and tails kept, only the tie to the events broken), a normal tail
+  (a mean over many blocks); judged at FALSE_ALARM over the event kinds.
+- *fixed-frequency peaks*: ``residual.spectral_peaks`` (its height over the local level of the
+  residual's spectrum, in the whole recording and in its quarters).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from model_core.effects import EFFECTS, SENSOR_EFFECTS
+from model_core.kinematics import speed_ratio
+
+from . import residual as R
+from .select_effects import MIN_EXPLAINED_NM, fit_rms
+from .selection import Term, explained
+from .twins import FALSE_ALARM, N_TWINS, Check, normal_tail
+
+#: [N*m] the smallest amplitude of a narrow spectral peak reported as unexplained: 1 mN*m (RMS
+#: 0.7 mN*m, above MIN_EXPLAINED_NM)
+PEAK_MIN_AMPLITUDE_NM = 1e-3
+#: [1] an effect that the generic basis could stand in for (its statistic beside the basis
+#: within its twins) keeps its name when it explains at least this many times the RMS the
+#: basis adds beside the selection: 3, i.e. 90 % of the variance of the two together, the rest
+#: reported as unexplained; below it the effect is withdrawn (``could_include``). Not a
+#: significance threshold (both parts are beyond their twins), but the share of an explanation
+#: at which the library's shape is taken for the answer and the rest for a remainder: the
+#: twins cannot decide which of two explanations of the same residual to name
+DOMINANCE = 3.0
+#: relative offsets of the off-order twins of an order k (k (1 + d)): wider than the order
+#: resolution of a 5 s hold at 10 Hz shaft speed (2 %), inside the neighbourhood whose noise
+#: level the order shares
+OFF_ORDERS = (-0.21, -0.18, -0.15, -0.12, -0.09, -0.06, 0.06, 0.09, 0.12, 0.15, 0.18, 0.21)
+
+
+@dataclass
+class Remainder:
+    """Stage ``remainder``: the final selection ``S`` and what it leaves (``unexplained``, the
+    JSON contract's dict), with the claims' checks."""
+    S: object
+    with_g: object
+    unexplained: dict
+    withdrawn: list
+    dominant: list
+    friction_doubted: bool
+    gain_alone: tuple
+    step_transient: bool
+    smooth: bool
+    orders_all: dict
+    residual_raw: np.ndarray = field(repr=False, default=None)
+    claims: dict = field(default_factory=dict)
+
+
+def structure(P, prob, S, tw):
+    """(present, best fit with a group of the generic basis, Check, RMS in the fit).
+
+    The statistic is the largest RSS drop any group makes (the twins take the same maximum);
+    the group reported (what the remainder is, its RMS) is the one with the smallest held-out
+    error (the whole basis always fits best in sample, and would report its overfit)."""
+    fits = [prob.fit(S.terms + (b,)) for b in P.structure]
+    stat = S.rss - min(f.rss for f in fits)
+    chk = tw.check(stat, tw.gain(S.terms, [(b,) for b in P.structure]), FALSE_ALARM)
+    best = min(fits, key=lambda f: f.cv_mse)
+    rms = fit_rms(prob, S, best)
+    return chk.stands and rms >= MIN_EXPLAINED_NM, best, chk, rms
+
+
+def withdraw(P, prob, S, with_g, tw, alpha, forced):
+    """Effects that the generic basis could stand in for: (S, withdrawn, dominant,
+    friction_doubted). An effect keeps its place beside the group of the generic basis that
+    best stands in for it (the group with which the rest of the selection fits best without
+    it) when its drop-one statistic there lies beyond its twins and is of a reportable size (``MIN_EXPLAINED_NM``: a long recording makes a shape
+    difference of no practical size significant); otherwise it is named only if it explains
+    ``DOMINANCE`` times the RMS the basis adds beside the selection, and withdrawn if not (one
+    at a time, the weakest first: a withdrawal changes what the others explain)."""
+    groups = [g for g in P.structure if g != P.generic]
+    g_adds = S.rss - with_g.rss
+    weak, dominant, doubted = [], [], False
+    for t in S.terms:
+        if t.effect in forced and t.effect != "friction_miscalibrated":
+            continue
+        others = tuple(x for x in S.terms if x != t)
+        b = min(groups, key=lambda g: prob.fit(others + (g,), cv=False).rss)
+        beside = tuple(S.terms) + (b,)
+        rest = tuple(x for x in beside if x != t)
+        stat = prob.fit(rest, cv=False).rss - prob.fit(beside, cv=False).rss
+        chk = tw.check(stat, tw.rss(rest) - tw.rss(beside), alpha)
+        if chk.stands and math.sqrt(max(stat, 0.0) / prob.swt) >= MIN_EXPLAINED_NM:
+            continue
+        explains = prob.fit(tuple(x for x in S.terms if x != t), cv=False).rss - S.rss
+        if t.effect == "friction_miscalibrated":
+            doubted = True        # the model's own coefficient: stays in the fit, not named
+        elif explains >= DOMINANCE ** 2 * g_adds:      # RSS: squares of the RMS
+            dominant.append(t.effect)
+        else:
+            weak.append((explains, t))
+    withdrawn = []
+    if weak:
+        t = min(weak, key=lambda x: x[0])[1]
+        withdrawn = [t.effect]
+        S = prob.fit(tuple(x for x in S.terms if x != t))
+        while not S.admissible:
+            out = [t for t in S.terms if t.effect not in forced and not np.all(
+                (S.of(t)[0] >= t.lower) & (S.of(t)[0] <= t.upper))]
+            if not out:
+                break
+            withdrawn += [t.effect for t in out]
+            S = prob.fit(tuple(t for t in S.terms if t not in out))
+    return S, withdrawn, dominant, doubted
+
+
+def gain_alone(P, sel, S, tw, alpha):
+    """Forward driving only: would the (not selectable) gain error explain what is left?
+    (gain, held-out RMS it explains, whether structure is left beside it) or None."""
+    if sel.backdriven or "torque_sensor_gain" not in sel.opts or "torque_sensor_gain" in S.ids:
+        return None
+    prob = sel.prob
+    g = sel.opts["torque_sensor_gain"][0]
+    fg = prob.fit(S.terms + (g,))
+    chk = tw.check(S.rss - fg.rss, tw.rss(S.terms) - tw.rss(fg.terms), alpha)
+    rms = max(explained(S, fg), fit_rms(prob, S, fg))
+    if not (fg.admissible and chk.stands and rms >= MIN_EXPLAINED_NM):
+        return None
+    left = structure(P, prob, fg, tw)[0]
+    return float(fg.of(g)[0][0]), rms, left
+
+
+def order_claims(r, sig, orders, dt, rng):
+    """{name: (amplitude, Check)} of the shaft orders, each against its off-order twins."""
+    amps = R.order_amplitudes(r, sig, orders, dt)
+    alpha = FALSE_ALARM / max(len(amps), 1)
+    ks = np.array(list(orders.values()))
+    out = {}
+    for name, (a, se) in amps.items():
+        if a < MIN_EXPLAINED_NM:
+            out[name] = (a, None)
+            continue
+        k = orders[name]
+        off = {f"{name} {d:+.2f}": k * (1 + d) for d in OFF_ORDERS
+               if np.all(np.abs(k * (1 + d) - ks) > 0.03 * ks)}
+        twins = np.array([x for x, _ in R.order_amplitudes(r, sig, off, dt,
+                                                            others=ks).values()])
+        if len(twins) < 4:
+            out[name] = (a, None)
+            continue
+        mu = float(np.mean(twins ** 2))
+        thr = math.sqrt(mu * math.log(1 / alpha))
+        p = math.exp(-a * a / mu) if mu > 0 else 0.0
+        out[name] = (a, Check(a, thr, p, alpha, len(twins), a > thr))
+    return out
+
+
+def burst_claims(P, r, spikes, rng):
+    """R.bursts' account of the spike blocks, with ``tied`` the event kinds whose residual
+    stands out against time-shifted twins; {kind: (Check, RMS of the burst excess)}."""
+    t, w, T = P.blocks["t"], P.blocks["w_in"], P.blocks["T_out"]
+    b = R.bursts(t, spikes, w, T)
+    ev = R.burst_events(t, w, T)
+    r2 = r * r
+    n = len(r2)
+    # the statistic is the mean rank of |r| near the events (a few random spikes move a rank
+    # mean by little, a transient at every event by much; no clipping constant needed)
+    from scipy.stats import rankdata
+    rk = rankdata(r2) / n
+    shifts = rng.integers(n // 10, n - n // 10, N_TWINS) if n > 20 else np.zeros(0, int)
+    alpha = FALSE_ALARM / len(ev)
+    taken = np.zeros(n, bool)
+    claims = {}
+    for kind, times in ev.items():
+        near = R._near(t, times, R.EVENT_WINDOW) & ~taken
+        taken |= near
+        if near.sum() < 3 or (~near).sum() < 3 or not len(shifts):
+            continue
+        idx = np.flatnonzero(near)
+        ref = float(np.median(r2[~near])) / 0.4549    # mean square of the noise (chi2_1)
+        stat = float(np.mean(rk[idx]))
+        twins = np.array([np.mean(rk[(idx + s) % n]) for s in shifts])
+        thr, p = normal_tail(twins, stat, alpha)
+        excess = math.sqrt(max(float(np.sum(r2[idx])) - len(idx) * ref, 0.0) / n)
+        claims[kind] = (Check(stat, thr, p, alpha, len(shifts), stat > thr), excess)
+    b["tied"] = [k for k, (c, e) in claims.items() if c.stands and e >= MIN_EXPLAINED_NM]
+    b["checks"] = {k: dict(c.to_json(), rms_Nm=e) for k, (c, e) in claims.items()}
+    return b, claims
+
+
+def _orders(design, mode, sig):
+    k = sig["order_roller"]
+    # the driven shaft's own rotation (runout, a coupling's misalignment, the brake) at 1x and
+    # 2x of the output speed, as orders of the input speed
+    k_out = 1.0 / abs(speed_ratio(mode, design.z1))
+    return {"1x": 1.0, "2x": 2.0, "3x": 3.0, f"order {k:g} (roller pass)": k,
+            f"order {2 * k:g} (2x roller pass)": 2 * k,
+            f"output 1x (order {k_out:.4g})": k_out,
+            f"output 2x (order {2 * k_out:.4g})": 2 * k_out}
+
+
+def _sample_residual(P, S, with_g, rec):
+    """Sample-level residual after the selection's fitted torque and the slow structure the
+    generic basis holds (taken out before the order and spectral analysis: its changes between
+    holds would leak into them)."""
+    from .replay import first_order
+    sig, dt = P.sig, P.dt
+    fitted = np.zeros(len(rec.time))
+    for t in S.terms:
+        v, _ = S.of(t)
+        fitted += first_order(EFFECTS[t.effect].basis(sig, t.shape), dt, P.bandwidth) @ v
+    r_raw = rec.torque_in - P.T_model_f - fitted
+    g = with_g.terms[-1]
+    v, _ = with_g.of(g)
+    slow = P.X[:, list(g.cols)] @ v
+    r = r_raw.copy()
+    n = min(len(slow) * P.m, len(r))
+    r[:n] -= np.repeat(slow, P.m)[:n]
+    return r_raw, r, fitted
+
+
+def _smooth_part(P, prob, S, with_g, present, rms, dominant, sel_min):
+    """The statement of the smooth remainder and what it follows (the held-out RMS lost
+    without each group of the basis)."""
+    parts, follows = [], {}
+    if not present:
+        return parts, follows
+    g = with_g.terms[-1]
+    ref = prob.fit(with_g.terms)
+    for group in dict.fromkeys(g.names):
+        idx = tuple(c for c, n in zip(g.cols, g.names) if n != group)
+        names = tuple(n for n in g.names if n != group)
+        sub = Term("generic", None, idx, names, ("N*m",) * len(idx),
+                   (-np.inf,) * len(idx), (np.inf,) * len(idx))
+        follows[group] = fit_rms(prob, prob.fit(S.terms + (sub,), cv=False), ref)
+    main = [k for k, v in sorted(follows.items(), key=lambda kv: -kv[1]) if v >= 0.5 * sel_min]
+    parts.append(f"a mismatch of {1e3 * rms:.2f} mN*m (in the fit, beyond its twins) remains "
+                 "that no effect of the library explains"
+                 + (f"; it follows {', '.join(main)}" if main else "")
+                 + (f" (beside {', '.join(dominant)}, which the generic basis could stand in "
+                    "for but which explain more than it adds)" if dominant else ""))
+    return parts, follows
+
+
+def _burst_parts(b, claims, P):
+    parts = []
+    rev = [e for e in b["tied"] if "reversal" in e]
+    if rev:
+        parts.append(f"the residual stands out at {' and '.join(rev)} ("
+                     + ", ".join(f"{1e3 * claims[e][1]:.2f} mN*m" for e in rev)
+                     + " over the recording; "
+                     f"{sum(b['at'].get(e, 0) for e in rev)} spike blocks there): a transient "
+                     "such as backlash or compliance, not in the library")
+    step = "load or speed steps" in b["tied"]
+    if step:
+        parts.append(f"the residual stands out at load or speed steps "
+                     f"({1e3 * claims['load or speed steps'][1]:.2f} mN*m over the recording): "
+                     "the input torque settles more slowly than the quasi-static reducer and "
+                     "the recorded speed allow (a filter or a delay of the torque channel, "
+                     "compliance, a controller's transient), not in the library")
+    rms = math.sqrt(sum(claims[e][1] ** 2 for e in b["tied"]))
+    return parts, step, bool(rev), rms
+
+
+def _lines(P, S, r, design, mode, rng):
+    """Shaft orders (judged against their off-order twins) and fixed-frequency peaks of the
+    sample-level residual ``r``: (statement parts, library orders left, other orders, peaks,
+    {order: (amplitude, Check)})."""
+    orders = _orders(design, mode, P.sig)
+    k = P.sig["order_roller"]
+    lib = ("1x", f"order {k:g} (roller pass)")
+    oc = order_claims(r, P.sig, orders, P.dt, rng)
+    standing = {n: a for n, (a, c) in oc.items() if c is not None and c.stands}
+    outside = {n: a for n, a in standing.items() if n not in lib}
+    inside = {n: a for n, a in standing.items() if n in lib}
+    ex = design.extra
+    if ({"mesh_ripple", "load_ripple"} & set(S.ids) or ex.ripple_1x or ex.ripple_roller
+            or ex.ripple_1x_load or ex.ripple_roller_load):
+        inside = {}       # the library's orders, fitted: what is left is phase tracking
+    parts = []
+    if outside or inside:
+        parts.append("the residual holds shaft orders: " + ", ".join(
+            f"{n} ({1e3 * a:.2f} mN*m)" for n, a in {**inside, **outside}.items()))
+    peaks = R.spectral_peaks(r, P.dt, min_amplitude=PEAK_MIN_AMPLITUDE_NM,
+                             speed=P.sig["w_in"], orders=list(orders.values()))
+    if peaks:
+        parts.append("the residual spectrum peaks at " + ", ".join(
+            f"{f:.2f} Hz ({1e3 * a:.2f} mN*m)" for f, a in peaks))
+    return parts, inside, outside, peaks, oc
+
+
+def remainder(P, sel, J, rec, design, mode) -> Remainder:
+    """Stage ``remainder`` on the problem ``P``, the selection ``sel`` and the twins ``J``."""
+    prob, tw, S = sel.prob, J.twins, J.S
+    rng = np.random.default_rng(20261127)
+    present, with_g, chk, rms = structure(P, prob, S, tw)
+    withdrawn, dominant, doubted = [], [], False
+    while present:     # withdrawn effects change what the others hold: judged again
+        S, out, dom, doubt = withdraw(P, prob, S, with_g, tw, J.alpha_effect, sel.forced)
+        withdrawn += out
+        dominant, doubted = dom, doubted or doubt
+        if not out:
+            break
+        present, with_g, chk, rms = structure(P, prob, S, tw)
+    dominant = [e for e in dominant if e in S.ids]
+    claims = {"structure": chk.to_json()}
+    ga = gain_alone(P, sel, S, tw, J.alpha_effect)
+    parts, follows = _smooth_part(P, prob, S, with_g, present, rms, dominant, sel.min_expl)
+    smooth = present
+    r_raw, r, _ = _sample_residual(P, S, with_g, rec)
+    lparts, inside, outside, peaks, oc = _lines(P, S, r, design, mode, rng)
+    claims["orders"] = {n: c.to_json() for n, (a, c) in oc.items() if c is not None}
+    present = present or bool(lparts)
+    parts += lparts
+    y_after = P.y - (P.X[:, [i for t in S.terms for i in t.cols]] @ S.coef
+                     if S.terms else 0.0)
+    b, bc = burst_claims(P, y_after, sel.spikes, rng)
+    claims["bursts"] = b["checks"]
+    bparts, step_transient, rev, burst_rms = _burst_parts(b, bc, P)
+    present = present or bool(bparts)
+    parts += bparts
+    if withdrawn:
+        parts.append("withdrawn because the unexplained mismatch could hold them: "
+                     + ", ".join(withdrawn))
+    set_aside = [c for c in dict.fromkeys(sel.confounded) if c not in withdrawn] \
+        if present else []
+    if set_aside:
+        parts.append("it could be a drift set aside because a steady function of the "
+                     "operating point explains the same change over time: "
+                     + ", ".join(set_aside))
+    doubted = doubted and present
+    if doubted:
+        parts.append("the friction level stays in the fit as the model's own coefficient "
+                     "but is not named: the unexplained mismatch could hold part of it")
+    statement = ("; ".join(parts) + ".") if present else \
+        "nothing the model and the selected effects leave is structured beyond the noise."
+    lines = list({**inside, **outside}.values()) + [a for _, a in peaks]
+    total = math.sqrt((rms if smooth else 0.0) ** 2 + sum(a * a / 2 for a in lines)
+                      + burst_rms ** 2)
+    unexplained = {
+        "present": present, "rms_Nm": total if present else 0.0, "statement": statement,
+        "follows": follows, "orders": outside, "library_orders_left": inside,
+        "peaks_Hz_Nm": peaks,
+        "could_include": list(withdrawn) + set_aside + (
+            ["friction_miscalibrated"] if doubted else []),
+        "bursts": b, "false_alarm_rate": FALSE_ALARM, "n_twins": tw.n, "claims": claims,
+        "proposed": None}
+    amps = {n: (a, c) for n, (a, c) in oc.items()}
+    return Remainder(S=S, with_g=with_g, unexplained=unexplained, withdrawn=withdrawn,
+                     dominant=[(e, fit_rms(prob, prob.fit(tuple(x for x in S.terms
+                                                                   if x.effect != e)), S),
+                                fit_rms(prob, S, with_g)) for e in dominant],
+                     friction_doubted=doubted, gain_alone=ga, step_transient=step_transient,
+                     smooth=smooth, orders_all=amps, residual_raw=r_raw, claims=claims)
