@@ -792,7 +792,8 @@ def build_parser() -> argparse.ArgumentParser:
     sp.add_argument("--design", help="design file (TOML) or preset name (mackic-rig); "
                    "default: the paper's test drive")
     sp.add_argument("--rated-torque", type=_number("rated-torque"), help="rated output torque "
-                    "N*m the catalogue values refer to (default: the paper's motor times z1-1)")
+                    "N*m the catalogue values refer to (default: the paper's motor times z1-1); "
+                    "from 1e-3 of the design's static rating up to that rating")
     sp.add_argument("--json", action="store_true", help="print one JSON object")
     sp.add_argument("--out", help="folder for stiffness.png and stiffness.json")
     _add_profile(sp)

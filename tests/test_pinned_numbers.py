@@ -1,8 +1,8 @@
 """The default (physical) profile's documented numbers, pinned (issue 21, item 2).
 
 Each value below was computed once by this code (session of 2026-11-26) and is the number the
-documentation states, to the digits it prints (README: "Numbers, physical profile", "Two
-profiles" items 4 and 5, "Stiffness"; docs/explanation/testing.md lists them). The tolerances
+documentation states, to the digits it prints (docs/explanation/profiles.md, physics.md,
+stiffness.md, docs/reference/errors.md; docs/explanation/testing.md lists them). The tolerances
 are tight (1e-6 relative unless stated): a change of any physical rule, constant or default
 that moves one of them fails here and must be documented with the new number. A pin is not a
 proof of correctness; the physics tests (closed forms, balances, published numbers) are
