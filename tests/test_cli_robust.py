@@ -383,7 +383,7 @@ ISSUE21 = {
         ["speed = 1e-300", "stands still"], []),
     "stiffness_rated_1e-300": (
         lambda t: ["stiffness", "--rated-torque", "1e-300"],
-        ["rated-torque = 1e-300", "not a finite number"], []),
+        ["rated-torque = 1e-300", "static rating", "clearances alone"], []),
     "sweep_envelope_torque_zero": (
         lambda t: ["sweep", _spec(t, ENVELOPE_SPEC.format("torque_min = 0\ntorque_max = 0")),
                    "--out", str(t / "o.parquet"), "--serial"],
@@ -405,9 +405,11 @@ ISSUE21 = {
                    "--temperature", "-99"],
         ["temperature = -99.0", "no-load running torque"], ["torque = 1.0"]),
     "efficiency_heat_balance_beyond_200": (
-        lambda t: ["efficiency", "--mode", "S1", "--speed", "1000", "--torque", "300",
+        # 30 N*m at 1000 r/min: 450 N*m on the ring, within its static rating (962 N*m), and
+        # about 3 kW of input the housing cannot shed below 200 degC at 20 degC ambient
+        lambda t: ["efficiency", "--mode", "S1", "--speed", "1000", "--torque", "30",
                    "--ambient", "20"],
-        ["torque = 300.0", "heat balance"], ["473.15", "operating_temperature"]),
+        ["torque = 30.0", "heat balance"], ["473.15", "operating_temperature"]),
     "diagnose_20_MB_cell": (
         lambda t: ["diagnose", _huge_cell(t), "--mode", "S1"],
         ["20000001 characters", "is not a number"], []),
