@@ -31,8 +31,14 @@ class Transducer(UnitSlave):
         yu = self.y_unit
         self.parameter("scale", self.default_scale, "1", "unit scale and sign, y = scale*x "
                        "(e.g. 30/pi for rad/s to r/min)")
-        self.parameter("gain_error", 0.0, "1", "relative gain error (accuracy class)")
-        self.parameter("offset", 0.0, yu, "zero offset, in output units")
+        # bounds: a span error beyond +-50 % is a wrong scale (``scale``), not an accuracy-class
+        # gain error (class 0.05-1 %; the diagnosis's torque_sensor_gain allows +-5 %). The
+        # offset has no bound: it is in the reading's unit, and what is plausible depends on
+        # the transducer's nominal range, which this FMU does not know
+        self.parameter("gain_error", 0.0, "1", "relative gain (span) error: y = (1 + "
+                       "gain_error) scale x + offset (accuracy class; -0.5 to 0.5)",
+                       min=-0.5, max=0.5)
+        self.parameter("offset", 0.0, yu, "zero offset, in output units (finite)")
         self.parameter("bandwidth", 1000.0, "Hz", "first-order bandwidth (<= 0: none)")
         self.parameter("noise", 0.0, yu, "standard deviation of white noise, output units",
                        min=0.0)
