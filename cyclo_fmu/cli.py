@@ -440,9 +440,11 @@ def cmd_verify(args) -> int:
     from .fmu_cache import fmus_into
     import tempfile
     design = _load_design(args.design, args.profile)
-    rec, mode = _replay_input(args, design)
+    if args.mode.strip().lower() != "auto":
+        parse_mode(args.mode)
     if args.out:
         _output_dir("out", args.out, create=False)
+    rec, mode = _replay_input(args, design)
     with tempfile.TemporaryDirectory(prefix="cyclofmu_verify_") as tmp:
         fmu_dir = fmus_into(Path(tmp) / "fmus", fmu_names(args.fmu_set), design)
         try:
