@@ -551,6 +551,8 @@ def cmd_diagnose(args) -> int:
                                        calibrate=args.calibrate)
     except (RecordingError, DiagnosisError) as exc:
         raise CycloidInputError("recording", args.recording, str(exc))
+    if args.verify:
+        result["verify"] = _verify_updated(rec, mode, design, d)
     if args.out:
         from .diagnosis import write_diagnosis
         write_diagnosis(args.out, d, design, result, source=str(args.recording))
@@ -594,7 +596,37 @@ def cmd_diagnose(args) -> int:
           f"{1e3 * d.rmse_after_Nm:.2f} mN*m; zeta_d (Eq. 31): {100 * d.zeta_d_before:.2f} -> "
           f"{100 * d.zeta_d_after:.2f} %; residual whiteness p: {d.whiteness_before:.2g} -> "
           f"{d.whiteness_after:.2g}")
+    if args.verify:
+        v = result["verify"]
+        if "skipped" in v:
+            print(f"verify: skipped ({v['skipped']})")
+        else:
+            print(f"verify through the bench (native FMUs, the updated design): input torque "
+                  f"residual RMS {1e3 * v['torque_in_residual_rms_Nm']:.3f} mN*m against the "
+                  f"noise floor {1e3 * v['noise_floor_Nm']:.3f} mN*m: ratio "
+                  f"{v['ratio_to_noise_floor']:.3f} (tolerance {v['tolerance']:g}): "
+                  + ("reproduces the recording to its noise floor"
+                     if v["reproduces_to_noise_floor"] else "does NOT reproduce the recording"))
     return 0
+
+
+def _verify_updated(rec, mode, design, d) -> dict:
+    """``diagnose --verify``: the bench (native FMUs, the reducer built for the updated design)
+    co-simulated on the recording's inputs with the design the diagnosis writes
+    (cyclo_fmu.bench_replay.verify_recording)."""
+    import tempfile
+    from .bench import fmu_names
+    from .bench_replay import verify_recording
+    from .diagnosis import updated_design
+    from .fmu_cache import fmus_into
+    mode = "".join(parse_mode(mode)[:2])
+    if mode not in ("S1", "S2"):
+        return {"skipped": f"mode {mode}: the bench drives the eccentric shaft (S1, S2)"}
+    fixed, _ = d.updated or updated_design(design, d)
+    with tempfile.TemporaryDirectory(prefix="cyclofmu_verify_") as tmp:
+        fmu_dir = fmus_into(Path(tmp) / "fmus", fmu_names("native"), fixed)
+        out, _ = verify_recording(rec, mode, fmu_dir, fixed, "native")
+    return out
 
 
 EFFECTS_NONE = "the model explains the data within its noise"
@@ -799,6 +831,9 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     dg.add_argument("--units", help="units of columns, overriding anything detected, e.g. "
                     "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")
+    dg.add_argument("--verify", action="store_true", help="also co-simulate the bench (native "
+                    "FMUs) with the updated design on the recording's inputs and report the "
+                    "input torque residual against the recording's noise floor (as verify)")
     dg.add_argument("--json", action="store_true")
     _add_profile(dg)
     dg.set_defaults(func=cmd_diagnose)

@@ -220,6 +220,10 @@ def test_cli_bench_replay_and_verify(sets, short, tmp_path, capsys):
     code = main(["verify", str(path), "--mode", "S1", "--fmus", "python", "--json"])
     res = json.loads(capsys.readouterr().out)
     assert code == 1 and not res["reproduces_to_noise_floor"] and res["blocks"] == 1200
+    # diagnose --verify: the updated design through the bench (native FMUs) closes the loop
+    assert main(["diagnose", str(path), "--mode", "S1", "--verify", "--json"]) == 0
+    v = json.loads(capsys.readouterr().out)["verify"]
+    assert v["reproduces_to_noise_floor"] and v["ratio_to_noise_floor"] <= VERIFY_TOLERANCE
     assert main(["bench", "--scenario", str(tmp_path / "missing.csv")]) == 2
     assert main(["bench", "--scenario", "paper", "--columns", cols]) == 2
     assert "scenario" in capsys.readouterr().err
