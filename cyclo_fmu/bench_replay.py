@@ -179,3 +179,34 @@ def verify_recording(rec, mode: str, fmu_dir, design: DriveDesign = None, fmus: 
 def write_replay(path, replay: Replay):
     """The simulated recording as CSV (the bench's recording schema)."""
     return write_recording(path, replay.simulated)
+
+
+def plot_replay(replay: Replay, path, block: float = BLOCK_S):
+    """Measured and simulated signals over time, and the input torque's residual on
+    ``block``-second means (matplotlib PNG)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    meas, sim = replay.measured, replay.simulated
+    t = meas["time_s"]
+    fig, axes = plt.subplots(3, 1, figsize=(11, 9), sharex=True)
+    for ax, key, label in ((axes[0], "speed_in_rpm", "input speed / (r/min)"),
+                           (axes[1], "torque_in_Nm", "input torque / N*m")):
+        ax.plot(t, meas[key], lw=0.5, color="0.5", label="recording")
+        ax.plot(t, sim[key], lw=0.6, color="C3", label="bench replay")
+        ax.set_ylabel(label)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[0].set_title(f"replay of a recording through the bench, mode {replay.mode}")
+    m = max(1, int(round(block / float(np.median(np.diff(t))))))
+    r = _block_means(meas["torque_in_Nm"] - sim["torque_in_Nm"], m)
+    tb = _block_means(t, m)
+    noise = noise_floor(meas["torque_in_Nm"], m)
+    axes[2].plot(tb, 1e3 * r, lw=0.5, color="C0")
+    for s in (-1, 1):
+        axes[2].axhline(1e3 * s * noise, color="k", ls="--", lw=0.8)
+    axes[2].set(xlabel="time / s", ylabel=f"residual, {1e3 * m * float(np.median(np.diff(t))):.3g}"
+                " ms means / mN*m", title="recording - replay (dashed: +-noise floor)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path

@@ -400,8 +400,8 @@ def cmd_bench(args) -> int:
 def _bench_replay(args) -> int:
     """``bench --scenario RECORDING``: the bench driven by the recording's measured input speed
     and output torque (cyclo_fmu.bench_replay)."""
-    from .bench import BenchRun, Scenario, Sensors, fmu_names, plot_bench
-    from .bench_replay import replay_recording, write_replay
+    from .bench import Sensors, fmu_names
+    from .bench_replay import plot_replay, replay_recording, write_replay
     from .fmu_cache import fmus_into
     if not Path(args.scenario).is_file():
         raise CycloidInputError("scenario", args.scenario, "must be one of "
@@ -422,7 +422,7 @@ def _bench_replay(args) -> int:
         name = f"recording_{mode}_replay.csv"
         write_replay(out / name, rp)
         if args.plot:
-            plot_bench(BenchRun(Scenario("replay", mode=mode), rp.simulated, [], None), out)
+            plot_replay(rp, out / f"bench_{mode}_replay.png")
     t = rp.simulated["time_s"]
     print(f"bench: mode {mode}, scenario replay of {args.scenario} ({len(t)} samples, "
           f"{t[-1] - t[0]:.1f} s, step {1e3 * rp.step:.4g} ms); files in {out}")
