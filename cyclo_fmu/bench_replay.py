@@ -29,6 +29,7 @@ import numpy as np
 from model_core import DriveDesign
 from model_core.kinematics import parse_mode
 
+from .recordings import RecordingError
 from .bench import (RPM_PER_RAD_S, Scenario, Sensors, bench_parameters, check_native_design,
                     fmu_set, run_fmus, write_recording)
 
@@ -48,6 +49,11 @@ VERIFY_BANDWIDTH = 1000.0
 #: of the noise remain, below what the diagnosis itself reports (an effect that explains less
 #: than the noise-scaled threshold is not named): what is left is not a library effect's size
 VERIFY_TOLERANCE = 1.2
+#: [steps] the longest replay in one run: the lean master keeps every connector's value of
+#: every step (about 40 doubles), so 2 million steps (33 min at 1 kHz) hold about 0.6 GB. A
+#: longer recording is replayed in parts, or read as block means (``load_recording(...,
+#: block=0.01)``)
+MAX_REPLAY_STEPS = 2_000_000
 
 
 @dataclass
@@ -99,7 +105,8 @@ def replay_recording(rec, mode: str, fmu_dir, design: DriveDesign = None,
     dt = np.diff(t)
     step = float(np.median(dt))
     if not (math.isfinite(step) and step > 0):
-        raise ValueError(f"time_s: the recording's median step {step!r} s is not a time step")
+        raise RecordingError(f"time_s: the recording's median step {step!r} s is not a time "
+                             "step")
     even = bool(np.all(np.abs(dt - step) <= EVEN_SAMPLING * step))
     n = len(t) - 1 if even else int(math.floor((t[-1] - t[0]) / step + 1e-9))
     grid = t if even else t[0] + step * np.arange(n + 1)
@@ -107,6 +114,12 @@ def replay_recording(rec, mode: str, fmu_dir, design: DriveDesign = None,
     T_out = np.asarray(rec.torque_out, float)
     if not even:
         w_in, T_out = np.interp(grid, t, w_in), np.interp(grid, t, T_out)
+    if n > MAX_REPLAY_STEPS:
+        raise RecordingError(f"time_s: the recording has {n + 1} samples at {1e3 * step:.6g} ms, "
+                         f"more than one replay runs ({MAX_REPLAY_STEPS} steps): replay it in "
+                         "parts or as 10 ms block means")
+    if n < 1:
+        raise RecordingError("time_s: the recording has fewer than two samples")
     params = replay_parameters(mode, n * step, sensors, design, fmus)
     res = run_fmus(fmu_dir, params, n * step, step, progress=progress, fmus=fmus,
                    signals={"motor.w_set": w_in, "brake.T_set": T_out})

@@ -402,6 +402,7 @@ def _bench_replay(args) -> int:
     and output torque (cyclo_fmu.bench_replay)."""
     from .bench import Sensors, fmu_names
     from .bench_replay import plot_replay, replay_recording, write_replay
+    from .recordings import RecordingError
     from .fmu_cache import fmus_into
     if not Path(args.scenario).is_file():
         raise CycloidInputError("scenario", args.scenario, "must be one of "
@@ -417,6 +418,8 @@ def _bench_replay(args) -> int:
             rp = replay_recording(rec, mode, fmu_dir, design,
                                   Sensors(ideal=args.ideal_sensors, seed=args.seed),
                                   args.fmu_set, progress=_progress_on(args))
+        except RecordingError as exc:
+            raise CycloidInputError("scenario", args.scenario, str(exc))
         except ValueError as exc:
             raise CycloidInputError("design", args.design, str(exc))
         name = f"recording_{mode}_replay.csv"
@@ -438,6 +441,7 @@ def cmd_verify(args) -> int:
     from .bench import fmu_names
     from .bench_replay import verify_recording, write_replay
     from .fmu_cache import fmus_into
+    from .recordings import RecordingError
     import tempfile
     design = _load_design(args.design, args.profile)
     if args.mode.strip().lower() != "auto":
@@ -450,6 +454,8 @@ def cmd_verify(args) -> int:
         try:
             result, rp = verify_recording(rec, mode, fmu_dir, design, args.fmu_set,
                                           progress=_progress_on(args))
+        except RecordingError as exc:
+            raise CycloidInputError("recording", args.recording, str(exc))
         except ValueError as exc:
             raise CycloidInputError("design", args.design, str(exc))
     result = {"recording": str(args.recording), "design": args.design or "(default)",

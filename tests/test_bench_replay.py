@@ -132,6 +132,28 @@ def test_an_uneven_recording_is_run_on_its_median_step(sets):
     assert np.allclose(rp.simulated["torque_out_Nm"], T_out, atol=1e-9)
 
 
+def test_an_mdf4_recording_replays_and_verifies_like_its_csv(sets, short, tmp_path):
+    """The same reader as diagnose: MDF4 channels with their own names and units (N*mm, rad/s)
+    give the replay and the verdict of the CSV."""
+    asammdf = pytest.importorskip("asammdf")
+    py_dir, _ = sets
+    path, rec, mode = short
+    t = rec.time
+    mdf = asammdf.MDF(version="4.10")
+    mdf.append([asammdf.Signal(rec.speed_in * 30 / math.pi, t, name="n_in", unit="rpm"),
+                asammdf.Signal(rec.torque_in * 1e3, t, name="T_in", unit="N·mm"),
+                asammdf.Signal(rec.speed_out, t, name="n_out", unit="rad/s"),
+                asammdf.Signal(rec.torque_out, t, name="T_out", unit="Nm")])
+    p = tmp_path / "run.mf4"
+    mdf.save(p, overwrite=True)
+    mdf.close()
+    rec4, mode4, _ = load_recording(p, "auto")
+    a, _ = verify_recording(rec, mode, py_dir, DriveDesign(), "python")
+    b, _ = verify_recording(rec4, mode4, py_dir, DriveDesign(), "python")
+    assert mode4 == mode and b["blocks"] == a["blocks"]
+    assert b["ratio_to_noise_floor"] == pytest.approx(a["ratio_to_noise_floor"], rel=1e-6)
+
+
 def test_noise_floor_of_white_noise_is_sigma_over_sqrt_m():
     rng = np.random.default_rng(1)
     x = 0.003 * rng.standard_normal(200_000)
