@@ -51,11 +51,12 @@ def test_the_replay_follows_the_recording_on_its_time_base(sets, short):
     # the load machine applies the measured output torque: with ideal transducers the output
     # torque reading is that torque (the reducer's output torque is its load, J_out = 0)
     assert np.max(np.abs(sim["torque_out_Nm"] - rec.torque_out)) < 1e-12
-    # the speed loop (first order, tc = 2 ms) follows the measured speed: the lag is tc times
-    # the acceleration; the 10 ms means agree within the 1500 (r/min)/s ramps' 3 r/min
+    # the speed loop (first order, 1 ms) follows the measured speed, its setpoint advanced by
+    # the loop's time: no lag; the 10 ms means agree within a tenth of the ramps' 1500 (r/min)/s
+    # times the loop's time, plus the noise
     m = 10
     d = (rec.speed_in * 30 / math.pi - sim["speed_in_rpm"])[:len(rec.time) // m * m]
-    assert np.max(np.abs(d.reshape(-1, m).mean(1))) < 3.5
+    assert np.max(np.abs(d.reshape(-1, m).mean(1))) < 1.0
     # the output speed is the input's times the kinematic ratio (S1: 1/z1)
     assert np.allclose(sim["speed_out_rpm"], sim["speed_in_rpm"] * RATIO, atol=1e-9)
 
@@ -213,6 +214,11 @@ def test_closure_sensor_offset(sets, tmp_path):
     # the warm-up in time form (extra.thermal_loss_change, thermal_tau: the reducer FMUs carry
     # it); a temperature model of the FMUs is not on this branch
     ("thermal_drift", {"duration": 120.0}),
+    # the reducer FMU's dynamic extra physics: J dw/dt (the speed setpoint's noise matters:
+    # bench_replay.SPEED_SMOOTHING), the ripple at the shaft's orders, the Stribeck rise
+    ("inertia", {}),
+    ("mesh_ripple", {}),
+    ("low_speed_friction", {}),
 ])
 def test_closure_through_the_bench(sets, tmp_path, effect, kw):
     good, bad, d = _closure(effect, sets, tmp_path, **kw)

@@ -63,9 +63,9 @@ class InductionMotor(UnitSlave):
                        "it follows the input w_set through a first-order speed loop of "
                        "speed_time_constant, the motor delivering the torque that takes "
                        "(instead of the Kloss curve at the frequency setpoints)", Boolean)
-        self.parameter("speed_time_constant", 2.0e-3, "s", "time constant of the closed speed "
+        self.parameter("speed_time_constant", 1.0e-3, "s", "time constant of the closed speed "
                        "loop with speed_control. Assumption: a servo regulator's speed loop "
-                       "of about 80 Hz, fast against the recordings' 10 ms blocks",
+                       "of about 160 Hz, fast against the motor's own ~5 ms",
                        min=sys.float_info.min, max=1.0)
         self.input("w_set", 0.0, "rad/s", "speed setpoint with speed_control (e.g. a "
                    "recording's measured input speed)")
