@@ -185,7 +185,8 @@ def _closure(effect, sets, tmp_path, duration=20.0, plan="full", engine="bench",
 
 def _assert_closes(good, bad):
     # the tolerance VERIFY_TOLERANCE (1.2, bench_replay: what a reproduction to the noise
-    # floor may leave); measured ratios 0.96-1.07 on these recordings, 1.14 for the inertia
+    # floor may leave); measured ratios 0.88-1.17 on these recordings (Stribeck 1.17, inertia
+    # 1.14, the rest 0.88-1.09)
     assert good["reproduces_to_noise_floor"], good
     assert good["ratio_to_noise_floor"] <= VERIFY_TOLERANCE
     assert abs(good["torque_in_residual_mean_Nm"]) < 0.5 * good["noise_floor_Nm"]
