@@ -164,6 +164,8 @@ class Sensors:
     torque_in_offset: float = 0.0
     torque_out_gain_error: float = 0.0
     torque_out_offset: float = 0.0
+    torque_in_zero_drift: float = 0.0  # N*m, the input transducer's zero drift when warm
+    torque_in_zero_tau: float = 300.0  # s, its time constant
     seed: int = 1
 
 
@@ -220,15 +222,26 @@ def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDe
     # [extra] torque_in_offset, torque_in_gain_error; model_core.effects.reading_model: y =
     # (1 + g) T + offset), on top of the sensors' own: the bench reads as the diagnosed bench did
     g_in, off_in = sensors.torque_in_gain_error, sensors.torque_in_offset
+    drift, tau = sensors.torque_in_zero_drift, sensors.torque_in_zero_tau
     if design is not None:
-        g_in = (1 + g_in) * (1 + design.extra.torque_in_gain_error) - 1
-        off_in = off_in + design.extra.torque_in_offset
+        ex = design.extra
+        g_in = (1 + g_in) * (1 + ex.torque_in_gain_error) - 1
+        off_in = off_in + ex.torque_in_offset
+        # and the zero's drift in time form (torque_in_zero_drift, torque_in_zero_tau); its
+        # temperature form (torque_in_zero_per_10K) needs a temperature the bench does not have
+        if ex.torque_in_zero_drift:
+            if drift and abs(tau - ex.torque_in_zero_tau) > 1e-9:
+                raise ValueError("torque_in_zero_tau: the sensors' and the design's zero drifts "
+                                 "have different time constants; the transducer has one")
+            drift, tau = drift + ex.torque_in_zero_drift, ex.torque_in_zero_tau
     for name, scale, noise, res, gain, off in (
             ("t_in", 1.0, sensors.torque_noise, sensors.torque_resolution, g_in, off_in),
             ("n_in", RPM_PER_RAD_S, sensors.speed_noise, sensors.speed_resolution, 0.0, 0.0),
             ("t_out", 1.0, sensors.torque_noise, sensors.torque_resolution,
              sensors.torque_out_gain_error, sensors.torque_out_offset),
             ("n_out", RPM_PER_RAD_S, sensors.speed_noise, sensors.speed_resolution, 0.0, 0.0)):
+        p.update({f"{name}.zero_drift": float(drift if name == "t_in" else 0.0),
+                  f"{name}.zero_drift_tau": float(tau if name == "t_in" else 300.0)})
         p.update({f"{name}.scale": float(scale), f"{name}.noise": float(noise),
                   f"{name}.resolution": float(res), f"{name}.gain_error": float(gain),
                   f"{name}.offset": float(off), f"{name}.bandwidth": float(sensors.bandwidth),

@@ -62,13 +62,15 @@ def test_the_replay_follows_the_recording_on_its_time_base(sets, short):
 
 
 def test_native_and_python_replays_are_twins(sets, short):
-    """Speed and torque control, the transducers' offset and gain from the design: the C
-    components equal their Python slaves."""
+    """Speed and torque control, the transducers' offset, gain and zero drift from the design:
+    the C components equal their Python slaves."""
     py_dir, na_dir = sets
     _, rec, mode = short
     design = DriveDesign()
     design = replace(design, extra=replace(design.extra, torque_in_offset=0.004,
                                            torque_in_gain_error=0.01))
+    design = replace(design, extra=replace(design.extra, torque_in_zero_drift=0.01,
+                                           torque_in_zero_tau=3.0))
     out = []
     for d, fmus in ((py_dir, "python"), (na_dir, "native")):
         # the native reducer carries the paper's drive: its design check compares the reducer
@@ -80,16 +82,19 @@ def test_native_and_python_replays_are_twins(sets, short):
 
 
 def test_the_bench_reads_the_diagnosed_offset_and_gain(sets, short):
-    """design_updated.toml's [extra] torque_in_offset and torque_in_gain_error (where the
-    diagnosis writes them, model_core.effects._apply_offset/_apply_gain) become the input
-    torque transducer's offset and gain: the reading is (1 + g) T + offset
-    (model_core.effects.reading_model), on top of the bench's own sensor errors."""
+    """design_updated.toml's [extra] torque_in_offset, torque_in_gain_error and
+    torque_in_zero_drift/_tau (where the diagnosis writes them, model_core.effects._apply_offset,
+    _apply_gain, _apply_zero_drift) become the input torque transducer's offset, gain and zero
+    drift: the reading is (1 + g) T + offset + drift (model_core.effects.reading_model), on top
+    of the bench's own sensor errors."""
     py_dir, _ = sets
     _, rec, mode = short
     base = DriveDesign()
     g, off = 0.02, 0.006
     fixed = replace(base, extra=replace(base.extra, torque_in_offset=off,
                                         torque_in_gain_error=g))
+    drifting = replace(fixed, extra=replace(fixed.extra, torque_in_zero_drift=0.01,
+                                            torque_in_zero_tau=3.0))
     p = bench_parameters(Scenario("x"), Sensors(torque_in_offset=0.001,
                                                 torque_in_gain_error=0.01), fixed)
     assert p["t_in.offset"] == pytest.approx(0.007)
@@ -100,6 +105,10 @@ def test_the_bench_reads_the_diagnosed_offset_and_gain(sets, short):
     a = replay_recording(rec, mode, py_dir, base, quiet, "python").simulated["torque_in_Nm"]
     b = replay_recording(rec, mode, py_dir, fixed, quiet, "python").simulated["torque_in_Nm"]
     assert np.allclose(b, (1 + g) * a + off, rtol=0, atol=1e-12)
+    # and the zero's drift in time form: 0.01 (1 - exp(-t/3 s)) from the recording's start
+    c = replay_recording(rec, mode, py_dir, drifting, quiet, "python").simulated["torque_in_Nm"]
+    t = rec.time - rec.time[0]
+    assert np.allclose(c - b, 0.01 * (1 - np.exp(-t / 3.0)), rtol=0, atol=1e-12)
 
 
 def test_transducer_gain_error_has_bounds(sets, capfd):
@@ -221,6 +230,9 @@ def test_closure_sensor_offset(sets, tmp_path):
     ("inertia", {"duration": 30.0}),
     ("mesh_ripple", {}),
     ("low_speed_friction", {}),
+    # the input transducer's zero drifting as it warms (time form: the transducer FMU's
+    # zero_drift, zero_drift_tau from [extra] torque_in_zero_drift, torque_in_zero_tau)
+    ("torque_sensor_drift", {"duration": 120.0}),
 ])
 def test_closure_through_the_bench(sets, tmp_path, effect, kw):
     good, bad, d = _closure(effect, sets, tmp_path, **kw)
