@@ -3,7 +3,8 @@ a design reproduces that recording through the co-simulation (``cyclo-fmu verify
 
 Replay scenario: the bench's components as in every scenario (motor, reducer, brake, the four
 transducers), with the motor's regulator in speed control following the recording's measured
-input speed (``InductionMotor.speed_control``: a first-order speed loop) and the brake replaced
+input speed (``InductionMotor.speed_control``: a first-order speed loop whose setpoint is the
+measured speed's +-2 ms mean, advanced by the loop's time constant) and the brake replaced
 by a load machine in torque control applying the measured output torque at the output shaft
 (``FeltBrake.torque_control``; the measured torque already holds the output side's inertia,
 so the reducer's ``J_out`` is 0). The lean master (``bench.run_fmus``) feeds the two measured
@@ -133,9 +134,9 @@ def replay_recording(rec, mode: str, fmu_dir, design: DriveDesign = None,
     if not even:
         T_out = np.interp(grid, t, T_out)
     if n > MAX_REPLAY_STEPS:
-        raise RecordingError(f"time_s: the recording has {n + 1} samples at {1e3 * step:.6g} ms, "
-                         f"more than one replay runs ({MAX_REPLAY_STEPS} steps): replay it in "
-                         "parts or as 10 ms block means")
+        raise RecordingError(f"time_s: the recording has {n + 1} samples at {1e3 * step:.6g} "
+                             f"ms, more than one replay runs ({MAX_REPLAY_STEPS} steps): replay "
+                             "it in parts or as 10 ms block means")
     if n < 1:
         raise RecordingError("time_s: the recording has fewer than two samples")
     params = replay_parameters(mode, n * step, sensors, design, fmus)
