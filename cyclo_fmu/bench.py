@@ -164,6 +164,8 @@ class Sensors:
     torque_in_offset: float = 0.0
     torque_out_gain_error: float = 0.0
     torque_out_offset: float = 0.0
+    torque_in_zero_drift: float = 0.0  # N*m, the input transducer's zero drift when warm
+    torque_in_zero_tau: float = 300.0  # s, its time constant
     seed: int = 1
 
 
@@ -218,13 +220,30 @@ def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDe
                                                                "torque_schedule")))
     if design is not None and fmus == "python":
         p.update(drive_parameters(design))
+    # the input torque transducer's offset and gain error a diagnosis found (design_updated.toml
+    # [extra] torque_in_offset, torque_in_gain_error; model_core.effects.reading_model: y =
+    # (1 + g) T + offset), on top of the sensors' own: the bench reads as the diagnosed bench did
+    g_in, off_in = sensors.torque_in_gain_error, sensors.torque_in_offset
+    drift, tau = sensors.torque_in_zero_drift, sensors.torque_in_zero_tau
+    if design is not None:
+        ex = design.extra
+        g_in = (1 + g_in) * (1 + ex.torque_in_gain_error) - 1
+        off_in = off_in + ex.torque_in_offset
+        # and the zero's drift in time form (torque_in_zero_drift, torque_in_zero_tau); its
+        # temperature form (torque_in_zero_per_10K) needs a temperature the bench does not have
+        if ex.torque_in_zero_drift:
+            if drift and abs(tau - ex.torque_in_zero_tau) > 1e-9:
+                raise ValueError("torque_in_zero_tau: the sensors' and the design's zero drifts "
+                                 "have different time constants; the transducer has one")
+            drift, tau = drift + ex.torque_in_zero_drift, ex.torque_in_zero_tau
     for name, scale, noise, res, gain, off in (
-            ("t_in", 1.0, sensors.torque_noise, sensors.torque_resolution,
-             sensors.torque_in_gain_error, sensors.torque_in_offset),
+            ("t_in", 1.0, sensors.torque_noise, sensors.torque_resolution, g_in, off_in),
             ("n_in", RPM_PER_RAD_S, sensors.speed_noise, sensors.speed_resolution, 0.0, 0.0),
             ("t_out", 1.0, sensors.torque_noise, sensors.torque_resolution,
              sensors.torque_out_gain_error, sensors.torque_out_offset),
             ("n_out", RPM_PER_RAD_S, sensors.speed_noise, sensors.speed_resolution, 0.0, 0.0)):
+        p.update({f"{name}.zero_drift": float(drift if name == "t_in" else 0.0),
+                  f"{name}.zero_drift_tau": float(tau if name == "t_in" else 300.0)})
         p.update({f"{name}.scale": float(scale), f"{name}.noise": float(noise),
                   f"{name}.resolution": float(res), f"{name}.gain_error": float(gain),
                   f"{name}.offset": float(off), f"{name}.bandwidth": float(sensors.bandwidth),
@@ -454,7 +473,7 @@ COUPLINGS = ("gauss-seidel", "jacobi")
 
 
 def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progress=False,
-             coupling: str = "gauss-seidel", fmus: str = None):
+             coupling: str = "gauss-seidel", fmus: str = None, signals: dict = None):
     """The bench of ``run_ssp`` (components, connections, parameters, fixed step, all connector
     values starting at 0, rows holding post-step values) run by a lean master that calls the
     FMUs' C functions over value references and buffers resolved once, and that can also set
@@ -466,6 +485,12 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
     steps all components from the previous step's outputs, as fmpy's SSP master does (the same
     numbers to 1e-9, a test), which delays every signal by one step per connection it passes.
     ``fmus``: the FMU set (``fmu_set``: native when ``fmu_dir`` holds it).
+
+    ``signals``: external signals {"component.input": values} for inputs no connection feeds
+    (a replay's measured speed and torque, ``bench_replay``), each n_steps + 1 values: [0] in
+    Initialization Mode, [k + 1] during step k (the value at the step's end, the time of the
+    row the step writes). With signals the result starts with the row of the initial values
+    (time 0, then time k*step holds the values at k*step: the signals' own time base).
     Returns a structured array with the same fields as ``run_ssp``."""
     import ctypes
 
@@ -478,6 +503,23 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
         raise ValueError("fmus = 'native3': this master runs FMI 2.0 FMUs; run the FMI 3.0 set "
                          "as an SSP in an FMI 3.0 host (build_ssp(..., fmus='native3'))")
     COMPONENTS = components(fmus)
+    n_steps = int(round(stop_time / step))
+    ext = {}
+    for key, values in (signals or {}).items():
+        comp, _, var = key.partition(".")
+        if comp not in COMPONENTS:
+            raise ValueError(f"signals: {key!r}: no such bench component ({', '.join(COMPONENTS)})")
+        values = np.ascontiguousarray(values, dtype=float)
+        if values.shape != (n_steps + 1,):
+            raise ValueError(f"signals: {key!r} has {values.size} values; the run needs "
+                             f"{n_steps + 1} (the start and one per step)")
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"signals: {key!r} holds a value that is not finite")
+        fmu, cons = COMPONENTS[comp]
+        if any(c == var for c, _ in cons):
+            raise ValueError(f"signals: {key!r} is a bench connector, fed by the bench")
+        COMPONENTS[comp] = (fmu, cons + [(var, "input")])
+        ext[(comp, var)] = values
     unknown = sorted({k.split(".", 1)[0] for k in params} - set(COMPONENTS))
     if unknown:
         raise ValueError(f"{unknown[0]}: no such bench component ({', '.join(COMPONENTS)})")
@@ -491,8 +533,14 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
     out_index = {key: i for i, key in enumerate(outputs)}
     in_index = {key: n_out + i for i, key in enumerate(inputs)}
     feeds = {(c, d): (a, b) for a, b, c, d in CONNECTIONS}
-    dst = np.array([in_index[key] for key in inputs], dtype=np.intp)
-    src = np.array([out_index[feeds[key]] for key in inputs], dtype=np.intp)
+    dst = np.array([in_index[key] for key in inputs if key in feeds], dtype=np.intp)
+    src = np.array([out_index[feeds[key]] for key in inputs if key in feeds], dtype=np.intp)
+    ext_keys = list(ext)
+    ext_dst = [in_index[key] for key in ext_keys]
+    ext_rows = (np.ascontiguousarray(np.column_stack([ext[k] for k in ext_keys]))
+                if ext else np.zeros((n_steps + 1, 0)))
+    for i, key in zip(ext_dst, ext_keys):
+        buf[i] = ext[key][0]
     size = ctypes.sizeof(fmi2Real)
     fmi2Status = ctypes.c_int
     comps, calls, unpacked, libs, raw = [], {}, {}, [], {}
@@ -547,7 +595,7 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
             do_step.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int]
             do_step.restype = fmi2Status
             links = [(in_index[(name, c)], out_index[feeds[(name, c)]])
-                     for c, k in connectors if k == "input"]
+                     for c, k in connectors if k == "input" and (name, c) in feeds]
             calls[name] = (name, ctypes.c_void_p(f.component), set_real, do_step, get_real,
                            block(in_index), block(out_index), links)
             raw[name] = (f.component, *(ctypes.cast(fn, ctypes.c_void_p).value
@@ -573,16 +621,21 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
         for f in comps:
             f.exitInitializationMode()
         fields = [f"{n}.{c}" for n, c in outputs] + [f"{n}.{c}" for n, c in inputs]
-        n_steps = int(round(stop_time / step))
-        rows = np.empty((n_steps, len(fields)))
+        first = 1 if ext else 0          # with signals: the initial row first
+        all_rows = np.empty((n_steps + first, len(fields)))
+        if first:
+            all_rows[0] = view
+        rows = all_rows[first:]
         bar = _progress(progress, n_steps, "bench")
         tick = max(1, n_steps // 100)
         loop = _c_loop()
         if loop is not None:
-            loop(calls, raw, buf, rows, n_steps, step, gauss, bar)
+            loop(calls, raw, buf, rows, n_steps, step, gauss, bar, ext_dst, ext_rows[1:])
             n_steps = 0                  # done
         for k in range(n_steps):
             t = k * step
+            for i, value in zip(ext_dst, ext_rows[k + 1]):
+                buf[i] = value
             for name, comp, set_real, do_step, get_real, ins, outs, links in calls:
                 if ins is not None:
                     if gauss:
@@ -601,7 +654,8 @@ def run_fmus(fmu_dir, params: dict, stop_time: float, step: float = 1e-3, progre
                 bar.update(min(tick, n_steps - k))
         if bar is not None:
             bar.close()
-        n_steps = len(rows)
+        n_steps = len(all_rows)
+        rows = all_rows
     finally:
         import _ctypes
         for lib in libs:         # our reference to the library; fmpy frees its own
@@ -697,7 +751,7 @@ def _compile_loop():
     fn.restype = ctypes.c_long
     P = ctypes.c_void_p
 
-    def run(calls, raw, buf, rows, n_steps, step, gauss, bar):
+    def run(calls, raw, buf, rows, n_steps, step, gauss, bar, ext_dst=(), ext=None):
         n = len(calls)
         arr = lambda ctype, values: (ctype * max(1, len(values)))(*values)   # noqa: E731
         comps = arr(P, [raw[c[0]][0] for c in calls])
@@ -725,6 +779,12 @@ def _compile_loop():
             starts.append(len(dst))
         starts, dst, src = arr(ctypes.c_int, starts), arr(ctypes.c_int, dst), arr(ctypes.c_int, src)
         fail = (ctypes.c_int * 3)()
+        n_ext = len(ext_dst)
+        ext_idx = arr(ctypes.c_int, list(ext_dst))
+        if n_ext:
+            ext = np.ascontiguousarray(ext, dtype=float)
+            if ext.shape != (n_steps, n_ext):
+                raise ValueError("bench loop: external signals of the wrong shape")
         chunk = n_steps if bar is None else max(1, n_steps // 100)
         width = rows.shape[1]
         for k0 in range(0, n_steps, chunk):
@@ -733,7 +793,8 @@ def _compile_loop():
             bad = fn(n, comps, sets, steps_, gets, in_vrs, n_in, in_off, out_vrs, n_out, out_off,
                      starts, dst, src, int(gauss), buf, len(buf), P(ptr),
                      ctypes.c_long(rows.shape[0] - k0), int(width), ctypes.c_long(k0),
-                     ctypes.c_long(m), ctypes.c_double(step), fail)
+                     ctypes.c_long(m), ctypes.c_double(step), fail, int(n_ext), ext_idx,
+                     P(ext.ctypes.data + k0 * n_ext * size) if n_ext else None)
             if bad < 0:
                 raise RuntimeError(f"bench loop: inconsistent arguments (check {fail[0]}, "
                                    f"item {fail[1]})")

@@ -496,20 +496,45 @@ def _bench_step(text) -> float:
     return ms * 1e-3
 
 
+#: the named scenarios of ``bench --scenario``; anything else names a recording to replay
+NAMED_SCENARIOS = ("paper", "runup", "loadstep", "reversal")
+
+
+def _replay_input(args, design):
+    """The recording of ``bench --scenario FILE`` or ``verify FILE`` read, checked and its mode
+    resolved as ``diagnose`` does: (rec, mode); one line naming the field if bad."""
+    from .io import RecordingError, load_recording
+    path = args.recording if hasattr(args, "recording") else args.scenario
+    field = "recording" if hasattr(args, "recording") else "scenario"
+    if args.mode.strip().lower() != "auto":
+        parse_mode(args.mode)
+    try:
+        rec, mode, _ = load_recording(path, args.mode, design, columns=args.columns,
+                                      units=args.units)
+    except RecordingError as exc:
+        raise CycloidInputError(field, path, str(exc))
+    mode = "".join(parse_mode(mode)[:2])
+    if mode not in ("S1", "S2"):
+        raise CycloidInputError("mode", mode, "the bench drives the eccentric shaft S: S1 or S2")
+    return rec, mode
+
+
 def cmd_bench(args) -> int:
     from .bench import Sensors, fmu_names, run_bench, scenario
     from .fmu_cache import fmus_into
+    if args.scenario not in NAMED_SCENARIOS:
+        return _bench_replay(args)
+    if args.columns or args.units:
+        raise CycloidInputError("columns" if args.columns else "units",
+                                args.columns or args.units, "apply to a recording given as "
+                                "--scenario, not to a named scenario")
     mode = "".join(parse_mode(args.mode)[:2])
     if mode not in ("S1", "S2"):
         raise CycloidInputError("mode", args.mode, "the bench drives the eccentric shaft S: "
                                 "S1 or S2")
     _check_seed(args.seed)
     step = _bench_step(args.step)
-    try:
-        sc = scenario(args.scenario, mode)
-    except ValueError as exc:
-        raise CycloidInputError("scenario", args.scenario, "must be one of paper, runup, "
-                                "loadstep, reversal") from exc
+    sc = scenario(args.scenario, mode)
     design = _load_design(args.design, args.profile)
     with _staged_dir("out", args.out) as out:
         # the FMUs built once per version and sources (cyclo_fmu.fmu_cache), copied here
@@ -534,6 +559,94 @@ def cmd_bench(args) -> int:
             print(f"  {w['speed_in_rpm']:10.0f} {w['torque_in_Nm']:9.3f} {100 * w['eta']:11.2f} "
                   f"{100 * w.get('eta_core', float('nan')):10.2f}")
     return 0
+
+
+def _bench_replay(args) -> int:
+    """``bench --scenario RECORDING``: the bench driven by the recording's measured input speed
+    and output torque (cyclo_fmu.bench_replay)."""
+    from .bench import Sensors, fmu_names
+    from .bench_replay import plot_replay, replay_recording, write_replay
+    from .recordings import RecordingError
+    from .fmu_cache import fmus_into
+    if not Path(args.scenario).is_file():
+        raise CycloidInputError("scenario", args.scenario, "must be one of "
+                                f"{', '.join(NAMED_SCENARIOS)} or a recording file to replay")
+    _check_seed(args.seed)
+    if str(args.step).strip() != "1":
+        raise CycloidInputError("step", args.step, "a replay runs at the recording's own step")
+    design = _load_design(args.design, args.profile)
+    rec, mode = _replay_input(args, design)
+    with _staged_dir("out", args.out) as out:
+        fmu_dir = fmus_into(out / "fmus", fmu_names(args.fmu_set), design)
+        try:
+            rp = replay_recording(rec, mode, fmu_dir, design,
+                                  Sensors(ideal=args.ideal_sensors, seed=args.seed),
+                                  args.fmu_set, progress=_progress_on(args))
+        except RecordingError as exc:
+            raise CycloidInputError("scenario", args.scenario, str(exc))
+        except ValueError as exc:
+            raise CycloidInputError("design", args.design, str(exc))
+        name = f"recording_{mode}_replay.csv"
+        write_replay(out / name, rp)
+        if args.plot:
+            plot_replay(rp, out / f"bench_{mode}_replay.png")
+    t = rp.simulated["time_s"]
+    print(f"bench: mode {mode}, scenario replay of {args.scenario} ({len(t)} samples, "
+          f"{t[-1] - t[0]:.1f} s, step {1e3 * rp.step:.4g} ms); files in {out}")
+    for n in rp.notes:
+        print(f"  {n}")
+    print(f"  simulated recording: {out / name} (the recording's time base)")
+    return 0
+
+
+def cmd_verify(args) -> int:
+    """``verify RECORDING --design D``: the co-simulation with the design on the recording's
+    inputs, the input torque's residual against the recording's noise floor."""
+    from .bench import fmu_names
+    from .bench_replay import verify_recording, write_replay
+    from .fmu_cache import fmus_into
+    from .recordings import RecordingError
+    import tempfile
+    design = _load_design(args.design, args.profile)
+    if args.mode.strip().lower() != "auto":
+        parse_mode(args.mode)
+    if args.out:
+        _output_dir("out", args.out, create=False)
+    rec, mode = _replay_input(args, design)
+    with tempfile.TemporaryDirectory(prefix="cyclofmu_verify_") as tmp:
+        fmu_dir = fmus_into(Path(tmp) / "fmus", fmu_names(args.fmu_set), design)
+        try:
+            result, rp = verify_recording(rec, mode, fmu_dir, design, args.fmu_set,
+                                          progress=_progress_on(args))
+        except RecordingError as exc:
+            raise CycloidInputError("recording", args.recording, str(exc))
+        except ValueError as exc:
+            raise CycloidInputError("design", args.design, str(exc))
+    result = {"recording": str(args.recording), "design": args.design or "(default)",
+              "fmus": args.fmu_set, **result}
+    if args.out:
+        with _staged_dir("out", args.out) as out:
+            write_replay(out / f"recording_{mode}_verify.csv", rp)
+            (out / "verify.json").write_text(json.dumps(result, indent=2))
+    code = 0 if result["reproduces_to_noise_floor"] else 1
+    if args.json:
+        print(json.dumps(result, indent=2))
+        return code
+    r = result
+    print(f"verify: {args.recording}, mode {mode}, design {r['design']} ({args.fmu_set} FMUs)")
+    print(f"  the bench co-simulated on the recording's measured input speed and output "
+          f"torque; {r['blocks']} blocks of {1e3 * r['block_s']:.3g} ms")
+    print(f"  input torque residual RMS {1e3 * r['torque_in_residual_rms_Nm']:.3f} mN*m "
+          f"(mean {1e3 * r['torque_in_residual_mean_Nm']:+.3f}); noise floor "
+          f"{1e3 * r['noise_floor_Nm']:.3f} mN*m; ratio {r['ratio_to_noise_floor']:.3f} "
+          f"(tolerance {r['tolerance']:g})")
+    print(f"  speeds: input {r['speed_in_residual_rms_rpm']:.3g} r/min, output "
+          f"{r['speed_out_residual_rms_rpm']:.3g} r/min RMS; output torque "
+          f"{1e3 * r['torque_out_residual_rms_Nm']:.3g} mN*m RMS")
+    print("  " + ("reproduces the recording to its noise floor" if code == 0 else
+                  "does NOT reproduce the recording to its noise floor: a mismatch remains "
+                  "(diagnose the recording against this design)"))
+    return code
 
 
 def cmd_synth(args) -> int:
@@ -611,6 +724,8 @@ def cmd_diagnose(args) -> int:
                                        calibrate=args.calibrate)
     except (RecordingError, DiagnosisError) as exc:
         raise _recording_error(args.recording, exc) from None
+    if args.verify:
+        result["verify"] = _verify_updated(rec, mode, design, d)
     if args.out:
         from .diagnosis import write_diagnosis
         write_diagnosis(args.out, d, design, result, source=str(args.recording))
@@ -657,6 +772,17 @@ def cmd_diagnose(args) -> int:
           f"{1e3 * d.rmse_after_Nm:.2f} mN*m; zeta_d (Eq. 31): {100 * d.zeta_d_before:.2f} -> "
           f"{100 * d.zeta_d_after:.2f} %; residual whiteness p: {d.whiteness_before:.2g} -> "
           f"{d.whiteness_after:.2g}")
+    if args.verify:
+        v = result["verify"]
+        if "skipped" in v:
+            print(f"verify: skipped ({v['skipped']})")
+        else:
+            print(f"verify through the bench (native FMUs, the updated design): input torque "
+                  f"residual RMS {1e3 * v['torque_in_residual_rms_Nm']:.3f} mN*m against the "
+                  f"noise floor {1e3 * v['noise_floor_Nm']:.3f} mN*m: ratio "
+                  f"{v['ratio_to_noise_floor']:.3f} (tolerance {v['tolerance']:g}): "
+                  + ("reproduces the recording to its noise floor"
+                     if v["reproduces_to_noise_floor"] else "does NOT reproduce the recording"))
     return 0
 
 
@@ -667,6 +793,25 @@ def _proposed_line(p) -> str:
     return (f"  proposed form: {p['formula']}; held-out RMS {1e3 * p['heldout_rms_before_Nm']:.2f}"
             f" -> {1e3 * p['heldout_rms_after_Nm']:.2f} mN*m (noise "
             f"{1e3 * p['noise_Nm']:.2f}); reading: {p['reading']}")
+
+
+def _verify_updated(rec, mode, design, d) -> dict:
+    """``diagnose --verify``: the bench (native FMUs, the reducer built for the updated design)
+    co-simulated on the recording's inputs with the design the diagnosis writes
+    (cyclo_fmu.bench_replay.verify_recording)."""
+    import tempfile
+    from .bench import fmu_names
+    from .bench_replay import verify_recording
+    from .diagnosis import updated_design
+    from .fmu_cache import fmus_into
+    mode = "".join(parse_mode(mode)[:2])
+    if mode not in ("S1", "S2"):
+        return {"skipped": f"mode {mode}: the bench drives the eccentric shaft (S1, S2)"}
+    fixed, _ = d.updated or updated_design(design, d)
+    with tempfile.TemporaryDirectory(prefix="cyclofmu_verify_") as tmp:
+        fmu_dir = fmus_into(Path(tmp) / "fmus", fmu_names("native"), fixed)
+        out, _ = verify_recording(rec, mode, fmu_dir, fixed, "native")
+    return out
 
 
 EFFECTS_NONE = "the model explains the data within its noise"
@@ -817,9 +962,16 @@ def build_parser() -> argparse.ArgumentParser:
     mx.set_defaults(func=cmd_export_modelica)
     bench = sub.add_parser("bench", help="simulate the motor - reducer - brake test bench (SSP)")
     bench.add_argument("--mode", default="S1", help="operating mode of the reducer: S1 or S2 "
-                       "(the bench's motor drives the eccentric shaft S; default S1)")
+                       "(the bench's motor drives the eccentric shaft S; default S1); with a "
+                       "recording also auto (inferred from its speed ratio)")
     bench.add_argument("--scenario", default="paper",
-                       help="paper (frequency x load series), runup, loadstep, reversal")
+                       help="paper (frequency x load series), runup, loadstep, reversal, or a "
+                       "recording (CSV of any dialect, MDF4) to replay: the motor follows its "
+                       "measured input speed, a load machine applies its measured output torque")
+    bench.add_argument("--columns", help="with a recording: column mapping, e.g. "
+                       "'time_s=t,torque_in_Nm=T22' (as diagnose)")
+    bench.add_argument("--units", help="with a recording: units of columns, e.g. "
+                       "'torque_in_Nm=N*mm' (as diagnose)")
     bench.add_argument("--out", default="out/bench", help="output folder (default: out/bench)")
     bench.add_argument("--ideal-sensors", action="store_true", help="switch transducer errors off")
     bench.add_argument("--seed", type=int, default=1, help="noise seed of the transducers")
@@ -836,6 +988,23 @@ def build_parser() -> argparse.ArgumentParser:
                        "design_updated.toml a diagnosis wrote, or a preset name (mackic-rig)")
     _add_profile(bench)
     bench.set_defaults(func=cmd_bench, fmus=True)
+    vf = sub.add_parser("verify", help="co-simulate the bench with a design (e.g. a diagnosis's "
+                        "design_updated.toml) on a recording's own inputs: does it reproduce "
+                        "the recording to its noise floor? (exit 1 if not)")
+    vf.add_argument("recording", help="recording (CSV of any dialect, MDF4)")
+    vf.add_argument("--design", help="design file (TOML), e.g. design_updated.toml, or a preset "
+                    "name (mackic-rig); default: the paper's test drive")
+    vf.add_argument("--mode", default="auto", help="operating mode (S1, S2) or auto (default: "
+                    "inferred from the measured speed ratio)")
+    vf.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
+    vf.add_argument("--units", help="units of columns, e.g. 'torque_in_Nm=N*mm'")
+    vf.add_argument("--fmus", dest="fmu_set", default="native", choices=("native", "python"),
+                    help="the bench's FMUs (default native; the reducer is built for the design)")
+    vf.add_argument("--out", help="folder for the simulated recording and verify.json")
+    vf.add_argument("--json", action="store_true", help="print one JSON object")
+    vf.add_argument("--quiet", action="store_true", help="no progress bar")
+    _add_profile(vf)
+    vf.set_defaults(func=cmd_verify, fmus=True)
     sy = sub.add_parser("synth", help="write a bench recording with one hidden effect")
     sy.add_argument("--effect", required=True, help="hidden effect id (see model_core.effects); "
                     "several separated by commas")
@@ -873,6 +1042,9 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     dg.add_argument("--units", help="units of columns, overriding anything detected, e.g. "
                     "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")
+    dg.add_argument("--verify", action="store_true", help="also co-simulate the bench (native "
+                    "FMUs) with the updated design on the recording's inputs and report the "
+                    "input torque residual against the recording's noise floor (as verify)")
     dg.add_argument("--json", action="store_true", help="print the diagnosis as one JSON "
                     "object (the keys of diagnosis.json; strict JSON, null for undefined)")
     _add_profile(dg)
@@ -1011,7 +1183,7 @@ def run() -> None:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         code = 0
     sys.stderr.flush()
-    if len(sys.argv) > 1 and sys.argv[1] in ("bench", "synth", "build"):
+    if len(sys.argv) > 1 and sys.argv[1] in ("bench", "synth", "build", "verify"):
         os._exit(code)
     sys.exit(code)
 

@@ -30,8 +30,8 @@ from .bench import RECORDING_COLUMNS, write_recording
 SIZES = {"tiny": 42.0, "small": 120.0, "medium": 300.0, "large": 600.0}
 ENGINES = ("fast", "bench")
 #: effects the bench's FMUs cannot hide: they act through the replay only (the reducer FMU's
-#: map is built at the catalogue viscosity, and the transducer FMU has no drifting zero)
-BENCH_CANNOT_HIDE = {"viscosity_drift", "torque_sensor_drift"}
+#: map is built at the catalogue viscosity)
+BENCH_CANNOT_HIDE = {"viscosity_drift"}
 
 #: hidden-effect sizes (the registry's synth defaults): comparable with the transducer noise
 #: (0.003 N*m), invisible by eye
@@ -284,8 +284,11 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
                       seed=seed,
                       torque_in_offset=values.get("offset", 0.0) if effect == "torque_sensor_offset" else 0.0,
                       torque_in_gain_error=values.get("gain_error", 0.0)
-                      if effect == "torque_sensor_gain" else 0.0)
-    if effect not in ("torque_sensor_offset", "torque_sensor_gain"):
+                      if effect == "torque_sensor_gain" else 0.0,
+                      torque_in_zero_drift=values.get("offset_change", 0.0)
+                      if effect == "torque_sensor_drift" else 0.0,
+                      torque_in_zero_tau=shape if effect == "torque_sensor_drift" else 300.0)
+    if effect not in ("torque_sensor_offset", "torque_sensor_gain", "torque_sensor_drift"):
         ex = switch_on(ex, effect, values, shape)
     design = replace(true_design, extra=ex)
     pole_pairs = 1

@@ -236,9 +236,10 @@ class Transducer:
         a = self.filter_coefficient(dt)
         return a * y + (1 - a) * x
 
-    def reading(self, filtered: float, noise_sample: float) -> float:
-        """Reading from the filtered true value and a standard-normal sample."""
-        y = filtered * (1 + self.gain_error) + self.offset + self.noise * noise_sample
+    def reading(self, filtered: float, noise_sample: float, drift: float = 0.0) -> float:
+        """Reading from the filtered true value and a standard-normal sample; ``drift``: the
+        zero's drift at this time, in the measured unit, added to the offset."""
+        y = filtered * (1 + self.gain_error) + (self.offset + drift) + self.noise * noise_sample
         if self.resolution > 0:
             y = self.resolution * round(y / self.resolution)
         return y

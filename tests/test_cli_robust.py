@@ -30,6 +30,7 @@ OUTPUT_COMMANDS = {
     "diagnose-batch": (["diagnose-batch", "{recdir}", "--mode", "S1"], "--out", "dir"),
     "export-modelica": (["export-modelica", "--mode", "S1"], "--out", "dir"),
     "stiffness": (["stiffness"], "--out", "dir"),
+    "verify": (["verify", "missing-recording.csv", "--mode", "S1"], "--out", "dir"),
 }
 
 # name: argv that takes ``--design`` and would otherwise run
@@ -42,6 +43,7 @@ DESIGN_COMMANDS = {
     "build": ["build", "--dest", "{tmp}/build_out", "CycloidDriveNative"],
     "export-modelica": ["export-modelica", "--mode", "S1", "--out", "{tmp}/mo_out"],
     "stiffness": ["stiffness"],
+    "verify": ["verify", "missing-recording.csv", "--mode", "S1"],
 }
 
 SEED_COMMANDS = {

@@ -9,6 +9,9 @@
  * [link_start[c], link_start[c + 1]); Jacobi: all links after the step. After each step the
  * whole buffer is appended to rows.
  *
+ * External signals (a replay's measured setpoints): before step k the n_ext values
+ * ext[(k - k0) * n_ext + j] are written to buf[ext_dst[j]] (inputs no connection feeds).
+ *
  * Returns 0, or the failing step (k + 1) with fail[0] = component, fail[1] = function
  * (0 fmi2SetReal, 1 fmi2DoStep, 2 fmi2GetReal) and fail[2] = its status; or -1 before any
  * call if an argument is inconsistent (fail[0] = the check that failed, fail[1] = the
@@ -26,7 +29,8 @@ long bench_loop(int n_comp, void **comps, void **set_fns, void **step_fns, void 
                 unsigned int **out_vrs, const size_t *n_out, const int *out_off,
                 const int *link_start, const int *dst, const int *src, int gauss,
                 double *buf, int buf_len, double *rows, long rows_cap, int row_len, long k0,
-                long n_steps, double step, int *fail)
+                long n_steps, double step, int *fail, int n_ext, const int *ext_dst,
+                const double *ext)
 {
     int n_links;
     if (fail == NULL) return -1;
@@ -53,9 +57,14 @@ long bench_loop(int n_comp, void **comps, void **set_fns, void **step_fns, void 
     if (n_links > 0 && (!dst || !src)) BAD(7, 0);
     for (int l = 0; l < n_links; ++l)
         if (dst[l] < 0 || dst[l] >= buf_len || src[l] < 0 || src[l] >= buf_len) BAD(7, l);
+    if (n_ext < 0 || (n_ext > 0 && (!ext_dst || !ext))) BAD(8, 0);
+    for (int j = 0; j < n_ext; ++j)
+        if (ext_dst[j] < 0 || ext_dst[j] >= buf_len) BAD(8, j);
 #undef BAD
     for (long k = k0; k < k0 + n_steps; ++k) {
         double t = (double)k * step;
+        for (int j = 0; j < n_ext; ++j)
+            buf[ext_dst[j]] = ext[(size_t)(k - k0) * (size_t)n_ext + (size_t)j];
         for (int c = 0; c < n_comp; ++c) {
             int status;
             if (n_in[c]) {

@@ -51,6 +51,11 @@ int rig_setup(RigState *s, char *msg, size_t n)
         snprintf(msg, n, "J_out = %g: must not be negative", s->r[R_J_out]);
         return 1;
     }
+    if (s->b[B_torque_control] && s->r[R_J_out] != 0) {
+        snprintf(msg, n, "J_out = %g: must be 0 with torque_control (the controlled torque "
+                 "acts at the shaft)", s->r[R_J_out]);
+        return 1;
+    }
     for (j = 0; j < s->n_schedule; j++)
         if (s->schedule[j][1] < 0) {
             snprintf(msg, n, "torque schedule: a brake torque setpoint must not be negative");
@@ -74,6 +79,16 @@ static int update(RigState *s, double t, double dt, char *msg, size_t n)
     if (!isfinite(w)) {
         snprintf(msg, n, "input w = %g: must be finite", w);
         return 1;
+    }
+    if (s->b[B_torque_control]) {    /* a load machine: the input torque at the shaft */
+        double T = s->r[R_T_set];
+        if (!isfinite(T)) {
+            snprintf(msg, n, "input T_set = %g: must be finite", T);
+            return 1;
+        }
+        s->r[R_T_brake] = s->r[R_torque_shaft] = T;
+        s->r[R_tau_out] = -T;
+        return 0;
     }
     sp = setpoint(s, t);
     if (J == 0) {

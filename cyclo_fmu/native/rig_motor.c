@@ -82,11 +82,53 @@ static double setpoint(const RigState *s, double t)
 
 int rig_init(RigState *s, char *msg, size_t n)
 {
-    (void)msg; (void)n;
-    s->r[R_w] = s->r[R_w_start];
+    if (s->b[B_speed_control]) {
+        /* the shaft starts at the speed setpoint (a replay starts at the measured speed) */
+        if (!isfinite(s->r[R_w_set])) {
+            snprintf(msg, n, "input w_set = %g: must be finite", s->r[R_w_set]);
+            return 1;
+        }
+        s->r[R_w] = s->r[R_w_set];
+    } else {
+        s->r[R_w] = s->r[R_w_start];
+    }
     s->r[R_frequency] = s->r[R_w] == 0 ? 0.0 : s->r[R_w] * s->i[I_pole_pairs] / (2 * PI);
     s->r[R_T_em] = torque(s, s->r[R_w], s->r[R_frequency]);
+    if (s->b[B_speed_control]) {         /* held at the setpoint: the motor carries the shaft */
+        if (!isfinite(s->r[R_tau_shaft])) {
+            snprintf(msg, n, "input tau_shaft = %g: must be finite", s->r[R_tau_shaft]);
+            return 1;
+        }
+        s->r[R_T_em] = s->r[R_tau_shaft];
+        s->r[R_alpha] = 0.0;
+    }
     s->r[R_P_mech] = s->r[R_T_em] * s->r[R_w];
+    return 0;
+}
+
+/* motor.InductionMotor._speed_step: the closed speed loop as a first-order lag of time
+ * constant tc, solved exactly over the step with w_set held; T_em = tau + (J + J_side) alpha */
+static int speed_step(RigState *s, double h, double tau, double J_acc, double J_dec,
+                      char *msg, size_t n)
+{
+    double w_set = s->r[R_w_set], tc = s->r[R_speed_time_constant], w, alpha, J;
+    if (!isfinite(w_set)) {
+        snprintf(msg, n, "input w_set = %g: must be finite", w_set);
+        return 1;
+    }
+    w = w_set + (s->r[R_w] - w_set) * exp(-h / tc);
+    alpha = (w_set - w) / tc;
+    J = s->r[R_J] + (((alpha >= 0) == (w >= 0)) ? J_acc : J_dec);
+    s->r[R_w] = w;
+    s->r[R_alpha] = alpha;
+    s->r[R_T_em] = tau + J * alpha;
+    s->r[R_frequency] = w * s->i[I_pole_pairs] / (2 * PI);
+    s->r[R_P_mech] = s->r[R_T_em] * w;
+    if (!isfinite(s->r[R_P_mech])) {
+        snprintf(msg, n, "tau_shaft = %g N.m gives a torque that is not a finite number: "
+                 "refused", tau);
+        return 1;
+    }
     return 0;
 }
 
@@ -101,6 +143,7 @@ int rig_step(RigState *s, double t, double h, char *msg, size_t n)
         return 1;
     }
     if (J_dec < 0) J_dec = J_acc;
+    if (s->b[B_speed_control]) return speed_step(s, h, tau, J_acc, J_dec, msg, n);
     steps = (int)ceil(h / SUBSTEP - 1e-9);
     if (steps < 1) steps = 1;
     hh = h / steps;

@@ -15,11 +15,11 @@ enum { X_FILTERED, X_NEXT, X_DT, X_A, X_HAS_DT };
 int rig_setup(RigState *s, char *msg, size_t n)
 {
     static const int reals[] = {R_scale, R_gain_error, R_offset, R_bandwidth, R_noise,
-                                R_resolution};
+                                R_resolution, R_zero_drift, R_zero_drift_tau};
     static const char *const names[] = {"scale", "gain_error", "offset", "bandwidth", "noise",
-                                        "resolution"};
+                                        "resolution", "zero_drift", "zero_drift_tau"};
     int j;
-    for (j = 0; j < 6; j++)
+    for (j = 0; j < 8; j++)
         if (!isfinite(s->r[reals[j]])) {
             snprintf(msg, n, "%s = %g: must be finite", names[j], s->r[reals[j]]);
             return 1;
@@ -35,14 +35,17 @@ int rig_setup(RigState *s, char *msg, size_t n)
     return 0;
 }
 
-static void read_out(RigState *s)
+static void read_out(RigState *s, double elapsed)
 {
     double y;
     if (s->b[B_ideal]) {
         s->r[R_y] = s->r[R_scale] * s->r[R_x];
         return;
     }
-    y = s->x[X_FILTERED] * (1 + s->r[R_gain_error]) + s->r[R_offset]
+    /* the zero's drift at the step's end (slaves/transducer.py), added to the offset */
+    double drift = s->r[R_zero_drift] ? s->r[R_zero_drift]
+        * (1.0 - exp(-elapsed / s->r[R_zero_drift_tau])) : 0.0;
+    y = s->x[X_FILTERED] * (1 + s->r[R_gain_error]) + (s->r[R_offset] + drift)
         + s->r[R_noise] * rig_normal_sample((unsigned long long)s->i[I_seed],
                                             (unsigned long long)s->x[X_NEXT]);
     s->x[X_NEXT] += 1.0;
@@ -66,14 +69,13 @@ int rig_init(RigState *s, char *msg, size_t n)
     s->x[X_FILTERED] = s->r[R_scale] * s->r[R_x];
     s->x[X_HAS_DT] = 0.0;
     s->x[X_DT] = s->x[X_A] = 0.0;
-    read_out(s);
+    read_out(s, 0.0);
     return 0;
 }
 
 int rig_step(RigState *s, double t, double h, char *msg, size_t n)
 {
     double x = s->r[R_x], a;
-    (void)t;
     if (!isfinite(x)) {
         snprintf(msg, n, "input x = %g: must be finite", x);
         return 1;
@@ -85,7 +87,7 @@ int rig_step(RigState *s, double t, double h, char *msg, size_t n)
     }
     a = s->x[X_A];
     s->x[X_FILTERED] = a * s->x[X_FILTERED] + (1 - a) * s->r[R_scale] * x;
-    read_out(s);
+    read_out(s, t + h);
     return 0;
 }
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 
 from . import core
-from .base import Integer, String, UnitSlave
+from .base import Boolean, Integer, String, UnitSlave
 
 
 class FeltBrake(UnitSlave):
@@ -43,10 +43,20 @@ class FeltBrake(UnitSlave):
                        "(c = 2 zeta sqrt(k J_out)). Assumption: an elastomer insert", min=0.0)
         self.input("w", 0.0, "rad/s", "speed of the output shaft")
         self.output("tau_out", 0.0, "N.m", "torque the brake applies on the reducer's output shaft",
-                    depends=("w",))
+                    depends=("w", "T_set"))
         self.output("torque_shaft", 0.0, "N.m", "torque the output shaft delivers to the brake",
-                    depends=("w",))
-        self.output("T_brake", 0.0, "N.m", "friction torque of the felt brake", depends=("w",))
+                    depends=("w", "T_set"))
+        self.output("T_brake", 0.0, "N.m", "friction torque of the felt brake", depends=("w", "T_set"))
+        # torque control (a replay of a recording's measured output torque); after the older
+        # variables, so that their value references stay
+        self.parameter("torque_control", False, None, "a load machine in torque control "
+                       "instead of the felt brake: the shaft delivers the input T_set to the "
+                       "load, whatever its speed (both signs: it may drive the output); no "
+                       "drum (J_out must be 0: the measured torque holds the drum's inertia)",
+                       Boolean)
+        self.input("T_set", 0.0, "N.m", "with torque_control: the torque the output shaft "
+                   "delivers to the load, signed in the shaft's coordinate (e.g. a recording's "
+                   "measured output torque)")
         self._twist = 0.0
         self._w_drum = 0.0
 
@@ -70,6 +80,9 @@ class FeltBrake(UnitSlave):
                     raise ValueError(f"{name} = {v!r}: must be positive")
             if not (math.isfinite(self.J_out) and self.J_out >= 0):
                 raise ValueError(f"J_out = {self.J_out!r}: must not be negative")
+            if self.torque_control and self.J_out != 0:
+                raise ValueError(f"J_out = {self.J_out!r}: must be 0 with torque_control (the "
+                                 "controlled torque acts at the shaft)")
             if self._schedule and any(v < 0 for _, v in self._schedule):
                 raise ValueError("torque schedule: a brake torque setpoint must not be negative")
         except ValueError as exc:
@@ -93,6 +106,13 @@ class FeltBrake(UnitSlave):
         w = self.w
         if not math.isfinite(w):
             self.require_finite(w=w)
+        if self.torque_control:
+            T = self.T_set
+            if not math.isfinite(T):
+                self.require_finite(T_set=T)
+            self.T_brake = self.torque_shaft = T
+            self.tau_out = -T
+            return
         setpoint = self._setpoint(t)
         if self.J_out == 0:
             # no drum here (the bench gives the output inertia to the reducer, which reflects

@@ -11,9 +11,10 @@ reducer ``tau_shaft`` is the torque the motor delivers into the shaft towards th
 from __future__ import annotations
 
 import math
+import sys
 
 from . import core
-from .base import Integer, String, UnitSlave
+from .base import Boolean, Integer, String, UnitSlave
 
 _SUBSTEP = 2.5e-4   # s; a twentieth of the rotor's mechanical time constant on the Kloss slope (~5 ms)
 
@@ -56,15 +57,29 @@ class InductionMotor(UnitSlave):
         self.input("J_load_dec", -1.0, "kg.m2", "inertia of the load seen at the motor shaft "
                    "while the shaft slows down (reducer J_load_dec; through a reducer it differs "
                    "from J_load by the two efficiencies); negative: the same as J_load")
+        # speed control (a replay of a recording's measured input speed); after the older
+        # variables, so that their value references stay
+        self.parameter("speed_control", False, None, "the regulator controls the shaft speed: "
+                       "it follows the input w_set through a first-order speed loop of "
+                       "speed_time_constant, the motor delivering the torque that takes "
+                       "(instead of the Kloss curve at the frequency setpoints)", Boolean)
+        self.parameter("speed_time_constant", 1.0e-3, "s", "time constant of the closed speed "
+                       "loop with speed_control. Assumption: a servo regulator's speed loop "
+                       "of about 160 Hz, fast against the motor's own ~5 ms",
+                       min=sys.float_info.min, max=1.0)
+        self.input("w_set", 0.0, "rad/s", "speed setpoint with speed_control (e.g. a "
+                   "recording's measured input speed)")
         self._t = 0.0
 
     #: at the start the outputs follow w_start and the motor's curve; not the inertia, ramp or
     #: the setpoints (the frequency starts at the synchronous value of w_start)
     init_independent = ("J", "ramp_rate", "f_first", "f_last", "f_count", "hold_time",
-                        "loads_per_frequency", "frequency_schedule")
+                        "loads_per_frequency", "frequency_schedule", "speed_time_constant")
 
     def initial_dependencies(self, name):
-        return [p for p in super().initial_dependencies(name) if not p.startswith("schedule_")]
+        # with speed_control the start follows the setpoint and carries the shaft's torque
+        return [p for p in super().initial_dependencies(name)
+                if not p.startswith("schedule_")] + ["w_set", "tau_shaft"]
 
     def _setup(self):
         try:
@@ -90,9 +105,21 @@ class InductionMotor(UnitSlave):
         self._torque = self._motor.torque_function()
 
     def _evaluate_init(self):
-        self.w = float(self.w_start)
+        if self.speed_control:
+            # the shaft starts at the speed setpoint (a replay starts at the measured speed)
+            if not math.isfinite(self.w_set):
+                self.require_finite(w_set=self.w_set)
+            self.w = float(self.w_set)
+        else:
+            self.w = float(self.w_start)
         self.frequency = 0.0 if self.w == 0 else self.w * self.pole_pairs / (2 * math.pi)
         self._outputs()
+        if self.speed_control:          # held at the setpoint: the motor carries the shaft
+            tau = self.tau_shaft
+            if not math.isfinite(tau):
+                self.require_finite(tau_shaft=tau)
+            self.T_em, self.alpha = float(tau), 0.0
+            self.P_mech = self.T_em * self.w
 
     def _setpoint(self, t):
         if self._schedule is not None:
@@ -112,6 +139,8 @@ class InductionMotor(UnitSlave):
             self.fail(f"J_load = {J_acc!r}: input must not be negative")
         if J_dec < 0:
             J_dec = J_acc
+        if self.speed_control:
+            return self._speed_step(step_size, tau, J_acc, J_dec)
         n = max(1, int(math.ceil(step_size / _SUBSTEP - 1e-9)))
         h = step_size / n
         m = self._motor
@@ -141,4 +170,26 @@ class InductionMotor(UnitSlave):
         if not math.isfinite(self.P_mech + self.alpha):
             self.fail(f"tau_shaft = {tau!r} N.m, J_load = {J_acc!r} kg.m2 give a speed or "
                       "acceleration that is not a finite number: refused")
+        return True
+
+    def _speed_step(self, h, tau, J_acc, J_dec):
+        """Speed control: the closed speed loop as a first-order lag of time constant tc,
+        dw/dt = (w_set - w)/tc, solved exactly over the step with w_set held; the motor
+        delivers T_em = tau_shaft + (J + J_side) dw/dt (the side as in the Kloss branch). The
+        frequency output is the shaft's synchronous frequency (the regulator's slip is not
+        modelled here)."""
+        w_set = self.w_set
+        if not math.isfinite(w_set):
+            self.require_finite(w_set=w_set)
+        tc = self.speed_time_constant
+        w = w_set + (self.w - w_set) * math.exp(-h / tc)
+        alpha = (w_set - w) / tc
+        J = self._motor.inertia + (J_acc if (alpha >= 0) == (w >= 0) else J_dec)
+        self.w, self.alpha = w, alpha
+        self.T_em = tau + J * alpha
+        self.frequency = w * self.pole_pairs / (2 * math.pi)
+        self.P_mech = self.T_em * w
+        if not math.isfinite(self.P_mech):
+            self.fail(f"tau_shaft = {tau!r} N.m gives a torque that is not a finite number: "
+                      "refused")
         return True

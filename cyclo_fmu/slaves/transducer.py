@@ -8,6 +8,7 @@ N.m output wired to an input of unit "1") take the bench with the typed ones."""
 from __future__ import annotations
 
 import math
+import sys
 
 
 from . import core
@@ -31,8 +32,14 @@ class Transducer(UnitSlave):
         yu = self.y_unit
         self.parameter("scale", self.default_scale, "1", "unit scale and sign, y = scale*x "
                        "(e.g. 30/pi for rad/s to r/min)")
-        self.parameter("gain_error", 0.0, "1", "relative gain error (accuracy class)")
-        self.parameter("offset", 0.0, yu, "zero offset, in output units")
+        # bounds: a span error beyond +-50 % is a wrong scale (``scale``), not an accuracy-class
+        # gain error (class 0.05-1 %; the diagnosis's torque_sensor_gain allows +-5 %). The
+        # offset has no bound: it is in the reading's unit, and what is plausible depends on
+        # the transducer's nominal range, which this FMU does not know
+        self.parameter("gain_error", 0.0, "1", "relative gain (span) error: y = (1 + "
+                       "gain_error) scale x + offset (accuracy class; -0.5 to 0.5)",
+                       min=-0.5, max=0.5)
+        self.parameter("offset", 0.0, yu, "zero offset, in output units (finite)")
         self.parameter("bandwidth", 1000.0, "Hz", "first-order bandwidth (<= 0: none)")
         self.parameter("noise", 0.0, yu, "standard deviation of white noise, output units",
                        min=0.0)
@@ -41,6 +48,12 @@ class Transducer(UnitSlave):
         self.parameter("ideal", False, None, "switch all errors off: y = scale*x", Boolean)
         self.input("x", 0.0, self.x_unit, "true value")
         self.output("y", 0.0, yu, "reading", depends=("x",))
+        # after the older variables, so that their value references stay
+        self.parameter("zero_drift", 0.0, yu, "drift of the zero as the transducer warms up, "
+                       "first order from the start: offset + zero_drift (1 - exp(-t/"
+                       "zero_drift_tau)), output units (finite)")
+        self.parameter("zero_drift_tau", 300.0, "s", "time constant of the zero's drift",
+                       min=sys.float_info.min)
         self._filtered = None
 
     init_independent = ("bandwidth",)   # the filter starts at the input
@@ -61,7 +74,8 @@ class Transducer(UnitSlave):
     def _setup(self):
         try:
             self.check_limits()
-            for name in ("scale", "gain_error", "offset", "bandwidth", "noise", "resolution"):
+            for name in ("scale", "gain_error", "offset", "bandwidth", "noise", "resolution",
+                         "zero_drift", "zero_drift_tau"):
                 v = getattr(self, name)
                 if not math.isfinite(v):
                     raise ValueError(f"{name} = {v!r}: must be finite")
@@ -82,9 +96,9 @@ class Transducer(UnitSlave):
         self._noise, self._next, self._block = [], 0, 0
         self._filtered = self.scale * x
         self._dt, self._a = None, 0.0
-        self._read()
+        self._read(0.0)
 
-    def _read(self):
+    def _read(self, elapsed):
         if self.ideal:
             self.y = self.scale * self.x
             return
@@ -94,7 +108,14 @@ class Transducer(UnitSlave):
                                                   _NOISE_BLOCK).tolist()
             self._block, k = self._block + 1, 0
         self._next = k + 1
-        self.y = self._model.reading(self._filtered, self._noise[k])
+        if self.zero_drift:
+            # the zero's warm-up at the step's end (model_core.effects' torque_sensor_drift in
+            # its time form), added before the quantisation as the offset is
+            self.y = self._model.reading(self._filtered, self._noise[k],
+                                         self.zero_drift * (1.0 - math.exp(
+                                             -elapsed / self.zero_drift_tau)))
+        else:
+            self.y = self._model.reading(self._filtered, self._noise[k])
 
     def do_step(self, current_time, step_size):
         x = self.x
@@ -104,7 +125,7 @@ class Transducer(UnitSlave):
             self._dt, self._a = step_size, self._model.filter_coefficient(step_size)
         a = self._a
         self._filtered = a * self._filtered + (1 - a) * self.scale * x
-        self._read()
+        self._read(current_time + step_size)
         if not math.isfinite(self.y):
             self.fail(f"x = {x!r} gives a reading that is not a finite number (scale = "
                       f"{self.scale!r}): refused")

@@ -1,0 +1,271 @@
+"""The loop closes through the bench (issue 19 item 7): the bench replays a recording (the motor
+follows its measured input speed, a load machine applies its measured output torque), the
+transducer FMUs carry the input torque transducer's offset and gain a diagnosis found, and the
+co-simulation with the diagnosis's design_updated.toml reproduces the recording to its noise
+floor, while the design the diagnosis started from does not."""
+import json
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from model_core import DriveDesign, design_to_toml
+from cyclo_fmu.bench import Sensors, bench_parameters, Scenario
+from cyclo_fmu.bench_replay import (VERIFY_TOLERANCE, noise_floor, replay_parameters,
+                                    replay_recording, verify_recording)
+from cyclo_fmu.io import load_recording
+from cyclo_fmu.synth import synthesize, write_synth
+
+TWIN_TOL = 1e-9       # native against Python, as tests/test_native_rig.py
+#: output over input speed in S1 (model_core.kinematics)
+RATIO = float(__import__("model_core.kinematics", fromlist=["x"]).shaft_speeds(
+    "S1", 1.0, DriveDesign().z1)["1"])
+
+
+@pytest.fixture(scope="module")
+def sets(fmu_dir, tmp_path_factory):
+    """The session's Python set and a native set (the paper's drive)."""
+    from cyclo_fmu.fmu_build import RIG_NATIVE, build_any
+    d = tmp_path_factory.mktemp("replay_native")
+    for name in RIG_NATIVE + ("CycloidDriveNative",):
+        build_any(name, d)
+    return fmu_dir, d
+
+
+@pytest.fixture(scope="module")
+def short(tmp_path_factory):
+    """A 12 s recording of the fast synthesiser (drag hidden) and its checked form."""
+    path = tmp_path_factory.mktemp("replay_rec") / "drag.csv"
+    write_synth(path, synthesize("load_independent_loss", 3, "S1", duration=12.0))
+    rec, mode, _ = load_recording(path, "S1")
+    return path, rec, mode
+
+
+def test_the_replay_follows_the_recording_on_its_time_base(sets, short):
+    py_dir, _ = sets
+    _, rec, mode = short
+    rp = replay_recording(rec, mode, py_dir, DriveDesign(), Sensors(ideal=True), "python")
+    sim = rp.simulated
+    assert np.array_equal(sim["time_s"], rec.time)
+    # the load machine applies the measured output torque: with ideal transducers the output
+    # torque reading is that torque (the reducer's output torque is its load, J_out = 0)
+    assert np.max(np.abs(sim["torque_out_Nm"] - rec.torque_out)) < 1e-12
+    # the speed loop (first order, 1 ms) follows the measured speed, its setpoint advanced by
+    # the loop's time: no lag; the 10 ms means agree within a tenth of the ramps' 1500 (r/min)/s
+    # times the loop's time, plus the noise
+    m = 10
+    d = (rec.speed_in * 30 / math.pi - sim["speed_in_rpm"])[:len(rec.time) // m * m]
+    assert np.max(np.abs(d.reshape(-1, m).mean(1))) < 1.0
+    # the output speed is the input's times the kinematic ratio (S1: 1/z1)
+    assert np.allclose(sim["speed_out_rpm"], sim["speed_in_rpm"] * RATIO, atol=1e-9)
+
+
+def test_native_and_python_replays_are_twins(sets, short):
+    """Speed and torque control, the transducers' offset, gain and zero drift from the design:
+    the C components equal their Python slaves."""
+    py_dir, na_dir = sets
+    _, rec, mode = short
+    design = DriveDesign()
+    design = replace(design, extra=replace(design.extra, torque_in_offset=0.004,
+                                           torque_in_gain_error=0.01))
+    design = replace(design, extra=replace(design.extra, torque_in_zero_drift=0.01,
+                                           torque_in_zero_tau=3.0))
+    out = []
+    for d, fmus in ((py_dir, "python"), (na_dir, "native")):
+        # the native reducer carries the paper's drive: its design check compares the reducer
+        # fields only, the transducer fields are the bench's
+        out.append(replay_recording(rec, mode, d, design, Sensors(seed=4), fmus).simulated)
+    for k in out[0]:
+        scale = np.maximum(1.0, np.abs(out[0][k]))
+        assert np.max(np.abs(out[0][k] - out[1][k]) / scale) <= TWIN_TOL, k
+
+
+def test_the_bench_reads_the_diagnosed_offset_and_gain(sets, short):
+    """design_updated.toml's [extra] torque_in_offset, torque_in_gain_error and
+    torque_in_zero_drift/_tau (where the diagnosis writes them, model_core.effects._apply_offset,
+    _apply_gain, _apply_zero_drift) become the input torque transducer's offset, gain and zero
+    drift: the reading is (1 + g) T + offset + drift (model_core.effects.reading_model), on top
+    of the bench's own sensor errors."""
+    py_dir, _ = sets
+    _, rec, mode = short
+    base = DriveDesign()
+    g, off = 0.02, 0.006
+    fixed = replace(base, extra=replace(base.extra, torque_in_offset=off,
+                                        torque_in_gain_error=g))
+    drifting = replace(fixed, extra=replace(fixed.extra, torque_in_zero_drift=0.01,
+                                            torque_in_zero_tau=3.0))
+    p = bench_parameters(Scenario("x"), Sensors(torque_in_offset=0.001,
+                                                torque_in_gain_error=0.01), fixed)
+    assert p["t_in.offset"] == pytest.approx(0.007)
+    assert p["t_in.gain_error"] == pytest.approx(1.01 * 1.02 - 1)
+    assert p["t_out.offset"] == 0.0 and p["t_out.gain_error"] == 0.0
+    quiet = Sensors(torque_noise=0.0, torque_resolution=0.0, speed_noise=0.0,
+                    speed_resolution=0.0)
+    a = replay_recording(rec, mode, py_dir, base, quiet, "python").simulated["torque_in_Nm"]
+    b = replay_recording(rec, mode, py_dir, fixed, quiet, "python").simulated["torque_in_Nm"]
+    assert np.allclose(b, (1 + g) * a + off, rtol=0, atol=1e-12)
+    # and the zero's drift in time form: 0.01 (1 - exp(-t/3 s)) from the recording's start
+    c = replay_recording(rec, mode, py_dir, drifting, quiet, "python").simulated["torque_in_Nm"]
+    t = rec.time - rec.time[0]
+    assert np.allclose(c - b, 0.01 * (1 - np.exp(-t / 3.0)), rtol=0, atol=1e-12)
+
+
+def test_transducer_gain_error_has_bounds(sets, capfd):
+    from fmpy import read_model_description
+    py_dir, na_dir = sets
+    for d, name in ((py_dir, "TorqueTransducer"), (na_dir, "TorqueTransducerNative")):
+        v = {x.name: x for x in read_model_description(str(d / f"{name}.fmu")).modelVariables}
+        assert (float(v["gain_error"].min), float(v["gain_error"].max)) == (-0.5, 0.5)
+        assert v["offset"].unit == "N.m" and v["gain_error"].unit == "1"
+    # a gain error beyond its bound is refused by the native front (fmi2Error, named)
+    from cyclo_fmu.bench import run_fmus
+    p = replay_parameters("S1", 0.01, Sensors(torque_in_gain_error=0.6), None, "native")
+    with pytest.raises(Exception, match="failed with status 3"):
+        run_fmus(na_dir, p, 0.01, 1e-3, fmus="native",
+                 signals={"motor.w_set": np.full(11, 100.0), "brake.T_set": np.full(11, 1.0)})
+    assert "gain_error = 0.6 outside its declared range [-0.5, 0.5]" in capfd.readouterr().out
+
+
+def test_an_uneven_recording_is_run_on_its_median_step(sets):
+    """A logger's dropped sample (a gap) and jitter: the run is on the median step, the result
+    interpolated back onto the recording's own times."""
+    from cyclo_fmu.recordings import recording_from_arrays
+    py_dir, _ = sets
+    t = np.arange(6000) * 1e-3
+    t = np.delete(t, [1000, 3000])
+    n = np.where(t < 3, 1500.0, 2000.0)
+    T_out = np.full_like(t, 4.0) * np.sign(RATIO)    # delivered to the load
+    rec = recording_from_arrays(t, n, np.full_like(t, 0.3), n * RATIO, T_out)
+    rp = replay_recording(rec, "S1", py_dir, DriveDesign(), Sensors(ideal=True), "python")
+    assert rp.resampled and np.array_equal(rp.simulated["time_s"], t)
+    assert np.allclose(rp.simulated["torque_out_Nm"], T_out, atol=1e-9)
+
+
+def test_an_mdf4_recording_replays_and_verifies_like_its_csv(sets, short, tmp_path):
+    """The same reader as diagnose: MDF4 channels with their own names and units (N*mm, rad/s)
+    give the replay and the verdict of the CSV."""
+    asammdf = pytest.importorskip("asammdf")
+    py_dir, _ = sets
+    path, rec, mode = short
+    t = rec.time
+    mdf = asammdf.MDF(version="4.10")
+    mdf.append([asammdf.Signal(rec.speed_in * 30 / math.pi, t, name="n_in", unit="rpm"),
+                asammdf.Signal(rec.torque_in * 1e3, t, name="T_in", unit="N·mm"),
+                asammdf.Signal(rec.speed_out, t, name="n_out", unit="rad/s"),
+                asammdf.Signal(rec.torque_out, t, name="T_out", unit="Nm")])
+    p = tmp_path / "run.mf4"
+    mdf.save(p, overwrite=True)
+    mdf.close()
+    rec4, mode4, _ = load_recording(p, "auto")
+    a, _ = verify_recording(rec, mode, py_dir, DriveDesign(), "python")
+    b, _ = verify_recording(rec4, mode4, py_dir, DriveDesign(), "python")
+    assert mode4 == mode and b["blocks"] == a["blocks"]
+    assert b["ratio_to_noise_floor"] == pytest.approx(a["ratio_to_noise_floor"], rel=1e-6)
+
+
+def test_noise_floor_of_white_noise_is_sigma_over_sqrt_m():
+    rng = np.random.default_rng(1)
+    x = 0.003 * rng.standard_normal(200_000)
+    assert noise_floor(x, 10) == pytest.approx(0.003 / math.sqrt(10), rel=0.02)
+
+
+def _closure(effect, sets, tmp_path, duration=20.0, plan="full", engine="bench",
+             calibrate=False, seed=2):
+    """Synthesise (the hidden effect in the bench's FMUs), diagnose against the default design,
+    write design_updated.toml, verify both designs through the bench (Python set)."""
+    from cyclo_fmu.sweep.batch import diagnose_recording
+    from model_core import design_from_toml
+    py_dir, _ = sets
+    rec = synthesize(effect, seed, "S1", duration=duration, plan=plan, engine=engine,
+                     fmu_dir=py_dir)
+    path = tmp_path / f"{effect}.csv"
+    write_synth(path, rec)
+    r, mode, checks = load_recording(path, "S1")
+    d, _ = diagnose_recording(r, mode, checks, DriveDesign(), calibrate=calibrate)
+    fixed, notes = d.updated
+    toml = tmp_path / "design_updated.toml"
+    toml.write_text(design_to_toml(fixed) + "".join(f"# {n}\n" for n in notes))
+    updated = design_from_toml(toml)
+    good, _ = verify_recording(r, mode, py_dir, updated, "python")
+    bad, _ = verify_recording(r, mode, py_dir, DriveDesign(), "python")
+    return good, bad, d
+
+
+def _assert_closes(good, bad):
+    # the tolerance VERIFY_TOLERANCE (1.2, bench_replay: what a reproduction to the noise
+    # floor may leave); measured ratios 0.88-1.17 on these recordings (Stribeck 1.17, inertia
+    # 1.14, the rest 0.88-1.09)
+    assert good["reproduces_to_noise_floor"], good
+    assert good["ratio_to_noise_floor"] <= VERIFY_TOLERANCE
+    assert abs(good["torque_in_residual_mean_Nm"]) < 0.5 * good["noise_floor_Nm"]
+    # the default design leaves the effect: several times the noise floor
+    assert not bad["reproduces_to_noise_floor"] and bad["ratio_to_noise_floor"] > 2.5
+
+
+def test_closure_sensor_offset(sets, tmp_path):
+    """The default suite's closure: a transducer zero offset (6 mN*m) hidden in the bench's
+    input torque transducer FMU, diagnosed, reproduced by the bench from design_updated.toml."""
+    good, bad, d = _closure("torque_sensor_offset", sets, tmp_path)
+    assert "torque_sensor_offset" in [e["id"] for e in d.effects]
+    _assert_closes(good, bad)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("effect, kw", [
+    ("load_independent_loss", {}),
+    ("friction_miscalibrated", {}),
+    ("mesh_loss", {"calibrate": True}),
+    ("idle_loss_scale", {"calibrate": True}),
+    # a gain error is told from the friction level only back-driven (the diagnosis's rule):
+    # the four-quadrant plan needs a load machine that drives the output, which the engine
+    # bench's felt brake is not; the fast engine's recording, verified through the bench
+    ("torque_sensor_gain", {"plan": "four_quadrant", "engine": "fast", "duration": 40.0}),
+    # the warm-up in time form (extra.thermal_loss_change, thermal_tau: the reducer FMUs carry
+    # it); a temperature model of the FMUs is not on this branch
+    ("thermal_drift", {"duration": 120.0}),
+    # the reducer FMU's dynamic extra physics: J dw/dt (the speed setpoint's noise matters:
+    # bench_replay.SPEED_SMOOTHING; the least margin: 1.14 of the noise floor on 30 s, 1.23 on
+    # 20 s, where the ramps' corners weigh more and J is fitted from fewer of them)
+    ("inertia", {"duration": 30.0}),
+    ("mesh_ripple", {}),
+    ("low_speed_friction", {}),
+    # the input transducer's zero drifting as it warms (time form: the transducer FMU's
+    # zero_drift, zero_drift_tau from [extra] torque_in_zero_drift, torque_in_zero_tau)
+    ("torque_sensor_drift", {"duration": 120.0}),
+])
+def test_closure_through_the_bench(sets, tmp_path, effect, kw):
+    good, bad, d = _closure(effect, sets, tmp_path, **kw)
+    _assert_closes(good, bad)
+
+
+def test_cli_bench_replay_and_verify(sets, short, tmp_path, capsys):
+    """bench --scenario FILE (with --columns/--units as diagnose) and verify: exit 1 when the
+    design does not reproduce the recording, one-line errors (exit 2) for bad input."""
+    from cyclo_fmu.cli import main
+    path, rec, _ = short
+    # the recording in another dialect: semicolons, decimal commas, torque in N*mm, renamed
+    text = path.read_text().splitlines()
+    rows = ["t;n1;T1;n2;T2"] + [";".join(x.replace(".", ",") if i != 2 else
+                                         str(float(x) * 1e3).replace(".", ",")
+                                         for i, x in enumerate(line.split(",")))
+                                for line in text[1:]]
+    other = tmp_path / "other.csv"
+    other.write_text("\n".join(rows) + "\n")
+    cols = "time_s=t,speed_in_rpm=n1,torque_in_Nm=T1,speed_out_rpm=n2,torque_out_Nm=T2"
+    out = tmp_path / "b"
+    assert main(["bench", "--scenario", str(other), "--columns", cols, "--units",
+                 "torque_in_Nm=N*mm", "--fmus", "python", "--out", str(out), "--quiet"]) == 0
+    sim = np.genfromtxt(out / "recording_S1_replay.csv", delimiter=",", names=True)
+    assert np.allclose(sim["time_s"], rec.time)
+    capsys.readouterr()
+    code = main(["verify", str(path), "--mode", "S1", "--fmus", "python", "--json"])
+    res = json.loads(capsys.readouterr().out)
+    assert code == 1 and not res["reproduces_to_noise_floor"] and res["blocks"] == 1200
+    # diagnose --verify: the updated design through the bench (native FMUs) closes the loop
+    assert main(["diagnose", str(path), "--mode", "S1", "--verify", "--json"]) == 0
+    v = json.loads(capsys.readouterr().out)["verify"]
+    assert v["reproduces_to_noise_floor"] and v["ratio_to_noise_floor"] <= VERIFY_TOLERANCE
+    assert main(["bench", "--scenario", str(tmp_path / "missing.csv")]) == 2
+    assert main(["bench", "--scenario", "paper", "--columns", cols]) == 2
+    assert "scenario" in capsys.readouterr().err
