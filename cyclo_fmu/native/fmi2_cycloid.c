@@ -273,13 +273,20 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     int dynamic = s->extra.input_inertia != 0 || s->extra.ripple_1x != 0
                   || s->extra.ripple_roller != 0 || s->extra.thermal_loss_change != 0;
     /* CycloidDrive._temperature: the input, or the heat balance stepped with the loss at the
-     * step's start (the P_loss output of the last point) */
+     * step's start held over the step: the step's inputs at the temperature of its start
+     * (CycloidDrive._loss_at_start: evaluated without a step of the dynamic terms) */
     double R = 1.0 / (s->thermal[3] * s->thermal[4]), T;
     if (s->use_T_oil_input)
         T = s->T_oil_in;
-    else if (dt > 0)
-        T = cd_housing_step(s->T, s->out[O_P_LOSS], dt, s->thermal[1], s->thermal[2], R);
-    else
+    else if (dt > 0) {
+        CDState saved = *s;
+        double P0;
+        evaluate(c, t - dt, 0.0, 0);
+        P0 = s->out[O_P_LOSS];
+        saved.warned_range = s->warned_range;   /* a warning the probe gave stays given */
+        *s = saved;
+        T = cd_housing_step(s->T, P0, dt, s->thermal[1], s->thermal[2], R);
+    } else
         T = s->phase == PH_STEP ? s->T : s->thermal[0];
     if (!(T > T_OIL_MIN && T < T_OIL_MAX)) {
         logmsg(c, fmi2Error, "%s %g K: must be a temperature between 173.15 and 473.15 K "

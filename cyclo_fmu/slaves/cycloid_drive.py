@@ -446,9 +446,11 @@ class CycloidDrive(UnitSlave):
         return True
 
     # -- physics ------------------------------------------------------------------------------
-    def _temperature(self, dt):
+    def _temperature(self, t, dt, w_in, tau_ext, alpha):
         """The grease temperature at the end of the step [K]: the input, or the heat balance
-        stepped from the last one with the loss at the step's start (thermal.housing_step)."""
+        stepped from the last one with the loss at the step's start held over the step
+        (thermal.housing_step): the loss of the step's inputs (held by the master over the step)
+        at the temperature of the step's start."""
         if self.use_T_oil_input:
             T = self.T_oil_in
             if not (isinstance(T, (int, float)) and T_OIL_RANGE[0] < T < T_OIL_RANGE[1]):
@@ -456,11 +458,12 @@ class CycloidDrive(UnitSlave):
                           f"{T_OIL_RANGE[0]} and {T_OIL_RANGE[1]} K (-100 to 200 degC)")
         elif dt > 0:
             d = self._design
-            T = core.thermal.housing_step(self._T, self.P_loss, dt, d.ambient_temperature,
+            P0 = self._loss_at_start(t - dt, w_in, tau_ext, alpha)
+            T = core.thermal.housing_step(self._T, P0, dt, d.ambient_temperature,
                                           d.housing_heat_capacity, self._R)
             if not T_OIL_RANGE[0] < T < T_OIL_RANGE[1]:
                 self.fail(f"the heat balance's grease temperature {T!r} K left -100 to 200 "
-                          f"degC (loss {self.P_loss!r} W, R = {self._R:.4g} K/W): refused")
+                          f"degC (loss {P0!r} W, R = {self._R:.4g} K/W): refused")
         else:
             T = self._T
         self._T = T
@@ -469,11 +472,25 @@ class CycloidDrive(UnitSlave):
                                                       self._R)
         return T
 
+    def _loss_at_start(self, t0, w_in, tau_ext, alpha):
+        """P_loss [W] at the step's start t0: the step's inputs at the present temperature,
+        without a step of the dynamic terms (no acceleration from a step, no angle advanced);
+        the outputs are computed again for the step's end."""
+        if (not self._dependent and not self._dynamic_extra
+                and self._last_inputs == (w_in, tau_ext, alpha, None)):
+            return self.P_loss      # the same inputs, and the losses do not depend on T
+        saved = self._theta, self._w_last
+        try:
+            self._update_at(t0, 0.0, w_in, tau_ext - self.J_out * self._ratio_out * alpha)
+            return self.P_loss
+        finally:
+            self._theta, self._w_last = saved
+
     def _update(self, t=0.0, dt=0.0):
         w_in, tau_ext, alpha = self.w_in, self.tau_out, self.alpha_in
         if not (math.isfinite(w_in) and math.isfinite(tau_ext) and math.isfinite(alpha)):
             self.require_finite(w_in=w_in, tau_out=tau_ext, alpha_in=alpha)
-        T = self._temperature(dt)
+        T = self._temperature(t, dt, w_in, tau_ext, alpha)
         # the temperature counts where the losses depend on it (physical profile)
         inputs = (w_in, tau_ext, alpha, T if self._dependent else None)
         if inputs == self._last_inputs:
