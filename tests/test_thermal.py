@@ -283,3 +283,34 @@ def test_bad_temperatures_are_refused(preset_fmus):
     with pytest.raises(FMICallException):
         n.set(housing_heat_capacity=-1.0)
     assert any("housing_heat_capacity" in m for _, m in n.messages)
+
+
+# -- the diagnosis's fits onto the drive's temperature physics -------------------------------
+def test_viscosity_fits_map_onto_the_lubricant_and_the_housing():
+    """A viscosity drift per 10 K of a temperature column becomes the lubricant's own
+    viscosity-temperature slope (the FMUs, given the temperature, then change the viscosity as
+    the replay does; the replay keeps its field); a drift in time gives the housing the
+    warm-up's time constant."""
+    from model_core.effects import EFFECTS
+    d = DriveDesign()
+    eff = EFFECTS["viscosity_drift"]
+    new, notes = eff.apply(d, {"ln_viscosity_change": -0.45}, None, temperature=True)
+    assert new.extra.viscosity_ln_per_10K == -0.45           # the replay's, unchanged
+    lub = new.lubricant
+
+    def ln_nu(lu, T):
+        return math.log(float(thermal.walther_viscosity(T, lu.kinematic_viscosity,
+                                                        lu.kinematic_viscosity_100)))
+    T0 = d.operating_temperature
+    assert ln_nu(lub, T0) == pytest.approx(ln_nu(d.lubricant, T0), abs=1e-12)
+    for dT in (-5.0, 5.0):   # the replay's linear form against Walther's line near T0
+        assert ln_nu(lub, T0 + dT) - ln_nu(lub, T0) == pytest.approx(-0.045 * dT, rel=0.03)
+    assert any("lubricant" in n for n in notes)
+    new, notes = eff.apply(d, {"ln_viscosity_change": -0.8}, 600.0)
+    assert thermal.housing_time_constant(new) == pytest.approx(600.0, rel=1e-12)
+    assert new.extra.viscosity_ln_change == -0.8 and new.extra.viscosity_tau == 600.0
+    # the paper profile has no temperature physics: replay only, the design's housing kept
+    paper = DriveDesign(profile="paper")
+    new, notes = eff.apply(paper, {"ln_viscosity_change": -0.8}, 600.0)
+    assert new.housing_heat_capacity == paper.housing_heat_capacity
+    assert any("replay only" in n for n in notes)
