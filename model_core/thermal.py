@@ -45,10 +45,11 @@ __all__ = ["HOUSING_AREA", "HOUSING_HEAT_CAPACITY", "HOUSING_HEAT_TRANSFER"]
 #: operating temperature itself is a node (so a map evaluated there is exactly the map of one
 #: temperature), 10 K apart from 30 K below it (a cold start at 10 degC for the default 40 degC)
 #: to 50 K above it (90 degC). Between nodes the torques and losses are interpolated linearly
-#: in T. 10 K, measured against the core on the paper's drive (S1; 30-300 rad/s, 0.3-20 N*m):
-#: the midpoint error is at most 7-9 % of the loss between 0 and 10 degC, where the cold grease
-#: makes the losses curve most, and below 2 % above 30 degC; 20 K would give 20-30 %. Each node
-#: is one ModeMap (about 40 ms per mode in Python; the native FMU carries all nodes). Outside the
+#: in T. 10 K, measured against the core on the paper's drive (S1; 30-300 rad/s, 0.3-20 N*m;
+#: the map's own error at a node 0.45 %): the midpoint error of the loss is at most 6.0 %
+#: between 10 and 20 degC, 4.1 % at 20-30, 2.1 % at 30-40 and below 0.8 % above 40 degC (the
+#: cold grease makes the losses curve most); 20 K gave 20-30 % at the cold end. Each node is
+#: one ModeMap (about 40 ms per mode in Python; the native FMU carries all nodes). Outside the
 #: nodes the edge is held (clamped).
 MAP_TEMPERATURE_OFFSETS = (-30.0, -20.0, -10.0, 0.0, 10.0, 20.0, 30.0, 40.0, 50.0)
 #: [K] the range the design validates temperatures in (-100 to 200 degC); nodes outside it
