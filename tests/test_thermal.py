@@ -314,3 +314,29 @@ def test_viscosity_fits_map_onto_the_lubricant_and_the_housing():
     new, notes = eff.apply(paper, {"ln_viscosity_change": -0.8}, 600.0)
     assert new.housing_heat_capacity == paper.housing_heat_capacity
     assert any("replay only" in n for n in notes)
+
+
+def test_fmi3_reducer_carries_the_temperature_as_the_fmi2_one(tmp_path):
+    """CycloidDriveNative3 (the same C core behind the FMI 3 front): the warm-up and the
+    Boolean use_T_oil_input reach it, and its numbers are the FMI 2 reducer's."""
+    if GCC is None:
+        pytest.skip("no C compiler")
+    from fmpy import simulate_fmu
+    from cyclo_fmu.fmu_build import build_any
+    fmu2, fmu3 = (str(build_any(n, tmp_path)) for n in ("CycloidDriveNative",
+                                                          "CycloidDriveNative3"))
+    t = np.arange(401) * 0.5
+    inp = np.array(list(zip(t, 200 + 60 * np.sin(t / 30), -(6 + 3 * np.cos(t / 20)))),
+                   dtype=[("time", float), ("w_in", float), ("tau_out", float)])
+    out = ["T_oil", "Q_ambient", "tau_in", "P_loss", "eta"]
+    for start in ({"T_oil_start": 290.0, "housing_heat_capacity": 300.0},
+                  {"use_T_oil_input": True, "T_oil_in": 345.0}):
+        kw = dict(stop_time=200.0, output_interval=0.5, input=inp, start_values=start,
+                  output=out)
+        a, b = simulate_fmu(fmu2, **kw), simulate_fmu(fmu3, **kw)
+        for name in out:
+            np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+        if "use_T_oil_input" in start:
+            assert np.all(b["T_oil"] == 345.0)
+        else:
+            assert b["T_oil"][-1] > 300.0          # warmed up by its own losses
