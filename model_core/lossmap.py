@@ -343,8 +343,11 @@ class ThermalMap:
         m = self._maps[i]
         if m is None:
             from . import thermal
-            m = self._maps[i] = self._build(thermal.at_temperature(self.design,
-                                                                   self.temperatures[i]))
+            d = self.design
+            if not (d.temperature_model == "fixed"
+                    and self.temperatures[i] == d.operating_temperature):
+                d = thermal.at_temperature(d, self.temperatures[i])
+            m = self._maps[i] = self._build(d)
         return m
 
     @property

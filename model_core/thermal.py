@@ -108,7 +108,8 @@ def solve_heat_balance(design, mode, w_in, T_in, ambient=None, tol=0.01, max_ite
     T = amb
     for _ in range(max_iter):
         op = operating_point(at_temperature(design, T), mode, w_in, T_in)
-        T_new = float(housing_temperature(np.nan_to_num(op.loss_power), amb))
+        T_new = float(housing_temperature(np.nan_to_num(op.loss_power), amb,
+                                          design.housing_heat_transfer, design.housing_area))
         T_new = min(T_new, 200 + KELVIN)
         if abs(T_new - T) < tol:
             T = T_new
