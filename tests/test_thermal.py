@@ -277,6 +277,13 @@ def test_bad_temperatures_are_refused(preset_fmus):
         n.fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-3)
     assert any("T_oil_in" in m for _, m in n.messages)
     n.close()
+    # an absurd loss (w_in = -1e308) would heat the grease beyond 200 degC: refused, not clamped
+    n = Inst(preset_fmus[0])
+    n.set(w_in=-1e308, tau_out=-3.0)
+    with pytest.raises(FMICallException):
+        n.fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-3)
+    assert any("heat balance" in m for _, m in n.messages)
+    n.close()
     n = Inst(preset_fmus[0], start=False)
     n.fmu.setupExperiment(startTime=0.0)
     n.fmu.enterInitializationMode()
