@@ -20,7 +20,6 @@ fmpy = pytest.importorskip("fmpy")
 
 from model_core import DriveDesign, thermal  # noqa: E402
 from model_core.lossmap import ModeMap, ThermalMap  # noqa: E402
-from model_core.presets import load_preset  # noqa: E402
 
 from test_native_fmu import Inst  # noqa: E402
 

@@ -566,7 +566,8 @@ FMI2_Export fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference 
         else if (r == VR_T_OIL_IN) value[i] = c->s.T_oil_in;
         else if (r >= VR_THERMAL0 && r < VR_THERMAL0 + CD_N_THERMAL)
             value[i] = c->s.thermal[r - VR_THERMAL0];
-        else if ((r >= VR_OUT0 && r < VR_OUT0 + N_OUT) || (r >= VR_PL_MESH && r <= VR_Q_AMBIENT)) {
+        else if ((r >= VR_OUT0 && r < VR_OUT0 + N_OUT)
+                 || (r >= VR_PL_MESH && r <= VR_Q_AMBIENT)) {
             if (!refreshed) {
                 if (!refresh(c)) return nonfinite(c, "fmi2GetReal");
                 refreshed = 1;
@@ -715,7 +716,8 @@ FMI2_Export fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference 
             } else {
                 *extra_field(&c->s.extra, k) = v;
             }
-        } else if ((r >= VR_OUT0 && r < VR_OUT0 + N_OUT) || (r >= VR_PL_MESH && r <= VR_Q_AMBIENT)) {
+        } else if ((r >= VR_OUT0 && r < VR_OUT0 + N_OUT)
+                   || (r >= VR_PL_MESH && r <= VR_Q_AMBIENT)) {
             logmsg(c, fmi2Error, "fmi2SetReal: value reference %u is an output", r);
             status = fmi2Error;
         } else if (const_index_real(r) >= 0) {
