@@ -35,10 +35,22 @@ PROFILES = ("paper", "physical")
 LOSS_SCOPES = ("load_dependent", "all")
 #: Fields of DriveDesign that live in the design file's [model] section.
 MODEL_FIELDS = ("profile", "losses", "temperature_model", "ambient_temperature",
-                "operating_temperature")
+                "operating_temperature", "housing_heat_capacity", "housing_heat_transfer",
+                "housing_area")
 #: How the grease temperature is found: from the housing's steady heat balance, or fixed.
 TEMPERATURE_MODELS = ("heat_balance", "fixed")
 KELVIN = 273.15   # degC at the design-file edge: T[K] = T[degC] + 273.15
+#: Combined convection and radiation coefficient of the housing [W/(m^2 K)]. **Assumption**:
+#: 15, still air around a small painted housing (ISO/TR 14179-2 gives about 10-20 for natural
+#: convection plus radiation).
+HOUSING_HEAT_TRANSFER = 15.0
+#: Radiating and convecting surface of the housing [m^2]. **Assumption**: a 130 mm x 80 mm
+#: cylinder (the paper's drive: ring rollers on a 96 mm pitch circle), 2 pi r^2 + pi d l.
+HOUSING_AREA = 2 * math.pi * 0.065 ** 2 + math.pi * 0.13 * 0.08
+#: Heat capacity of the housing with everything in it [J/K]. **Assumption**: 2000, about 4 kg
+#: of steel and cast iron (c = 460 J/(kg K): 1840 J/K; the 130 mm x 80 mm drive's housing,
+#: ring, gears, discs and shafts) and 0.08 kg of grease (c = 2000 J/(kg K): 160 J/K).
+HOUSING_HEAT_CAPACITY = 2000.0
 
 
 def _f(default, unit, doc, toml_unit=None, scale=1.0):
@@ -446,6 +458,17 @@ class DriveDesign:
     operating_temperature: float = _f(313.15, "K", "Grease temperature with temperature_model = "
                                       "'fixed' (default 40 degC, the catalogue temperature of the "
                                       "base-oil viscosity).", "degC", None)
+    housing_heat_capacity: float = _f(HOUSING_HEAT_CAPACITY, "J/K", "Heat capacity of the "
+                                      "housing with its contents, the lumped thermal mass of the "
+                                      "FMUs' heat balance (model_core.thermal.housing_step). "
+                                      "**Assumption**: 2000 J/K, about 4 kg of steel and 0.08 kg "
+                                      "of grease.")
+    housing_heat_transfer: float = _f(HOUSING_HEAT_TRANSFER, "W/(m^2 K)", "Convection and "
+                                      "radiation coefficient of the housing surface. "
+                                      "**Assumption**: 15, still air (ISO/TR 14179-2: 10-20).")
+    housing_area: float = _f(HOUSING_AREA, "m^2", "Surface of the housing that gives heat to "
+                             "the ambient. **Assumption**: a 130 mm x 80 mm cylinder, "
+                             "0.0592 m^2.")
     lubricant: Lubricant = field(default_factory=Lubricant)
     friction: Friction = field(default_factory=Friction)
     extra: ExtraPhysics = field(default_factory=ExtraPhysics)
@@ -642,6 +665,10 @@ def validate_design(d: DriveDesign) -> None:
         if not 173.15 < v < 473.15:     # echoed in degC, the unit the user gave it in
             raise CycloidInputError(name + "_degC", float(f"{v - KELVIN:.10g}"),
                                     "must lie between -100 and 200 degC")
+    for name in ("housing_heat_capacity", "housing_heat_transfer", "housing_area"):
+        v = getattr(d, name)
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise CycloidInputError(name, v, "must be a positive number")
     if d.temperature_model not in TEMPERATURE_MODELS:
         raise CycloidInputError("temperature_model", d.temperature_model,
                                 f"must be one of {', '.join(TEMPERATURE_MODELS)}")

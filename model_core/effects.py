@@ -503,18 +503,61 @@ def _apply_friction(design, v, shape, temperature):
 def _apply_thermal(design, v, shape, temperature):
     if temperature:
         return _with_extra(design, thermal_loss_per_10K=v["loss_change"]), [
-            "extra.thermal_loss_per_10K: losses change with the temperature column "
-            "(replay only: the FMUs have no temperature input)"]
+            "extra.thermal_loss_per_10K: losses change with the temperature column beyond the "
+            "model's own temperature physics (replay only: not a parameter of the FMUs, whose "
+            "losses follow their grease temperature through the lubricant)"]
     return _with_extra(design, thermal_loss_change=v["loss_change"], thermal_tau=shape), []
 
 
 def _apply_viscosity(design, v, shape, temperature):
-    note = ("viscosity drift acts through the model's viscosity sensitivity: replay only, the "
-            "FMUs do not carry it (their map is built at the catalogue viscosity)")
+    """The viscosity drift onto the drive's own temperature physics where it is the same
+    thing (physical profile: the losses depend on the grease temperature in the FMUs):
+
+    - per 10 K of a temperature column: the observed d ln(nu)/dT is the lubricant's
+      viscosity-temperature slope, so the lubricant's Walther line is rewritten to have it at
+      the operating temperature (thermal.lubricant_with_slope; nu there unchanged); the FMUs,
+      given the temperature (input T_oil_in) or warming by their heat balance, carry it;
+    - first order in time: the warm-up's time constant is the housing's, tau = R C, so
+      ``housing_heat_capacity`` = tau / R (R = 1/(k_h A_h) of the design).
+
+    The replay (which holds the design's temperature) keeps its fields (viscosity_ln_per_10K,
+    viscosity_ln_change/viscosity_tau), so a recording is replayed as it was fitted."""
+    from . import thermal
+    notes = []
     if temperature:
-        return _with_extra(design, viscosity_ln_per_10K=v["ln_viscosity_change"]), [note]
-    return _with_extra(design, viscosity_ln_change=v["ln_viscosity_change"],
-                       viscosity_tau=shape), [note]
+        new = _with_extra(design, viscosity_ln_per_10K=v["ln_viscosity_change"])
+        slope = v["ln_viscosity_change"] / T_STEP
+        if thermal.temperature_dependent(design):
+            try:
+                lub = thermal.lubricant_with_slope(design.lubricant,
+                                                   design.operating_temperature, slope)
+                new = replace(new, lubricant=lub)
+                notes.append(f"lubricant: viscosity-temperature slope {slope:.4g} 1/K at "
+                             f"{design.operating_temperature:g} K diagnosed (was "
+                             f"{thermal.viscosity_slope(design):.4g} 1/K): kinematic_viscosity "
+                             f"{lub.kinematic_viscosity * 1e6:.4g}, kinematic_viscosity_100 "
+                             f"{lub.kinematic_viscosity_100 * 1e6:.4g} mm2/s; the FMUs carry it "
+                             "through their grease temperature (T_oil_in or the heat balance)")
+            except ValueError as exc:
+                notes.append(f"viscosity drift per 10 K not a lubricant's ({exc}): replay only")
+        else:
+            notes.append("viscosity drift per 10 K: replay only (the paper profile's losses do "
+                         "not depend on the temperature)")
+        return new, notes
+    new = _with_extra(design, viscosity_ln_change=v["ln_viscosity_change"],
+                      viscosity_tau=shape)
+    if thermal.temperature_dependent(design) and shape:
+        C = shape / thermal.housing_resistance(design)
+        new = replace(new, housing_heat_capacity=C)
+        notes.append(f"housing_heat_capacity {C:.4g} J/K (was {design.housing_heat_capacity:.4g}): "
+                     f"the warm-up's time constant {shape:g} s diagnosed is the housing's R C; "
+                     "the FMUs' heat balance warms the grease with it (the size of the change "
+                     "follows from their losses and the lubricant; the replay keeps the fitted "
+                     "ln-viscosity change)")
+    else:
+        notes.append("viscosity drift in time: replay only (the paper profile's losses do not "
+                     "depend on the temperature)")
+    return new, notes
 
 
 def _apply_drag(design, v, shape, temperature):

@@ -314,3 +314,93 @@ def replay_input_torque(design, mode, w_in, tau_out, grid=None):
         tau_in[sl] = m.solve_arrays(w_in[sl], tau_out[sl])["tau_in"]
     lossless = -tau_out * m.ratio[m._k]
     return tau_in, tau_in - lossless
+
+
+class ThermalMap:
+    """The loss map of one mode over the grease temperature too: a ``ModeMap`` at each of the
+    design's map temperatures (thermal.map_temperatures: the operating temperature and nodes
+    10 K apart), solved when first needed, and the steady state linear in T between the two
+    nodes around it (clamped at the outer nodes).
+
+    Between nodes the torques and losses are blended, (1 - f) a + f b with the same driving
+    speed, so tau_in w_in + tau_out w_out = P_loss and the partial losses' sum hold as at a
+    node; eta follows from the blended torques. At a node (f = 0) the node's own solution is
+    returned unchanged: at the operating temperature this is exactly the one-temperature map.
+    ``build(design_at_T)`` makes a node's ModeMap (default: ModeMap(design, mode, torque_max,
+    speed_max)); the FMUs pass one that looks in their shipped maps first.
+    """
+
+    def __init__(self, design, mode, torque_max, speed_max, build=None):
+        from . import thermal
+        self.design = design
+        self.temperatures = thermal.map_temperatures(design)
+        self.mode = kinematics.parse_mode(mode)[0] + kinematics.parse_mode(mode)[1]
+        self._build = build or (lambda d: ModeMap(d, self.mode, torque_max, speed_max))
+        self._maps = [None] * len(self.temperatures)
+        self.reference = self.temperatures.index(float(design.operating_temperature))
+        self.node(self.reference)
+
+    @property
+    def dependent(self) -> bool:
+        """Whether the map changes with the temperature (more than one node)."""
+        return len(self.temperatures) > 1
+
+    def node(self, i) -> ModeMap:
+        """The ModeMap at node i (solved now if it was not)."""
+        m = self._maps[i]
+        if m is None:
+            from . import thermal
+            d = self.design
+            if not (d.temperature_model == "fixed"
+                    and self.temperatures[i] == d.operating_temperature):
+                d = thermal.at_temperature(d, self.temperatures[i])
+            m = self._maps[i] = self._build(d)
+        return m
+
+    @property
+    def solved_nodes(self) -> int:
+        return sum(m is not None for m in self._maps)
+
+    def locate(self, temperature):
+        """(i, f): the node below ``temperature`` [K] and the weight of the one above (clamped
+        to the outer nodes; f = 0 at a node)."""
+        T = self.temperatures
+        n = len(T)
+        if n == 1:
+            return 0, 0.0
+        x = min(max(temperature, T[0]), T[-1])
+        i = bisect_right(T, x) - 1
+        if i > n - 2:
+            i = n - 2
+        return i, (x - T[i]) / (T[i + 1] - T[i])
+
+    def solve(self, w_in: float, tau_out: float, temperature: float):
+        """ModeMap.solve at grease temperature ``temperature`` [K] (same returns)."""
+        i, f = self.locate(temperature)
+        a = self.node(i).solve(w_in, tau_out)
+        if f == 0.0:
+            return a
+        b = self.node(i + 1).solve(w_in, tau_out)
+        return blend_solutions(a, b, f, _SHAFT_INDEX[self.mode[0]], _SHAFT_INDEX[self.mode[1]])
+
+    @property
+    def out_of_range(self) -> int:
+        return sum(m.out_of_range for m in self._maps if m is not None)
+
+
+def blend_solutions(a, b, f, ia, ib):
+    """(1 - f) a + f b of two ModeMap.solve results at the same operating point (the same
+    speeds); ``locked`` and ``forward`` of the nearer one, eta from the blended torques. ia, ib:
+    the driving and driven shafts' indices."""
+    g = 1.0 - f
+    speeds = a[0]
+    ta, tb = a[1], b[1]
+    torques = (g * ta[0] + f * tb[0], g * ta[1] + f * tb[1], g * ta[2] + f * tb[2])
+    losses = [g * x + f * y for x, y in zip(a[2], b[2])]
+    eta0 = g * a[4] + f * b[4]
+    near = a if f < 0.5 else b
+    locked, forward = near[5], near[6]
+    p_a, p_b = torques[ia] * speeds[ia], torques[ib] * speeds[ib]
+    p_in, p_out = (p_a, -p_b) if forward else (p_b, -p_a)
+    eta = p_out / p_in if (p_in > 0 and p_out > 0 and not locked) else 0.0
+    return speeds, torques, losses, eta, eta0, locked, forward

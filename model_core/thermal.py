@@ -8,7 +8,23 @@ Viscosity. Walther's equation as standardised in ASTM D341,
 
 Heat balance (ISO/TR 14179-2 style, one lumped housing): the losses leave by convection and
 radiation from the housing surface, P_L = k_h A_h (T - T_amb). Both k_h and A_h are named
-assumptions of the design (module constants below).
+assumptions of the design (``DriveDesign.housing_heat_transfer``, ``housing_area``).
+
+Transient (the FMUs' warm-up): one thermal mass C (``DriveDesign.housing_heat_capacity``) with
+the losses as its source,
+
+.. math:: C \\frac{dT}{dt} = P_L - \\frac{T - T_{amb}}{R}, \\qquad R = \\frac{1}{k_h A_h},
+          \\qquad \\tau = R C,
+
+integrated over a communication step h by :func:`housing_step`: exactly for the linear part,
+the loss held at its value at the step's start (a zero-order hold; an exponential integrator,
+"exponential Euler"):
+
+.. math:: T(t+h) = T_{amb} + P_L R + (T(t) - T_{amb} - P_L R)\\, e^{-h/\\tau}.
+
+The grease temperature sets the viscosity (Walther) through which the physical profile's losses
+depend on it; the FMUs' loss maps carry the temperature as a map dimension at
+:func:`map_temperatures` (model_core.lossmap.ThermalMap).
 
 References: ASTM D341-20, Standard Practice for Viscosity-Temperature Equations and Charts of
 Liquid Petroleum or Hydrocarbon Products; ISO/TR 14179-2:2001, Gears - Thermal capacity - Part 2:
@@ -17,18 +33,28 @@ Thermal load-carrying capacity.
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
-from .design import KELVIN
+from .design import HOUSING_AREA, HOUSING_HEAT_CAPACITY, HOUSING_HEAT_TRANSFER, KELVIN
 
-#: Combined convection and radiation coefficient of the housing [W/(m^2 K)]. **Assumption**:
-#: 15, still air around a small painted housing (ISO/TR 14179-2 gives about 10-20 for natural
-#: convection plus radiation).
-HOUSING_HEAT_TRANSFER = 15.0
-#: Radiating and convecting surface of the housing [m^2]. **Assumption**: a 130 mm x 80 mm
-#: cylinder (the paper's drive: ring rollers on a 96 mm pitch circle), 2 pi r^2 + pi d l.
-HOUSING_AREA = 2 * np.pi * 0.065 ** 2 + np.pi * 0.13 * 0.08
+__all__ = ["HOUSING_AREA", "HOUSING_HEAT_CAPACITY", "HOUSING_HEAT_TRANSFER"]
+
+#: [K] temperatures of a loss map's nodes relative to the design's operating temperature: the
+#: operating temperature itself is a node (so a map evaluated there is exactly the map of one
+#: temperature), 10 K apart from 30 K below it (a cold start at 10 degC for the default 40 degC)
+#: to 50 K above it (90 degC). Between nodes the torques and losses are interpolated linearly
+#: in T. 10 K, measured against the core on the paper's drive (S1; 30-300 rad/s, 0.3-20 N*m;
+#: the map's own error at a node 0.45 %): the midpoint error of the loss is at most 6.0 %
+#: between 10 and 20 degC, 4.1 % at 20-30, 2.1 % at 30-40 and below 0.8 % above 40 degC (the
+#: cold grease makes the losses curve most); 20 K gave 20-30 % at the cold end. Each node is
+#: one ModeMap (about 40 ms per mode in Python; the native FMU carries all nodes). Outside the
+#: nodes the edge is held (clamped).
+MAP_TEMPERATURE_OFFSETS = (-30.0, -20.0, -10.0, 0.0, 10.0, 20.0, 30.0, 40.0, 50.0)
+#: [K] the range the design validates temperatures in (-100 to 200 degC); nodes outside it
+#: are dropped
+_T_VALID = (173.15, 473.15)
 #: Temperatures of the catalogue viscosities [K].
 T40, T100 = 40.0 + KELVIN, 100.0 + KELVIN
 
@@ -82,10 +108,104 @@ def solve_heat_balance(design, mode, w_in, T_in, ambient=None, tol=0.01, max_ite
     T = amb
     for _ in range(max_iter):
         op = operating_point(at_temperature(design, T), mode, w_in, T_in)
-        T_new = float(housing_temperature(np.nan_to_num(op.loss_power), amb))
+        T_new = float(housing_temperature(np.nan_to_num(op.loss_power), amb,
+                                          design.housing_heat_transfer, design.housing_area))
         T_new = min(T_new, 200 + KELVIN)
         if abs(T_new - T) < tol:
             T = T_new
             break
         T = 0.5 * (T + T_new)
     return operating_point(at_temperature(design, T), mode, w_in, T_in), T
+
+
+def temperature_dependent(design) -> bool:
+    """Whether the design's losses depend on the grease temperature: the physical profile's do
+    (viscosity by Walther's law); the paper profile uses the catalogue viscosity as given."""
+    return design.profile != "paper"
+
+
+def map_temperatures(design) -> tuple:
+    """Temperatures [K] of the nodes of a loss map over the grease temperature: the design's
+    operating temperature plus MAP_TEMPERATURE_OFFSETS (inside the valid range); one node (the
+    operating temperature) where the losses do not depend on it."""
+    T0 = float(design.operating_temperature)
+    if not temperature_dependent(design):
+        return (T0,)
+    return tuple(T0 + dT for dT in MAP_TEMPERATURE_OFFSETS
+                 if _T_VALID[0] < T0 + dT < _T_VALID[1])
+
+
+def housing_resistance(design) -> float:
+    """Thermal resistance housing -> ambient R = 1/(k_h A_h) [K/W]."""
+    return 1.0 / (design.housing_heat_transfer * design.housing_area)
+
+
+def housing_time_constant(design) -> float:
+    """Time constant of the housing's warm-up tau = R C [s]."""
+    return housing_resistance(design) * design.housing_heat_capacity
+
+
+def housing_step(temperature, loss_power, dt, ambient, heat_capacity, resistance):
+    """Grease/housing temperature [K] after a step ``dt`` [s] of the lumped heat balance
+    C dT/dt = P_L - (T - T_amb)/R, exact for the linear part with the loss ``loss_power`` [W]
+    held over the step (zero-order hold, exponential Euler):
+
+    .. math:: T(t+h) = T_{amb} + P_L R + (T(t) - T_{amb} - P_L R) e^{-h/(R C)}.
+
+    The heat over the step then balances exactly: P_L h = C (T(t+h) - T(t)) + the heat given to
+    the ambient, int (T - T_amb)/R dt.
+
+    Parameters
+    ----------
+    temperature : float
+        Temperature at the step's start [K].
+    loss_power : float
+        Loss power heating the housing over the step [W].
+    dt : float
+        Step [s], >= 0.
+    ambient : float
+        Ambient temperature [K].
+    heat_capacity : float
+        C [J/K].
+    resistance : float
+        R [K/W].
+    """
+    steady = ambient + loss_power * resistance
+    return steady + (temperature - steady) * math.exp(-dt / (resistance * heat_capacity))
+
+
+def heat_to_ambient(temperature, ambient, resistance):
+    """Heat flow from the housing to the ambient (T - T_amb)/R [W]."""
+    return (temperature - ambient) / resistance
+
+
+def viscosity_slope(design, temperature=None):
+    """d ln(nu)/dT [1/K] of the design's lubricant at ``temperature`` [K] (default: the
+    operating temperature), from Walther's line through its two catalogue viscosities."""
+    T = float(design.operating_temperature if temperature is None else temperature)
+    lub = design.lubricant
+    h = 0.01
+    return float((np.log(walther_viscosity(T + h, lub.kinematic_viscosity,
+                                           lub.kinematic_viscosity_100))
+                  - np.log(walther_viscosity(T - h, lub.kinematic_viscosity,
+                                             lub.kinematic_viscosity_100))) / (2 * h))
+
+
+def lubricant_with_slope(lubricant, temperature, slope):
+    """The lubricant whose Walther line passes through its own viscosity at ``temperature`` [K]
+    with d ln(nu)/dT = ``slope`` [1/K] (< 0: oils thin when hot); its 40 and 100 degC
+    viscosities are rewritten (ASTM D341). Raises ValueError where no Walther line has it."""
+    if not (math.isfinite(slope) and slope < 0):
+        raise ValueError(f"viscosity slope {slope!r} 1/K: must be negative (oils thin when hot)")
+    nu = float(walther_viscosity(temperature, lubricant.kinematic_viscosity,
+                                 lubricant.kinematic_viscosity_100)) * 1e6   # mm^2/s
+    x = math.log10(nu + 0.7)
+    y = math.log10(x)
+    # dy/dT = -B/(T ln 10) and dy/dnu = 1/(x (nu + 0.7) ln(10)^2): B from the slope
+    B = -slope * temperature * nu / (x * (nu + 0.7) * math.log(10))
+    A = y + B * math.log10(temperature)
+
+    def nu_at(T):
+        return (10 ** (10 ** (A - B * math.log10(T))) - 0.7) * 1e-6
+    return dataclasses.replace(lubricant, kinematic_viscosity=nu_at(T40),
+                               kinematic_viscosity_100=nu_at(T100))

@@ -61,7 +61,8 @@ def test_updated_design_explains_the_recording(effect):
 def test_fmu_carries_the_extra_physics(fmu):
     from test_fmu import Instance
     for exact in (True, False):
-        inst = Instance(fmu, mode="S1", exact=exact, drag_torque=0.02, stribeck_torque=0.01)
+        inst = Instance(fmu, mode="S1", exact=exact, drag_torque=0.02, stribeck_torque=0.01,
+                        use_T_oil_input=True)      # the grease at the design's temperature
         inst.step(w_in=250.0, tau_out=-7.0)
         tau_in, p_extra, p_loss = inst.get("tau_in", "P_extra", "P_loss")
         op = operating_point(DRAG, "S1", 250.0, T_out=-7.0)

@@ -105,7 +105,7 @@ def test_validates_with_units_and_structure(fmu):
     outs = {names[int(u.get("index")) - 1]: u.get("dependencies")
             for u in root.find("ModelStructure/Outputs")}
     assert outs["w_out"] == str(names.index("w_in") + 1)        # w_out does not depend on tau_out
-    assert len(outs["tau_in"].split()) == 3                      # w_in, tau_out, alpha_in
+    assert len(outs["tau_in"].split()) == 4            # w_in, tau_out, alpha_in, T_oil_in
     assert len(root.find("ModelStructure/InitialUnknowns")) == len(outs)
 
 
@@ -113,7 +113,8 @@ def test_validates_with_units_and_structure(fmu):
 def test_map_and_exact_agree_with_core(fmu, mode):
     d = DriveDesign()
     for exact in (False, True):
-        inst = Instance(fmu, mode=mode, exact=exact)
+        # the grease held at the design's temperature (the heat balance would warm it)
+        inst = Instance(fmu, mode=mode, exact=exact, use_T_oil_input=True)
         worst = 0.0
         for rpm in (1000.0, 2800.0):
             for T in (0.3, 0.85):
@@ -144,7 +145,7 @@ def test_load_independent_losses_have_their_own_outputs(fmu, exact):
     """The physical profile's seal, support-bearing and churning losses come out under their
     own names, equal to the core's at the operating point (map: within its interpolation),
     and with the load-dependent ones they make up P_loss."""
-    inst = Instance(fmu, mode="S1", exact=exact)
+    inst = Instance(fmu, mode="S1", exact=exact, use_T_oil_input=True)   # the design's T
     inst.step(w_in=250.0, tau_out=-7.0)
     op = operating_point(DriveDesign(), "S1", 250.0, T_out=-7.0)
     got = dict(zip(PARTS, inst.get(*PARTS)))
@@ -253,7 +254,7 @@ def test_the_profile_is_a_parameter(fmu):
     paper = DriveDesign(profile="paper", losses="load_dependent")
     for params, design in (({}, DriveDesign()),
                            ({"profile": "paper", "losses": "load_dependent"}, paper)):
-        inst = Instance(fmu, mode="S1", exact=True, **params)
+        inst = Instance(fmu, mode="S1", exact=True, use_T_oil_input=True, **params)
         inst.step(w_in=250.0, tau_out=-7.0)
         op = operating_point(design, "S1", 250.0, T_out=-7.0)
         assert inst.get("eta")[0] == pytest.approx(float(op.eta), rel=1e-9)

@@ -543,9 +543,11 @@ def test_native_refuses_inputs_that_give_no_finite_outputs(native):
                                     dict(tau_out=1e200)])
 def test_native_clamps_far_inputs_with_a_warning(native, inputs):
     """Inputs far beyond the map whose outputs stay finite: eta0 held at the map's edge, and
-    the step that first leaves the map answers fmi2Warning with the reason (documented)."""
+    the step that first leaves the map answers fmi2Warning with the reason (documented). The
+    grease is held at its temperature: the heat balance would take the loss of such inputs
+    (up to 1e308 W) beyond 200 degC and refuse the step (tests/test_thermal.py)."""
     from fmpy import fmi2
-    inst = Inst(native, J_out=1e-3)
+    inst = Inst(native, J_out=1e-3, use_T_oil_input=True)
     try:
         inst.step(w_in=100.0, tau_out=-3.0)
         inst.set(**{**dict(w_in=100.0, tau_out=-3.0, alpha_in=0.0), **inputs})

@@ -175,7 +175,9 @@ def test_model_description_metadata(native, fmu):
             assert (var[name].type, var[name].unit) == (v.type, v.unit), name
     out = {md.modelVariables.index(u.variable): u for u in md.outputs}
     deps = {u.variable.name: {d.name for d in u.dependencies} for u in md.outputs}
-    assert deps["w_out"] == {"w_in"} and deps["tau_in"] == {"w_in", "tau_out", "alpha_in"}
+    assert deps["w_out"] == {"w_in"} and deps["tau_in"] == {"w_in", "tau_out", "alpha_in",
+                                                            "T_oil_in"}
+    assert deps["T_oil"] == deps["Q_ambient"] == {"T_oil_in"}
     py_md = read_model_description(fmu)
     py_deps = {u.variable.name: {d.name for d in u.dependencies} for u in py_md.outputs}
     assert all(deps[n] == py_deps[n] for n in deps if n in py_deps)
@@ -188,7 +190,10 @@ def test_model_description_metadata(native, fmu):
     for name in ("tau_in", "P_loss", "eta"):     # drag_exponent acts in Initialization Mode
         assert "drag_exponent" in init[name], name
     assert {"J_out", "alpha_ref"} <= init["J_load"]
-    assert len(out) == len(init) == 22       # 21 Real outputs (PL_mesh at 52) and locked
+    assert {"use_T_oil_input", "T_oil_start"} <= init["T_oil"]
+    assert {"ambient_temperature", "housing_area"} <= init["Q_ambient"]
+    # 23 Real outputs (PL_mesh, T_oil, Q_ambient at 52..54) and locked
+    assert len(out) == len(init) == 24
 
 
 # -- the C host ------------------------------------------------------------------------------
@@ -210,7 +215,8 @@ int main(int argc, char **argv) {
     void *lib;
     fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
     fmi2ValueReference in[2] = {0, 1}, out[4] = {10, 11, 13, 19};
-    fmi2ValueReference mode_vr = 0;
+    fmi2ValueReference mode_vr = 0, use_T_oil_vr = 11;
+    fmi2Boolean hold = fmi2True;   /* the grease held at T_oil_in's start: the map's own T */
     fmi2String mode = "S1";
     fmi2Real u[2], y[4], t = 0.0, h = 1e-3;
     fmi2Component c;
@@ -220,7 +226,7 @@ int main(int argc, char **argv) {
     if (!lib) { printf("dlopen: %s\n", dlerror()); return 3; }
     LOAD(fmi2Instantiate) LOAD(fmi2SetupExperiment) LOAD(fmi2EnterInitializationMode)
     LOAD(fmi2ExitInitializationMode) LOAD(fmi2SetReal) LOAD(fmi2GetReal) LOAD(fmi2SetString)
-    LOAD(fmi2DoStep) LOAD(fmi2Terminate) LOAD(fmi2FreeInstance)
+    LOAD(fmi2DoStep) LOAD(fmi2Terminate) LOAD(fmi2FreeInstance) LOAD(fmi2SetBoolean)
     c = fmi2Instantiate("host", fmi2CoSimulation, argv[2], "file:///tmp", &cb, fmi2False,
                         fmi2False);
     if (!c) { printf("instantiate failed\n"); return 4; }
@@ -229,6 +235,7 @@ int main(int argc, char **argv) {
     if (fmi2EnterInitializationMode(c) != fmi2OK) return 5;
     if (fmi2SetString(c, &mode_vr, 1, &mode) != fmi2OK) return 5;
     if (fmi2SetReal(c, in, 2, u) != fmi2OK) return 5;
+    if (fmi2SetBoolean(c, &use_T_oil_vr, 1, &hold) != fmi2OK) return 5;
     if (fmi2ExitInitializationMode(c) != fmi2OK) return 5;
     for (k = 0; k < 3; k++) {
         if (fmi2DoStep(c, t, h, fmi2True) != fmi2OK) return 6;
@@ -481,7 +488,9 @@ def test_initialization_mode_outputs_equal_the_first_step(native, extra):
         inst = Inst(native, start=False)
         inst.fmu.setupExperiment(startTime=0.0)
         inst.fmu.enterInitializationMode()
-        inst.set(mode=mode, w_in=w, tau_out=t, **extra)
+        # the grease held at its temperature (use_T_oil_input, T_oil_in at its start): the heat
+        # balance would warm it by P h / C in the step
+        inst.set(mode=mode, w_in=w, tau_out=t, use_T_oil_input=True, **extra)
         init = inst.outputs()
         assert init["w_out"] != 0.0 and init["tau_in"] != 0.0
         inst.fmu.exitInitializationMode()
@@ -557,7 +566,8 @@ def test_calibrated_design_python_and_native_fmus_agree(calibrated_fmus, mode):
     native, python = calibrated_fmus
     from model_core.design import design_from_toml
     d = design_from_toml(CALIBRATED_TOML)
-    n, p = Inst(native, mode=mode), Inst(python, mode=mode)
+    # the grease held at the operating temperature: the map of one temperature
+    n, p = (Inst(x, mode=mode, use_T_oil_input=True) for x in (native, python))
     mm = ModeMap(d, mode, 30.0, 350.0)
     seen_mesh = 0
     for w, t in quadrant_points(mode, 80, np.random.default_rng(12)):

@@ -197,3 +197,45 @@ double cd_dynamic_torque(const CDExtra *x, double alpha, double theta, double or
            + x->ripple_roller * sin(order * theta + x->ripple_roller_phase)
            + x->thermal_loss_change * (1.0 - exp(-elapsed / x->thermal_tau)) * loss_in;
 }
+
+/* ThermalMap.locate, ThermalMap.solve and lossmap.blend_solutions */
+void cd_solve_thermal(const CDThermalMap *tm, int mode, double w_in, double tau_out, double T,
+                      CDSolution *out)
+{
+    const double *nodes = tm->T;
+    int n = tm->n, i, c, ia, ib;
+    double x, f, g, p_a, p_b, p_in, p_out;
+    CDSolution b;
+    const CDSolution *near;
+    if (n == 1) { cd_solve(&tm->maps[0], mode, w_in, tau_out, out); return; }
+    x = fmin(fmax(T, nodes[0]), nodes[n - 1]);
+    i = bisect_right(nodes, n, x) - 1;
+    if (i > n - 2) i = n - 2;
+    f = (x - nodes[i]) / (nodes[i + 1] - nodes[i]);
+    cd_solve(&tm->maps[i], mode, w_in, tau_out, out);
+    if (f == 0.0) return;
+    cd_solve(&tm->maps[i + 1], mode, w_in, tau_out, &b);
+    g = 1.0 - f;
+    for (c = 0; c < 3; c++) out->torques[c] = g * out->torques[c] + f * b.torques[c];
+    for (c = 0; c < CD_N_LOSSES; c++) out->losses[c] = g * out->losses[c] + f * b.losses[c];
+    out->eta0 = g * out->eta0 + f * b.eta0;
+    out->out_of_range = out->out_of_range || b.out_of_range;
+    if (!(f < 0.5)) {
+        near = &b;
+        out->locked = near->locked;
+        out->forward = near->forward;
+    }
+    ia = tm->maps[0].modes[mode].a;
+    ib = tm->maps[0].modes[mode].b;
+    p_a = out->torques[ia] * out->speeds[ia];
+    p_b = out->torques[ib] * out->speeds[ib];
+    if (out->forward) { p_in = p_a; p_out = -p_b; }
+    else              { p_in = p_b; p_out = -p_a; }
+    out->eta = (p_in > 0 && p_out > 0 && !out->locked) ? p_out / p_in : 0.0;
+}
+
+double cd_housing_step(double T, double P, double dt, double T_amb, double C, double R)
+{
+    double steady = T_amb + P * R;
+    return steady + (T - steady) * exp(-dt / (R * C));
+}

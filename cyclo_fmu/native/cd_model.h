@@ -67,6 +67,23 @@ typedef struct {
     int out_of_range;          /* 1 if the look-up was clamped at the map's edge */
 } CDSolution;
 
+/* The loss maps over the grease temperature (model_core.lossmap.ThermalMap): one CDMap per
+ * node, at temperatures T[0] < T[1] < ... (K); n = 1 where the losses do not depend on it. */
+typedef struct {
+    int n;
+    const double *T;
+    const CDMap *maps;
+} CDThermalMap;
+
+/* ThermalMap.solve: the steady state at grease temperature T (K), linear in T between the two
+ * nodes around it (blend_solutions), clamped at the outer nodes. */
+void cd_solve_thermal(const CDThermalMap *tm, int mode, double w_in, double tau_out, double T,
+                      CDSolution *out);
+
+/* model_core.thermal.housing_step: the temperature after a step dt of C dT/dt = P - (T -
+ * T_amb)/R with P held (exact exponential update). */
+double cd_housing_step(double T, double P, double dt, double T_amb, double C, double R);
+
 /* ModeMap.solve: steady state at driving speed w_in (rad/s) and load torque tau_out (N*m). */
 void cd_solve(const CDMap *map, int mode, double w_in, double tau_out, CDSolution *out);
 
@@ -93,11 +110,16 @@ int cd_mode_index(const char *mode);
 
 /* The design this FMU was built for (generated at build time: cd_map_data.c): its loss map,
  * the defaults of the extra physics, the design values shown as constants, the GUID. */
-extern const CDMap CD_MAP;
+extern const CDMap CD_MAP;              /* the map at the operating temperature */
+extern const CDThermalMap CD_THERMAL;     /* all nodes over the grease temperature */
 extern const CDExtra CD_DEFAULT_EXTRA;
 extern const CDTerm CD_DISCOVERED[CD_MAX_DISCOVERED];   /* built in, as the map */
 extern const int CD_N_DISCOVERED;
 extern const char CD_GUID[];
+/* the heat balance's parameters' defaults: T_oil_start, ambient_temperature (K),
+ * housing_heat_capacity (J/K), housing_heat_transfer (W/(m2 K)), housing_area (m2) */
+#define CD_N_THERMAL 5
+extern const double CD_DEFAULT_THERMAL[CD_N_THERMAL];
 extern const double CD_MAP_TORQUE_MAX;   /* N*m, largest |tau_out| of the map */
 extern const double CD_MAP_SPEED_MAX;    /* rad/s, largest |w_in| of the map */
 

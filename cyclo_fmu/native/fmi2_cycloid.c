@@ -7,14 +7,16 @@
  *
  * Value references (modelDescription.xml is generated with the same numbers by
  * cyclo_fmu/native/build.py):
- *   Real     0 w_in, 1 tau_out, 2 alpha_in (inputs)
+ *   Real     0 w_in, 1 tau_out, 2 alpha_in, 3 T_oil_in (inputs)
  *            10..29 outputs, in the order of OUT_NAMES
  *            30..47 extra physics parameters, in the order of CDExtra
  *            50 J_out, 51 alpha_ref (parameters of the output inertia)
  *            52 PL_mesh (output: the calibrated mesh loss; out[O_PL_MESH])
+ *            53 T_oil, 54 Q_ambient (outputs of the temperature)
+ *            55..59 the heat balance's parameters (CD_DEFAULT_THERMAL's order)
  *            100.. constants of the design (generated table)
  *   Integer  0 mode_number; 100.. constants
- *   Boolean  10 locked
+ *   Boolean  10 locked, 11 use_T_oil_input
  *   String   0 mode; 100.. constants
  */
 #include <math.h>
@@ -29,6 +31,15 @@
 #define VR_W_IN 0
 #define VR_TAU_OUT 1
 #define VR_ALPHA_IN 2
+#define VR_T_OIL_IN 3
+#define VR_T_OIL 53
+#define VR_Q_AMBIENT 54
+#define VR_THERMAL0 55
+#define VR_USE_T_OIL 11
+#define N_OUT_ALL (N_OUT + 3)  /* out[]: the 20, PL_mesh, T_oil, Q_ambient */
+/* K, the grease temperatures accepted (cycloid_drive.T_OIL_RANGE: -100 to 200 degC) */
+#define T_OIL_MIN 173.15
+#define T_OIL_MAX 473.15
 #define VR_OUT0 10
 #define N_OUT 20               /* outputs at value references 10..29 */
 #define VR_PL_MESH 52          /* one more output, beyond them */
@@ -47,7 +58,11 @@
 
 enum { O_W_OUT, O_TAU_IN, O_TAU_HOUSING, O_P_LOSS, O_PL1, O_PL2, O_PL3, O_PL5, O_PL6, O_ETA,
        O_ETA0, O_P_EXTRA, O_P_STORED, O_PL_SUPPORT, O_PL_SEAL, O_PL_CHURN, O_TORQUE_OUT,
-       O_TAU_IN_STATIC, O_J_LOAD, O_J_LOAD_DEC, O_PL_MESH };
+       O_TAU_IN_STATIC, O_J_LOAD, O_J_LOAD_DEC, O_PL_MESH, O_T_OIL, O_Q_AMBIENT };
+
+static const char *const THERMAL_NAMES[CD_N_THERMAL] = {
+    "T_oil_start", "ambient_temperature", "housing_heat_capacity", "housing_heat_transfer",
+    "housing_area"};
 
 static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "drag_torque", "stribeck_torque", "stribeck_speed", "input_inertia", "ripple_1x",
@@ -58,8 +73,8 @@ static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
 enum { PH_INSTANTIATED = 1, PH_INIT, PH_STEP, PH_TERMINATED };
 
 #define STATE_MAGIC 0x43444e53u   /* "CDNS" */
-#define STATE_VERSION 4u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
-                              * load ripple, CDState.distance */
+#define STATE_VERSION 5u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
+                              * load ripple, CDState.distance; 5: the oil temperature */
 
 /* Everything that defines the instance's behaviour from here on: inputs, parameters,
  * outputs and the dynamic state. Plain data: copied and serialised as it is. */
@@ -71,7 +86,11 @@ typedef struct {
     int mode;              /* index of the String parameter "mode" (0..5) */
     int mode_number;       /* 0 = use mode, 1..6 */
     CDExtra extra;
-    double out[N_OUT + 1];     /* the outputs at 10..29, then PL_mesh */
+    double out[N_OUT_ALL];     /* the outputs at 10..29, then PL_mesh, T_oil, Q_ambient */
+    double T_oil_in;           /* input: grease temperature from outside, K */
+    int use_T_oil_input;       /* parameter: the input (1) or the heat balance (0) */
+    double thermal[CD_N_THERMAL];   /* the heat balance's parameters (CD_DEFAULT_THERMAL) */
+    double T;                  /* grease/housing temperature at the last point, K */
     int locked;
     int mode_eff;          /* resolved at exitInitializationMode */
     double theta;          /* angle of the driving shaft since the start, rad */
@@ -149,6 +168,17 @@ static void set_defaults(CDState *s)
     s->extra = CD_DEFAULT_EXTRA;
     s->alpha_ref = ALPHA_REF_DEFAULT;
     s->out[O_ETA0] = 1.0;
+    memcpy(s->thermal, CD_DEFAULT_THERMAL, sizeof s->thermal);
+    s->T_oil_in = s->T = s->out[O_T_OIL] = CD_DEFAULT_THERMAL[0];
+}
+
+/* NULL if a heat-balance parameter's value is acceptable, else why not */
+static const char *thermal_problem(int i, double v)
+{
+    if (!isfinite(v)) return "must be a finite number";
+    if (i < 2) return (v > T_OIL_MIN && v < T_OIL_MAX) ? NULL
+                      : "must lie between 173.15 and 473.15 K (-100 to 200 degC)";
+    return v > 0 ? NULL : "must be positive";
 }
 
 static int resolve_mode(const CDState *s)
@@ -194,10 +224,10 @@ static const char *extra_problem(int i, double v)
 }
 
 /* CycloidDrive._gear_torque (map): the driving-shaft torque of the gear at a load torque */
-static double gear_torque(int mode, double w_in, double tau_out)
+static double gear_torque(int mode, double w_in, double tau_out, double T)
 {
     CDSolution r;
-    cd_solve(&CD_MAP, mode, w_in, tau_out, &r);
+    cd_solve_thermal(&CD_THERMAL, mode, w_in, tau_out, T, &r);
     return r.torques[CD_MAP.modes[mode].a];
 }
 
@@ -205,7 +235,7 @@ static double gear_torque(int mode, double w_in, double tau_out)
  * over +-alpha_ref (reused while w_in and the load stay within SLOPE_REUSE), and
  * tau_in_static. commit = 0 (Initialization Mode's reads) neither uses nor keeps the secants. */
 static void output_inertia(CDState *s, int mode, double tau_ext, double J_r, double tau_in_gear,
-                           int commit)
+                           int commit, double T)
 {
     double w_in = s->w_in, static_, J_acc, J_dec;
     if (J_r == 0.0) {
@@ -213,7 +243,7 @@ static void output_inertia(CDState *s, int mode, double tau_ext, double J_r, dou
         s->out[O_J_LOAD] = s->out[O_J_LOAD_DEC] = 0.0;
         return;
     }
-    static_ = gear_torque(mode, w_in, tau_ext);
+    static_ = gear_torque(mode, w_in, tau_ext, T);
     if (commit && s->has_key && fabs(w_in - s->key_w) <= SLOPE_REUSE * fabs(s->key_w)
         && fabs(tau_ext - s->key_tau) <= SLOPE_REUSE * fabs(s->key_tau)) {
         J_acc = s->key_J_acc;
@@ -221,8 +251,8 @@ static void output_inertia(CDState *s, int mode, double tau_ext, double J_r, dou
     } else {
         double A = w_in >= 0 ? s->alpha_ref : -s->alpha_ref;   /* speeding up */
         double lossless = J_r * CD_MAP.modes[mode].ratio_out;
-        J_acc = (gear_torque(mode, w_in, tau_ext - J_r * A) - static_) / A;
-        J_dec = (static_ - gear_torque(mode, w_in, tau_ext + J_r * A)) / A;
+        J_acc = (gear_torque(mode, w_in, tau_ext - J_r * A, T) - static_) / A;
+        J_dec = (static_ - gear_torque(mode, w_in, tau_ext + J_r * A, T)) / A;
         /* locked: the lossless reflection */
         if (!(isfinite(J_acc) && J_acc > 0)) J_acc = lossless;
         if (!(isfinite(J_dec) && J_dec > 0)) J_dec = lossless;
@@ -257,8 +287,34 @@ static void evaluate(Instance *c, double t, double dt, int commit)
                   || s->extra.ripple_roller != 0 || s->extra.thermal_loss_change != 0
                   || s->extra.run_in_change != 0 || s->extra.ripple_1x_load != 0
                   || s->extra.ripple_roller_load != 0;
+    /* CycloidDrive._temperature: the input, or the heat balance stepped with the loss at the
+     * step's start held over the step: the step's inputs at the temperature of its start
+     * (CycloidDrive._loss_at_start: evaluated without a step of the dynamic terms) */
+    double R = 1.0 / (s->thermal[3] * s->thermal[4]), T;
+    if (s->use_T_oil_input)
+        T = s->T_oil_in;
+    else if (dt > 0) {
+        CDState saved = *s;
+        double P0;
+        evaluate(c, t - dt, 0.0, 0);
+        P0 = s->out[O_P_LOSS];
+        saved.warned_range = s->warned_range;   /* a warning the probe gave stays given */
+        *s = saved;
+        T = cd_housing_step(s->T, P0, dt, s->thermal[1], s->thermal[2], R);
+    } else
+        T = s->phase == PH_STEP ? s->T : s->thermal[0];
+    if (!(T > T_OIL_MIN && T < T_OIL_MAX)) {
+        logmsg(c, fmi2Error, "%s %g K: must be a temperature between 173.15 and 473.15 K "
+               "(-100 to 200 degC)", s->use_T_oil_input ? "T_oil_in =" : "the heat balance's "
+               "grease temperature left the range:", T);
+        s->out[O_P_LOSS] = NAN;   /* refused by the caller (outputs_finite) */
+        return;
+    }
+    if (commit) s->T = T;
+    s->out[O_T_OIL] = T;
+    s->out[O_Q_AMBIENT] = (T - s->thermal[1]) / R;
     m = &CD_MAP.modes[mode];
-    cd_solve(&CD_MAP, mode, w_in, tau_out, &r);
+    cd_solve_thermal(&CD_THERMAL, mode, w_in, tau_out, T, &r);
     if (r.out_of_range && !s->warned_range
         && (fabs(tau_out) > CD_MAP_TORQUE_MAX || fabs(w_in) > CD_MAP_SPEED_MAX)) {
         s->warned_range = 1;
@@ -328,7 +384,7 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     s->out[O_ETA0] = r.eta0;
     s->locked = r.locked;
     s->out[O_TORQUE_OUT] = -tau_out;
-    output_inertia(s, mode, tau_ext, J_r, tau_in_gear, commit);
+    output_inertia(s, mode, tau_ext, J_r, tau_in_gear, commit, T);
 }
 
 /* Every output a finite number (an extreme input, e.g. tau_out = -1e308, overflows the
@@ -336,7 +392,7 @@ static void evaluate(Instance *c, double t, double dt, int commit)
 static int outputs_finite(const CDState *s)
 {
     int i;
-    for (i = 0; i < N_OUT; i++)
+    for (i = 0; i < N_OUT_ALL; i++)
         if (!isfinite(s->out[i])) return 0;
     return 1;
 }
@@ -470,6 +526,7 @@ FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
         c->s.mode_eff = resolve_mode(&c->s);
         c->s.phase = PH_STEP;
         c->s.has_key = 0;
+        c->s.T = c->s.thermal[0];   /* the heat balance starts here */
         evaluate(c, c->s.t_start, 0.0, 1);
         if (!outputs_finite(&c->s)) {
             c->s = before;
@@ -534,12 +591,17 @@ FMI2_Export fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference 
         else if (r == VR_ALPHA_IN) value[i] = c->s.alpha_in;
         else if (r == VR_J_OUT) value[i] = c->s.J_out;
         else if (r == VR_ALPHA_REF) value[i] = c->s.alpha_ref;
-        else if ((r >= VR_OUT0 && r < VR_OUT0 + N_OUT) || r == VR_PL_MESH) {
+        else if (r == VR_T_OIL_IN) value[i] = c->s.T_oil_in;
+        else if (r >= VR_THERMAL0 && r < VR_THERMAL0 + CD_N_THERMAL)
+            value[i] = c->s.thermal[r - VR_THERMAL0];
+        else if ((r >= VR_OUT0 && r < VR_OUT0 + N_OUT)
+                 || (r >= VR_PL_MESH && r <= VR_Q_AMBIENT)) {
             if (!refreshed) {
                 if (!refresh(c)) return nonfinite(c, "fmi2GetReal");
                 refreshed = 1;
             }
-            value[i] = c->s.out[r == VR_PL_MESH ? O_PL_MESH : (int)(r - VR_OUT0)];
+            value[i] = c->s.out[r >= VR_PL_MESH ? O_PL_MESH + (int)(r - VR_PL_MESH)
+                                                : (int)(r - VR_OUT0)];
         } else if (r >= VR_EXTRA0 && r < VR_EXTRA0 + CD_N_EXTRA)
             value[i] = *extra_field(&c->s.extra, (int)(r - VR_EXTRA0));
         else if ((k = const_index_real(r)) >= 0) value[i] = CD_CONST_REAL[k].value;
@@ -572,6 +634,10 @@ FMI2_Export fmi2Status fmi2GetBoolean(fmi2Component comp, const fmi2ValueReferen
     CHECK_INSTANCE(fmi2GetBoolean);
     if (nvr && (vr == NULL || value == NULL)) return fmi2Error;
     for (i = 0; i < nvr; i++) {
+        if (vr[i] == VR_USE_T_OIL) {
+            value[i] = c->s.use_T_oil_input ? fmi2True : fmi2False;
+            continue;
+        }
         if (vr[i] != VR_LOCKED) return bad_vr(c, "fmi2GetBoolean", vr[i]);
         if (!refresh(c)) return nonfinite(c, "fmi2GetBoolean");
         value[i] = c->s.locked ? fmi2True : fmi2False;
@@ -625,6 +691,29 @@ FMI2_Export fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference 
                 continue;
             }
             *dst = v;
+        } else if (r == VR_T_OIL_IN) {
+            /* its range is checked where it is used (use_T_oil_input) */
+            if (!isfinite(v)) {
+                logmsg(c, fmi2Error, "T_oil_in = %g: input must be a finite number (kept %g)",
+                       v, c->s.T_oil_in);
+                status = fmi2Error;
+            } else {
+                c->s.T_oil_in = v;
+            }
+        } else if (r >= VR_THERMAL0 && r < VR_THERMAL0 + CD_N_THERMAL) {
+            int k = (int)(r - VR_THERMAL0);
+            const char *why = thermal_problem(k, v);
+            if (!parameters_settable(c)) {
+                logmsg(c, fmi2Error, "%s is a fixed parameter: set it before "
+                       "fmi2ExitInitializationMode", THERMAL_NAMES[k]);
+                status = fmi2Error;
+            } else if (why) {
+                logmsg(c, fmi2Error, "invalid parameter: %s = %g %s (kept %g)", THERMAL_NAMES[k],
+                       v, why, c->s.thermal[k]);
+                status = fmi2Error;
+            } else {
+                c->s.thermal[k] = v;
+            }
         } else if (r == VR_J_OUT || r == VR_ALPHA_REF) {
             const char *name = r == VR_J_OUT ? "J_out" : "alpha_ref";
             double *dst = r == VR_J_OUT ? &c->s.J_out : &c->s.alpha_ref;
@@ -655,7 +744,8 @@ FMI2_Export fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference 
             } else {
                 *extra_field(&c->s.extra, k) = v;
             }
-        } else if ((r >= VR_OUT0 && r < VR_OUT0 + N_OUT) || r == VR_PL_MESH) {
+        } else if ((r >= VR_OUT0 && r < VR_OUT0 + N_OUT)
+                   || (r >= VR_PL_MESH && r <= VR_Q_AMBIENT)) {
             logmsg(c, fmi2Error, "fmi2SetReal: value reference %u is an output", r);
             status = fmi2Error;
         } else if (const_index_real(r) >= 0) {
@@ -699,12 +789,24 @@ FMI2_Export fmi2Status fmi2SetInteger(fmi2Component comp, const fmi2ValueReferen
 FMI2_Export fmi2Status fmi2SetBoolean(fmi2Component comp, const fmi2ValueReference vr[],
                                       size_t nvr, const fmi2Boolean value[])
 {
+    size_t i;
+    fmi2Status status = fmi2OK;
     CHECK_INSTANCE(fmi2SetBoolean);
-    (void)value;
-    if (nvr == 0) return fmi2OK;
-    logmsg(c, fmi2Error, "fmi2SetBoolean: value reference %u is not settable (locked is an "
-           "output)", vr ? vr[0] : 0u);
-    return fmi2Error;
+    if (nvr && (vr == NULL || value == NULL)) return fmi2Error;
+    for (i = 0; i < nvr; i++) {
+        if (vr[i] != VR_USE_T_OIL) {
+            logmsg(c, fmi2Error, "fmi2SetBoolean: value reference %u is not settable (locked is "
+                   "an output; use_T_oil_input is %u)", vr[i], VR_USE_T_OIL);
+            status = fmi2Error;
+        } else if (!parameters_settable(c)) {
+            logmsg(c, fmi2Error, "use_T_oil_input is a fixed parameter: set it before "
+                   "fmi2ExitInitializationMode");
+            status = fmi2Error;
+        } else {
+            c->s.use_T_oil_input = value[i] != fmi2False;
+        }
+    }
+    return status;
 }
 
 FMI2_Export fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[],
@@ -767,7 +869,12 @@ static const char *state_problem(const CDState *s)
     if (!isfinite(s->theta)) return "theta";
     if (!(isfinite(s->distance) && s->distance >= 0)) return "distance";
     if (!isfinite(s->w_last)) return "w_last";
-    for (i = 0; i < N_OUT; i++)
+    if (!isfinite(s->T_oil_in)) return "T_oil_in";
+    if (!(s->T > T_OIL_MIN && s->T < T_OIL_MAX)) return "T";
+    for (i = 0; i < CD_N_THERMAL; i++)
+        if (thermal_problem(i, s->thermal[i])) return THERMAL_NAMES[i];
+    if (!flag(s->use_T_oil_input)) return "use_T_oil_input";
+    for (i = 0; i < N_OUT_ALL; i++)
         if (!isfinite(s->out[i])) return "outputs";
     if (!flag(s->locked) || !flag(s->has_w_last) || !flag(s->warned_range) || !flag(s->has_key))
         return "flags";

@@ -54,7 +54,8 @@ QUANTITIES = {"rad/s": "AngularVelocity", "r/min": "AngularVelocity", "N.m": "To
               "m2/s": "KinematicViscosity", "kg/m3": "Density", "kg.m2": "MomentOfInertia",
               "s": "Time", "rad": "Angle", "Hz": "Frequency", "1": "DimensionlessRatio",
               "N.m.s/rad": "RotationalDampingConstant", "N.m/rad": "RotationalSpringConstant",
-              "rad/s2": "AngularAcceleration", "K": "ThermodynamicTemperature"}
+              "rad/s2": "AngularAcceleration", "K": "ThermodynamicTemperature",
+              "J/K": "HeatCapacity", "W/(m2.K)": "CoefficientOfHeatTransfer", "m2": "Area"}
 
 # SI base-unit exponents of the units we use (FMI 2.0 BaseUnit attributes)
 UNITS = {
@@ -74,6 +75,9 @@ UNITS = {
     "N.m.s/rad": dict(kg=1, m=2, s=-1, rad=-1),
     "N.m/rad": dict(kg=1, m=2, s=-2, rad=-1),
     "K": dict(K=1),
+    "J/K": dict(kg=1, m=2, s=-2, K=-1),
+    "W/(m2.K)": dict(kg=1, s=-3, K=-1),
+    "m2": dict(m=2),
 }
 
 

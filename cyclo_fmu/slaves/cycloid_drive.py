@@ -116,7 +116,20 @@ DESIGN_PARAMETERS = [
      "ripple: amplitude at 10 N.m of |tau_out|, in proportion", Real),
     ("ripple_roller_load_phase", "extra", "ripple_roller_load_phase", "rad",
      "phase of the load-scaled roller-pass ripple", Real),
+    # the housing's lumped heat balance (model_core.thermal.housing_step); run-time
+    # parameters, the loss map does not depend on them
+    ("ambient_temperature", None, "ambient_temperature", "K", "ambient temperature of the "
+     "housing's heat balance", Real),
+    ("housing_heat_capacity", None, "housing_heat_capacity", "J/K", "heat capacity C of the "
+     "housing with its contents (lumped heat balance)", Real),
+    ("housing_heat_transfer", None, "housing_heat_transfer", "W/(m2.K)", "convection and "
+     "radiation coefficient k_h of the housing surface", Real),
+    ("housing_area", None, "housing_area", "m2", "housing surface A_h giving heat to the "
+     "ambient (R = 1/(k_h A_h))", Real),
 ]
+#: design parameters of the heat balance only (run-time in both FMUs; not in the loss map)
+THERMAL_PARAMETERS = ("ambient_temperature", "housing_heat_capacity", "housing_heat_transfer",
+                      "housing_area")
 
 #: the design's discovered loss terms ([[extra.discovered]], model_core.discovered) as
 #: numbered slots (FMU parameter -> DiscoveredTerm field, unit, description, min, max); a slot
@@ -159,7 +172,14 @@ PARAMETER_LIMITS = dict(
     map_speed_max=(sys.float_info.min, None),
     stribeck_exponent=(1.0, 2.0), run_in_change=(-1.0, None),
     run_in_distance=(sys.float_info.min, None),
-    operating_temperature=(0.0, None), mesh_loss_k=(0.0, 0.5), idle_loss_scale=(0.0, 10.0))
+    operating_temperature=(0.0, None), mesh_loss_k=(0.0, 0.5), idle_loss_scale=(0.0, 10.0),
+    # temperatures: the design's valid range, -100 to 200 degC
+    ambient_temperature=(173.15, 473.15), T_oil_start=(173.15, 473.15),
+    **{n: (sys.float_info.min, None) for n in ("housing_heat_capacity",
+                                               "housing_heat_transfer", "housing_area")})
+#: [K] the grease temperatures the FMUs accept (input T_oil_in, the heat balance's result):
+#: the design's valid range, -100 to 200 degC
+T_OIL_RANGE = (173.15, 473.15)
 
 #: partial losses with an output each: the paper's load-dependent ones, then the physical
 #: profile's load-independent ones (zero with losses = "load_dependent"); they sum to P_loss
@@ -188,9 +208,17 @@ _MAP_DIR = Path(__file__).resolve().parent / "_maps"
 
 
 def _map_key(design, mode, torque_max, speed_max):
-    """What a loss map depends on: the whole design (profile included), mode and ranges, and
-    the map's layout (a map pickled by another version of the core is not used)."""
+    """What a loss map depends on: the whole design (profile included) but the heat balance's
+    parameters, mode and ranges, and the map's layout (a map pickled by another version of the
+    core is not used)."""
+    plain = core.DriveDesign()
+    design = dataclasses.replace(design, **{n: getattr(plain, n) for n in THERMAL_PARAMETERS})
     return (repr(design), mode, float(torque_max), float(speed_max), core.lossmap.MAP_LAYOUT)
+
+
+def _map_file(mode, temperature):
+    """File name of a shipped map: mode and the node's grease temperature [K]."""
+    return f"{mode}_{temperature:.2f}K.pkl"
 
 
 def base_design(folder=None):
@@ -215,20 +243,24 @@ def write_shipped_maps(folder, modes=SHIPPED_MAP_MODES, design=None):
     import numpy as np
     design = design or core.DriveDesign()
     for mode in modes:
-        # quiet as at an FMU's initialization: the map handles the points that do not run
-        with warnings.catch_warnings(), np.errstate(all="ignore"):
-            warnings.simplefilter("ignore", RuntimeWarning)
-            m = core.lossmap.ModeMap(design, mode, MAP_TORQUE_MAX, MAP_SPEED_MAX)
-        with open(folder / f"{mode}.pkl", "wb") as f:
-            # the key first, on its own: a design it does not fit reads no table (1 ms)
-            pickle.dump(_map_key(design, mode, MAP_TORQUE_MAX, MAP_SPEED_MAX), f,
-                        protocol=pickle.HIGHEST_PROTOCOL)
-            pickle.dump(m.__dict__, f, protocol=pickle.HIGHEST_PROTOCOL)
+        # every node over the grease temperature (model_core.thermal.map_temperatures)
+        for T in core.thermal.map_temperatures(design):
+            node = core.thermal.at_temperature(design, T)
+            # quiet as at an FMU's initialization: the map handles the points that do not run
+            with warnings.catch_warnings(), np.errstate(all="ignore"):
+                warnings.simplefilter("ignore", RuntimeWarning)
+                m = core.lossmap.ModeMap(node, mode, MAP_TORQUE_MAX, MAP_SPEED_MAX)
+            key = _map_key(node, mode, MAP_TORQUE_MAX, MAP_SPEED_MAX)
+            with open(folder / _map_file(mode, T), "wb") as f:
+                # the key first, on its own: a design it does not fit reads no table (1 ms)
+                pickle.dump(key, f, protocol=pickle.HIGHEST_PROTOCOL)
+                pickle.dump(m.__dict__, f, protocol=pickle.HIGHEST_PROTOCOL)
 
 
-def _shipped_map(key, folder=_MAP_DIR):
-    """The map shipped in ``folder`` for exactly this key, or None."""
-    path = Path(folder) / f"{key[1]}.pkl"
+def _shipped_map(key, temperature, folder=_MAP_DIR):
+    """The map shipped in ``folder`` for exactly this key (grease at ``temperature`` K), or
+    None."""
+    path = Path(folder) / _map_file(key[1], temperature)
     if not path.is_file():
         return None
     with open(path, "rb") as f:
@@ -277,14 +309,24 @@ class CycloidDrive(UnitSlave):
                        min=sys.float_info.min)
         self.parameter("map_speed_max", MAP_SPEED_MAX, "rad/s", "largest |w_in| in the loss map",
                        min=sys.float_info.min)
+        self.parameter("use_T_oil_input", False, None, "take the grease/housing temperature "
+                       "from the input T_oil_in (true) or from the internal lumped heat balance "
+                       "(false: C dT/dt = P_loss - (T - ambient_temperature)/R, started at "
+                       "T_oil_start)", Boolean)
+        self.parameter("T_oil_start", default.operating_temperature, "K", "grease/housing "
+                       "temperature at the start of the internal heat balance",
+                       min=PARAMETER_LIMITS["T_oil_start"][0],
+                       max=PARAMETER_LIMITS["T_oil_start"][1])
         self.input("w_in", 0.0, "rad/s", "speed of the driving shaft")
         self.input("tau_out", 0.0, "N.m", "torque the load applies on the driven shaft")
         self.input("alpha_in", 0.0, "rad/s2", "acceleration of the driving shaft (from its "
                    "integrator's equation of motion); used with J_out")
+        self.input("T_oil_in", default.operating_temperature, "K", "grease/housing temperature "
+                   "from outside (a measurement, a thermal model); used with use_T_oil_input")
         self.output("w_out", 0.0, "rad/s", "speed of the driven shaft", depends=("w_in",))
         # alpha_in acts through J_out (0 by default); declared, so that the dependencies hold
         # for every parameter value
-        both = ("w_in", "tau_out", "alpha_in")
+        both = ("w_in", "tau_out", "alpha_in", "T_oil_in")
         self.output("tau_in", 0.0, "N.m", "torque the driver applies on the driving shaft",
                     depends=both)
         self.output("tau_housing", 0.0, "N.m", "torque the support applies on the held shaft",
@@ -319,6 +361,12 @@ class CycloidDrive(UnitSlave):
                     depends=both)
         for name, _k, _field, unit, desc, lo, hi in DISCOVERED_PARAMETERS:
             self.parameter(name, 0.0, unit, desc, Real, min=lo, max=hi)
+        self.output("T_oil", default.operating_temperature, "K", "grease/housing temperature "
+                    "the losses are evaluated at (T_oil_in, or the heat balance's)",
+                    depends=("T_oil_in",))
+        self.output("Q_ambient", 0.0, "W", "heat flow from the housing to the ambient "
+                    "(T_oil - ambient_temperature)/R", depends=("T_oil_in",))
+        self._T = default.operating_temperature
         self._theta = 0.0
         self._distance = 0.0
         self._slope_key = None
@@ -368,7 +416,7 @@ class CycloidDrive(UnitSlave):
 
     #: the dynamic state besides the variables (fmi2GetFMUstate)
     state_attributes = ("_theta", "_distance", "_w_last", "_slope_key", "_last_inputs",
-                        "_warned_range")
+                        "_warned_range", "_T")
 
     #: no step yet in Initialization Mode: no acceleration, no warm-up
     init_independent = ("input_inertia", "thermal_loss_change", "thermal_tau")
@@ -404,14 +452,23 @@ class CycloidDrive(UnitSlave):
             if self.exact:
                 self._map = None
             elif self._map is None or self._map_key != map_key:
-                self._map = _shipped_map(map_key, self._map_folder())
-                if self._map is None:
-                    # no mallopt here: an FMU must not change the host's allocator (the map
-                    # solves 10-20 % slower with glibc's default thresholds early in a
-                    # process; docs/explanation/fmu-safety.md)
-                    self._map = core.lossmap.ModeMap(self._design, self._mode,
-                                                     self.map_torque_max, self.map_speed_max)
+                folder = self._map_folder()
+                tmax, smax, mode = self.map_torque_max, self.map_speed_max, self._mode
+
+                def node(design_T):
+                    # a node over the grease temperature: shipped, or solved now (the one at
+                    # the operating temperature here, the others at the first step that
+                    # needs them). No mallopt here: an FMU must not change the host's
+                    # allocator (the map solves 10-20 % slower with glibc's default
+                    # thresholds early in a process; docs/explanation/fmu-safety.md)
+                    m = _shipped_map(_map_key(design_T, mode, tmax, smax),
+                                     design_T.operating_temperature, folder)
+                    return m if m is not None else core.lossmap.ModeMap(design_T, mode, tmax,
+                                                                        smax)
+                self._map = core.lossmap.ThermalMap(self._design, mode, tmax, smax, node)
                 self._map_key = map_key
+            self._dependent = core.thermal.temperature_dependent(self._design)
+            self._R = core.thermal.housing_resistance(self._design)
             ex = self._design.extra
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
             self._discovered = bool(ex.discovered)
@@ -428,14 +485,15 @@ class CycloidDrive(UnitSlave):
         self._theta, self._w_last, self._slope_key = 0.0, None, None
         self._distance = 0.0
         self._last_inputs = None
+        self._T = self.T_oil_start
 
     def _evaluate_init(self):
         if self._in_init:   # a read in Initialization Mode: commit no dynamic state
-            saved = self._theta, self._w_last, self._distance
+            saved = self._theta, self._w_last, self._distance, self._T
             try:
                 self._update()
             finally:
-                self._theta, self._w_last, self._distance = saved
+                self._theta, self._w_last, self._distance, self._T = saved
         else:               # fmi2ExitInitializationMode: the state starts here
             self._update()
 
@@ -444,11 +502,53 @@ class CycloidDrive(UnitSlave):
         return True
 
     # -- physics ------------------------------------------------------------------------------
+    def _temperature(self, t, dt, w_in, tau_ext, alpha):
+        """The grease temperature at the end of the step [K]: the input, or the heat balance
+        stepped from the last one with the loss at the step's start held over the step
+        (thermal.housing_step): the loss of the step's inputs (held by the master over the step)
+        at the temperature of the step's start."""
+        if self.use_T_oil_input:
+            T = self.T_oil_in
+            if not (isinstance(T, (int, float)) and T_OIL_RANGE[0] < T < T_OIL_RANGE[1]):
+                self.fail(f"T_oil_in = {T!r} K: must be a temperature between "
+                          f"{T_OIL_RANGE[0]} and {T_OIL_RANGE[1]} K (-100 to 200 degC)")
+        elif dt > 0:
+            d = self._design
+            P0 = self._loss_at_start(t - dt, w_in, tau_ext, alpha)
+            T = core.thermal.housing_step(self._T, P0, dt, d.ambient_temperature,
+                                          d.housing_heat_capacity, self._R)
+            if not T_OIL_RANGE[0] < T < T_OIL_RANGE[1]:
+                self.fail(f"the heat balance's grease temperature {T!r} K left -100 to 200 "
+                          f"degC (loss {P0!r} W, R = {self._R:.4g} K/W): refused")
+        else:
+            T = self._T
+        self._T = T
+        self.T_oil = T
+        self.Q_ambient = core.thermal.heat_to_ambient(T, self._design.ambient_temperature,
+                                                      self._R)
+        return T
+
+    def _loss_at_start(self, t0, w_in, tau_ext, alpha):
+        """P_loss [W] at the step's start t0: the step's inputs at the present temperature,
+        without a step of the dynamic terms (no acceleration from a step, no angle advanced);
+        the outputs are computed again for the step's end."""
+        if (not self._dependent and not self._dynamic_extra
+                and self._last_inputs == (w_in, tau_ext, alpha, None)):
+            return self.P_loss      # the same inputs, and the losses do not depend on T
+        saved = self._theta, self._w_last, self._distance
+        try:
+            self._update_at(t0, 0.0, w_in, tau_ext - self.J_out * self._ratio_out * alpha)
+            return self.P_loss
+        finally:
+            self._theta, self._w_last, self._distance = saved
+
     def _update(self, t=0.0, dt=0.0):
         w_in, tau_ext, alpha = self.w_in, self.tau_out, self.alpha_in
         if not (math.isfinite(w_in) and math.isfinite(tau_ext) and math.isfinite(alpha)):
             self.require_finite(w_in=w_in, tau_out=tau_ext, alpha_in=alpha)
-        inputs = (w_in, tau_ext, alpha)
+        T = self._temperature(t, dt, w_in, tau_ext, alpha)
+        # the temperature counts where the losses depend on it (physical profile)
+        inputs = (w_in, tau_ext, alpha, T if self._dependent else None)
         if inputs == self._last_inputs:
             # the same inputs as the last step, bit for bit (a steady state: 88 % of the
             # paper scenario's steps), and no time-dependent physics: the outputs stand
@@ -497,15 +597,16 @@ class CycloidDrive(UnitSlave):
     def _gear_torque(self, w_in, tau_out):
         """Driving-shaft torque of the gear alone (map or exact core) at a load torque."""
         if self._map is not None:
-            return self._map.solve(w_in, tau_out)[1][self._shaft_index[0]]
+            return self._map.solve(w_in, tau_out, self._T)[1][self._shaft_index[0]]
         if w_in == 0:
             return 0.0
-        op = core.operating_point(self._design, self._mode, w_in, T_out=tau_out)
+        op = core.operating_point(self._design_at_T(), self._mode, w_in, T_out=tau_out)
         return float(op.torques[self._mode[0]]) - float(self._design.extra.steady_torque(w_in))
 
     def _update_at(self, t, dt, w_in, tau_out):
         if self._map is not None:
-            speeds, torques, losses, eta, eta0, locked, forward = self._map.solve(w_in, tau_out)
+            speeds, torques, losses, eta, eta0, locked, forward = self._map.solve(w_in, tau_out,
+                                                                                  self._T)
             # below the grid (|w_in| < map_speed_max/1000: start-up, standstill) the edge values
             # are the physics' own limit, not a lack of range: warn only beyond the maxima
             if (not self._warned_range and (abs(tau_out) > self.map_torque_max
@@ -572,6 +673,12 @@ class CycloidDrive(UnitSlave):
         self.P_stored = stored * w_in
         return torque
 
+    def _design_at_T(self):
+        """The design with its grease at the present temperature (physical profile)."""
+        if not self._dependent or self._T == self._design.operating_temperature:
+            return self._design
+        return core.thermal.at_temperature(self._design, self._T)
+
     def _exact(self, w_in, tau_out):
         a, b = self._mode[0], self._mode[1]
         h = _held(self._mode)
@@ -582,7 +689,7 @@ class CycloidDrive(UnitSlave):
             for n in OUTPUT_LOSSES:
                 setattr(self, n, 0.0)
             return None, None, None, 0.0, 1.0, False
-        op = core.operating_point(self._design, self._mode, w_in, T_out=tau_out)
+        op = core.operating_point(self._design_at_T(), self._mode, w_in, T_out=tau_out)
         self.tau_in = float(op.torques[a])
         self._tau_in_gear = self.tau_in - float(self._design.extra.steady_torque(w_in))
         self.tau_housing = float(op.torques[h])

@@ -1,0 +1,348 @@
+"""Temperature in the co-simulation (issue 19 item 6): the housing's lumped heat balance and the
+grease temperature in both reducer FMUs.
+
+Physical facts checked: the warm-up at a constant loss is the first-order closed form
+T_amb + P R (1 - exp(-t/tau)) at any step sizes; heat is conserved (integrated loss = stored
+heat + heat to the ambient); the long-run temperature closes the core's steady heat balance;
+the input T_oil_in overrides the internal model; a saved state restores the temperature; the
+Python and native FMUs agree for the calibrated preset ``mackic-rig`` while it warms up; at the
+design's operating temperature the outputs are exactly the one-temperature map's.
+"""
+import math
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+fmpy = pytest.importorskip("fmpy")
+
+from model_core import DriveDesign, thermal  # noqa: E402
+from model_core.lossmap import ModeMap, ThermalMap  # noqa: E402
+
+from test_native_fmu import Inst  # noqa: E402
+
+GCC = shutil.which("gcc") or shutil.which("cc")
+#: Python and native FMU agreement (the same arithmetic in the same order: as test_native_fmu)
+RTOL, ATOL = 1e-9, 1e-12
+OUT = ("T_oil", "Q_ambient", "P_loss", "tau_in", "tau_housing", "eta", "eta0", "PL1", "PL3",
+       "PL6", "PL_support", "PL_churn", "PL_mesh", "J_load", "tau_in_static")
+
+
+def values(inst, names=OUT):
+    return dict(zip(names, inst.fmu.getReal([inst.vr[n] for n in names])))
+
+
+def advance(inst, dt, **inputs):
+    inst.set(**inputs)
+    inst.fmu.doStep(currentCommunicationPoint=inst.t, communicationStepSize=dt)
+    inst.t += dt
+    return values(inst)
+
+
+@pytest.fixture(scope="module")
+def preset_fmus(tmp_path_factory, fmu):
+    """CycloidDrive.fmu and CycloidDriveNative.fmu of the calibrated preset mackic-rig, built by
+    ``cyclo-fmu build --design mackic-rig`` (after the session's default FMUs)."""
+    if GCC is None:
+        pytest.skip("no C compiler")
+    dest = tmp_path_factory.mktemp("preset")
+    r = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "build", "--design", "mackic-rig",
+                        "--dest", str(dest), "CycloidDrive", "CycloidDriveNative"],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    return str(dest / "CycloidDriveNative.fmu"), str(dest / "CycloidDrive.fmu")
+
+
+# -- the core --------------------------------------------------------------------------------
+def test_housing_step_is_exact_for_a_held_loss():
+    """Any split of an interval into steps gives the closed form when the loss is held."""
+    d = DriveDesign()
+    R, C = thermal.housing_resistance(d), d.housing_heat_capacity
+    tau = R * C
+    assert tau == pytest.approx(thermal.housing_time_constant(d))
+    T, t, P, amb = 300.0, 0.0, 40.0, 293.15
+    rng = np.random.default_rng(1)
+    for h in rng.uniform(0.01, 900.0, 40):
+        T = thermal.housing_step(T, P, h, amb, C, R)
+        t += h
+        closed = amb + P * R + (300.0 - amb - P * R) * math.exp(-t / tau)
+        assert T == pytest.approx(closed, rel=1e-12)
+
+
+def test_thermal_map_is_the_one_temperature_map_at_its_nodes():
+    d = DriveDesign()
+    tm = ThermalMap(d, "S1", 30.0, 350.0)
+    assert tm.temperatures[tm.reference] == d.operating_temperature
+    assert tm.solved_nodes == 1                     # only the operating temperature's at first
+    mm = ModeMap(d, "S1", 30.0, 350.0)
+    for w, t in ((300.0, -10.0), (50.0, -0.5), (-120.0, 3.0), (200.0, 2.0)):
+        assert tm.solve(w, t, d.operating_temperature) == mm.solve(w, t)   # bit for bit
+        hot = ModeMap(thermal.at_temperature(d, tm.temperatures[-1]), "S1", 30.0, 350.0)
+        assert tm.solve(w, t, tm.temperatures[-1]) == hot.solve(w, t)
+    # between nodes: the energy balance holds as at a node
+    for T in (300.0, 318.7, 351.0):
+        speeds, torques, losses, *_ = tm.solve(250.0, -6.0, T)
+        p = sum(x * y for x, y in zip(torques, speeds))
+        assert sum(losses) == pytest.approx(p, rel=1e-12)
+    # the paper profile does not depend on the temperature: one node
+    assert thermal.map_temperatures(DriveDesign(profile="paper")) == (313.15,)
+
+
+def test_fitted_viscosity_slope_is_carried_by_the_lubricant():
+    d = DriveDesign()
+    s = thermal.viscosity_slope(d)
+    lub = thermal.lubricant_with_slope(d.lubricant, d.operating_temperature, 1.4 * s)
+    new = DriveDesign(lubricant=lub)
+    assert thermal.viscosity_slope(new) == pytest.approx(1.4 * s, rel=1e-5)
+    assert thermal.lubricant_viscosity(new) == pytest.approx(thermal.lubricant_viscosity(d),
+                                                             rel=1e-9)
+    with pytest.raises(ValueError):
+        thermal.lubricant_with_slope(d.lubricant, 313.15, 0.01)
+
+
+# -- co-simulation ---------------------------------------------------------------------------
+def test_warm_up_follows_the_first_order_closed_form(fmu):
+    """Constant losses (paper profile: no temperature dependence, a held operating point):
+    T(t) = T_amb + P R (1 - exp(-t/tau)) from a start at the ambient, at irregular steps."""
+    amb = 295.0
+    p = Inst(fmu, profile="paper", T_oil_start=amb, ambient_temperature=amb, w_in=300.0,
+             tau_out=-10.0)
+    d = DriveDesign()
+    R = thermal.housing_resistance(d)
+    tau = R * d.housing_heat_capacity
+    P = values(p)["P_loss"]
+    assert P > 10
+    t = 0.0
+    for h in (7.0, 50.0, 200.0, 3.5, 900.0, 1500.0, 4000.0):
+        v = advance(p, h, w_in=300.0, tau_out=-10.0)
+        t += h
+        assert v["P_loss"] == P                         # held: the losses do not change
+        closed = amb + P * R * (1 - math.exp(-t / tau))
+        assert v["T_oil"] - amb == pytest.approx(closed - amb, rel=1e-10)
+        assert v["Q_ambient"] == pytest.approx((v["T_oil"] - amb) / R, rel=1e-12)
+    assert v["T_oil"] - amb > 0.9 * P * R                # near its steady rise after 3 tau
+    p.close()
+
+
+def test_energy_balance_of_the_warm_up(fmu):
+    """Integrated loss = heat stored in the housing + heat given to the ambient, while the
+    losses change with the operating point and with the temperature (physical profile)."""
+    d = DriveDesign()
+    R, C = thermal.housing_resistance(d), d.housing_heat_capacity
+    def u(k):
+        return 250.0 + 80.0 * math.sin(k / 90.0), -6.0 - 3.0 * math.sin(k / 37.0)
+    p = Inst(fmu, T_oil_start=290.0, ambient_temperature=293.15, w_in=u(0)[0],
+             tau_out=u(0)[1])
+    h, loss, q, T0 = 2.0, 0.0, [], 290.0
+    P_start = values(p)["P_loss"]
+    Q_prev = values(p)["Q_ambient"]
+    for k in range(1500):
+        w, t_out = u(k)
+        v = advance(p, h, w_in=w, tau_out=t_out)
+        # the loss over the step, as the user sees it: the output at the step's start (the FMU
+        # holds the loss of the step's inputs at the start's temperature: the same up to the
+        # inputs' change over one step, which cancels in the sum but for the last step)
+        loss += P_start * h
+        q.append(0.5 * (Q_prev + v["Q_ambient"]) * h)  # trapezoid of the heat flow
+        P_start, Q_prev = v["P_loss"], v["Q_ambient"]
+    stored = C * (v["T_oil"] - T0)
+    assert v["T_oil"] > T0 + 10                         # it warmed up
+    assert stored + sum(q) == pytest.approx(loss, rel=2e-4)
+    p.close()
+
+
+def test_long_run_temperature_closes_the_cores_heat_balance(fmu):
+    """After many time constants at one operating point the FMU's temperature is the steady
+    heat balance the core solves (model_core.thermal.solve_heat_balance, exact core; the FMU
+    interpolates its map, so within a fraction of a kelvin)."""
+    d = DriveDesign()
+    p = Inst(fmu, T_oil_start=300.0, w_in=280.0, tau_out=-8.0)
+    for _ in range(40):
+        v = advance(p, 1000.0, w_in=280.0, tau_out=-8.0)
+    op, T_core = _steady_core(d, 280.0, -8.0)
+    assert v["T_oil"] == pytest.approx(T_core, abs=0.5)
+    assert v["Q_ambient"] == pytest.approx(v["P_loss"], rel=1e-3)
+    p.close()
+
+
+def _steady_core(d, w_in, tau_out):
+    """The steady heat balance of the exact core at a load torque (fixed point in T)."""
+    from model_core.efficiency import operating_point
+    T = d.ambient_temperature
+    for _ in range(200):
+        op = operating_point(thermal.at_temperature(d, T), "S1", w_in, T_out=tau_out)
+        T_new = float(thermal.housing_temperature(float(op.loss_power), d.ambient_temperature,
+                                                  d.housing_heat_transfer, d.housing_area))
+        if abs(T_new - T) < 1e-6:
+            break
+        T = 0.5 * (T + T_new)
+    return op, T
+
+
+def test_input_overrides_the_heat_balance(fmu):
+    d = DriveDesign()
+    tm = ThermalMap(d, "S1", 30.0, 350.0)
+    p = Inst(fmu, use_T_oil_input=True, T_oil_in=345.0, T_oil_start=293.15)
+    for k, T_in in enumerate((345.0, 345.0, 301.5, 333.3)):
+        v = advance(p, 100.0, w_in=260.0, tau_out=-7.0, T_oil_in=T_in)
+        assert v["T_oil"] == T_in                          # not the heat balance's
+        assert v["tau_in"] == tm.solve(260.0, -7.0, T_in)[1][2]
+    p.close()
+    q = Inst(fmu, T_oil_start=293.15)
+    assert advance(q, 100.0, w_in=260.0, tau_out=-7.0, T_oil_in=345.0)["T_oil"] < 300.0
+    q.close()
+
+
+def test_defaults_at_the_operating_temperature_give_the_one_temperature_map(fmu):
+    """How today's results stay: the operating temperature is a node of the map and a node
+    returns its own map's solution unchanged, so while the grease is at the design's operating
+    temperature (the heat balance's default start; the input held at it) the outputs are the
+    map's of before, bit for bit."""
+    d = DriveDesign()
+    mm = ModeMap(d, "S1", 30.0, 350.0)
+    p = Inst(fmu, use_T_oil_input=True)          # T_oil_in starts at the operating temperature
+    for w, t in ((300.0, -10.0), (50.0, -0.5), (-120.0, 3.0)):
+        v = advance(p, 1e-3, w_in=w, tau_out=t)
+        assert v["T_oil"] == d.operating_temperature
+        assert v["tau_in"] == mm.solve(w, t)[1][2]
+        assert v["P_loss"] == pytest.approx(sum(mm.solve(w, t)[2]), rel=1e-12)
+    p.close()
+    q = Inst(fmu, w_in=300.0, tau_out=-10.0)     # the heat balance, at its start
+    assert values(q)["tau_in"] == mm.solve(300.0, -10.0)[1][2]
+    q.close()
+
+
+def test_python_and_native_fmus_agree_for_the_calibrated_preset_while_warm(preset_fmus):
+    """mackic-rig (calibrated) warming up from 15 degC with 60 s steps across the map's
+    temperature nodes, and then driven at a measured-looking warm temperature: every output
+    equal to 1e-9."""
+    native, python = preset_fmus
+    params = dict(T_oil_start=288.15, ambient_temperature=298.15, J_out=2e-3,
+                  housing_heat_capacity=600.0)
+    n, p = Inst(native, **params), Inst(python, **params)
+    seen = set()
+    for k in range(150):
+        w = 220.0 * math.sin(0.05 * k) + 60.0
+        t = -5.0 + 4.0 * math.sin(0.11 * k)
+        a, b = advance(n, 60.0, w_in=w, tau_out=t), advance(p, 60.0, w_in=w, tau_out=t)
+        for key in OUT:
+            assert a[key] == pytest.approx(b[key], rel=RTOL, abs=ATOL), (k, key)
+        seen.add(int(a["T_oil"] // 10))
+    assert len(seen) >= 3                  # it crossed several nodes of the map
+    n.close()
+    p.close()
+    n, p = (Inst(x, use_T_oil_input=True, T_oil_in=341.7) for x in preset_fmus)
+    for k in range(40):
+        w, t = 150.0 + 5 * k, -1.0 - 0.2 * k
+        a, b = advance(n, 1e-3, w_in=w, tau_out=t), advance(p, 1e-3, w_in=w, tau_out=t)
+        for key in OUT:
+            assert a[key] == pytest.approx(b[key], rel=RTOL, abs=ATOL), (k, key)
+    n.close()
+    p.close()
+
+
+@pytest.mark.parametrize("which", ["native", "python"])
+def test_state_round_trip_restores_the_temperature(preset_fmus, which):
+    path = preset_fmus[0] if which == "native" else preset_fmus[1]
+    inst = Inst(path, T_oil_start=290.0)
+    for k in range(5):
+        advance(inst, 120.0, w_in=250.0, tau_out=-8.0)
+    state = inst.fmu.getFMUstate()
+    t_saved = inst.t
+    first = [advance(inst, 120.0, w_in=250.0, tau_out=-8.0 + k) for k in range(4)]
+    assert first[-1]["T_oil"] > values(inst)["T_oil"] - 1e-9 > 290.0
+    inst.fmu.setFMUstate(state)
+    inst.t = t_saved
+    again = [advance(inst, 120.0, w_in=250.0, tau_out=-8.0 + k) for k in range(4)]
+    assert again == first
+    if which == "native":
+        blob = inst.fmu.serializeFMUstate(state)
+        restored = inst.fmu.deSerializeFMUstate(blob)
+        inst.fmu.setFMUstate(restored)
+        inst.t = t_saved
+        assert [advance(inst, 120.0, w_in=250.0, tau_out=-8.0 + k) for k in range(4)] == first
+        inst.fmu.freeFMUstate(restored)
+    inst.fmu.freeFMUstate(state)
+    inst.close()
+
+
+def test_bad_temperatures_are_refused(preset_fmus):
+    from fmpy.fmi1 import FMICallException
+    n = Inst(preset_fmus[0], use_T_oil_input=True)
+    n.set(T_oil_in=1000.0, w_in=100.0, tau_out=-1.0)
+    with pytest.raises(FMICallException):
+        n.fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-3)
+    assert any("T_oil_in" in m for _, m in n.messages)
+    n.close()
+    # an absurd loss (w_in = -1e308) would heat the grease beyond 200 degC: refused, not clamped
+    n = Inst(preset_fmus[0])
+    n.set(w_in=-1e308, tau_out=-3.0)
+    with pytest.raises(FMICallException):
+        n.fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-3)
+    assert any("heat balance" in m for _, m in n.messages)
+    n.close()
+    n = Inst(preset_fmus[0], start=False)
+    n.fmu.setupExperiment(startTime=0.0)
+    n.fmu.enterInitializationMode()
+    with pytest.raises(FMICallException):
+        n.set(housing_heat_capacity=-1.0)
+    assert any("housing_heat_capacity" in m for _, m in n.messages)
+
+
+# -- the diagnosis's fits onto the drive's temperature physics -------------------------------
+def test_viscosity_fits_map_onto_the_lubricant_and_the_housing():
+    """A viscosity drift per 10 K of a temperature column becomes the lubricant's own
+    viscosity-temperature slope (the FMUs, given the temperature, then change the viscosity as
+    the replay does; the replay keeps its field); a drift in time gives the housing the
+    warm-up's time constant."""
+    from model_core.effects import EFFECTS
+    d = DriveDesign()
+    eff = EFFECTS["viscosity_drift"]
+    new, notes = eff.apply(d, {"ln_viscosity_change": -0.45}, None, temperature=True)
+    assert new.extra.viscosity_ln_per_10K == -0.45           # the replay's, unchanged
+    lub = new.lubricant
+
+    def ln_nu(lu, T):
+        return math.log(float(thermal.walther_viscosity(T, lu.kinematic_viscosity,
+                                                        lu.kinematic_viscosity_100)))
+    T0 = d.operating_temperature
+    assert ln_nu(lub, T0) == pytest.approx(ln_nu(d.lubricant, T0), abs=1e-12)
+    for dT in (-5.0, 5.0):   # the replay's linear form against Walther's line near T0
+        assert ln_nu(lub, T0 + dT) - ln_nu(lub, T0) == pytest.approx(-0.045 * dT, rel=0.03)
+    assert any("lubricant" in n for n in notes)
+    new, notes = eff.apply(d, {"ln_viscosity_change": -0.8}, 600.0)
+    assert thermal.housing_time_constant(new) == pytest.approx(600.0, rel=1e-12)
+    assert new.extra.viscosity_ln_change == -0.8 and new.extra.viscosity_tau == 600.0
+    # the paper profile has no temperature physics: replay only, the design's housing kept
+    paper = DriveDesign(profile="paper")
+    new, notes = eff.apply(paper, {"ln_viscosity_change": -0.8}, 600.0)
+    assert new.housing_heat_capacity == paper.housing_heat_capacity
+    assert any("replay only" in n for n in notes)
+
+
+def test_fmi3_reducer_carries_the_temperature_as_the_fmi2_one(tmp_path):
+    """CycloidDriveNative3 (the same C core behind the FMI 3 front): the warm-up and the
+    Boolean use_T_oil_input reach it, and its numbers are the FMI 2 reducer's."""
+    if GCC is None:
+        pytest.skip("no C compiler")
+    from fmpy import simulate_fmu
+    from cyclo_fmu.fmu_build import build_any
+    fmu2, fmu3 = (str(build_any(n, tmp_path)) for n in ("CycloidDriveNative",
+                                                          "CycloidDriveNative3"))
+    t = np.arange(401) * 0.5
+    inp = np.array(list(zip(t, 200 + 60 * np.sin(t / 30), -(6 + 3 * np.cos(t / 20)))),
+                   dtype=[("time", float), ("w_in", float), ("tau_out", float)])
+    out = ["T_oil", "Q_ambient", "tau_in", "P_loss", "eta"]
+    for start in ({"T_oil_start": 290.0, "housing_heat_capacity": 300.0},
+                  {"use_T_oil_input": True, "T_oil_in": 345.0}):
+        kw = dict(stop_time=200.0, output_interval=0.5, input=inp, start_values=start,
+                  output=out)
+        a, b = simulate_fmu(fmu2, **kw), simulate_fmu(fmu3, **kw)
+        for name in out:
+            np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+        if "use_T_oil_input" in start:
+            assert np.all(b["T_oil"] == 345.0)
+        else:
+            assert b["T_oil"][-1] > 300.0          # warmed up by its own losses
