@@ -2,15 +2,17 @@
 
 Targets (issue 8): a 50 x 50 efficiency map (500-2800 r/min x 0.1-0.85 N*m), every point
 mesh-cycle averaged with its contacts solved iteratively, in at most 0.08 s; one operating point
-in at most 0.5 ms; the FMU's map (ModeMap(d, mode, 30, 350): 36 x 28 points x 2 flow directions)
+in about 1.5 ms (issue 19 withdrew issue 8's 0.5 ms: pure numpy is accepted, no compiled second
+implementation of the physics); the FMU's map (ModeMap(d, mode, 30, 350): 36 x 28 points x 2 flow directions)
 in at most 50 ms; modes S1 and S2. The reference measured in the same run is the
 straightforward path (``dedup=False``: every mesh position and contact problem solved on its
 own, all rollers of the loaded half), which gives the same numbers (tests/test_speed_paths.py).
 Timings are the best of several runs (the machine may be shared; the median is printed too).
 The FMU map is also timed as an FMU builds it at initialisation: the first build in a new
-process, inside ``cyclo_fmu.slaves.heap.map_solving_heap`` as the FMU does (glibc recycles the
-large temporaries on its heap), and as reference without it (glibc then maps fresh pages for
-every large temporary array: 30-40 % more).
+process with glibc's allocator as the host has it (an FMU must not change the host's allocator,
+so it no longer raises glibc's thresholds: docs/explanation/fmu-safety.md), and as reference
+with the thresholds the cyclo-fmu command sets for its own process
+(``keep_temporaries_on_heap``: glibc recycles the large temporaries on its heap).
 In-process timings run with glibc's thresholds as the ``cyclo-fmu`` command sets them for its
 own process (``cyclo_fmu.slaves.heap.keep_temporaries_on_heap``: large temporaries recycled on
 the heap); ``--plain`` leaves the allocator as a new Python process has it (the maps then take
@@ -26,7 +28,7 @@ import numpy as np
 from model_core import DriveDesign, efficiency_map, operating_point, rpm_to_rad_s
 from model_core.lossmap import ModeMap, ThermalMap
 
-TARGET_MAP_MS, TARGET_POINT_MS, TARGET_MODEMAP_MS = 80.0, 0.5, 50.0
+TARGET_MAP_MS, TARGET_POINT_MS, TARGET_MODEMAP_MS = 80.0, 1.5, 50.0
 
 
 def best_of(fn, repeat):
@@ -43,22 +45,23 @@ def verdict(ms, target):
 
 
 _FRESH = """
-import contextlib, time
+import time
 from model_core import DriveDesign
 from model_core.lossmap import ModeMap
-from cyclo_fmu.slaves.heap import map_solving_heap
+from cyclo_fmu.slaves.heap import keep_temporaries_on_heap
+if {heap!r}:
+    keep_temporaries_on_heap()
 d = DriveDesign(profile={profile!r})
 t = time.perf_counter()
-with (map_solving_heap() if {heap!r} else contextlib.nullcontext()):
-    ModeMap(d, {mode!r}, 30.0, 350.0)
+ModeMap(d, {mode!r}, 30.0, 350.0)
 print(time.perf_counter() - t)
 """
 
 
-def fresh_process_modemap(profile, mode, repeat, heap=True):
-    """ModeMap built as an FMU does at initialisation: the first build in a new process, inside
-    ``map_solving_heap`` (``heap=False``: without, glibc then maps fresh pages for the large
-    temporaries). Best of ``repeat``."""
+def fresh_process_modemap(profile, mode, repeat, heap=False):
+    """ModeMap built as an FMU does at initialisation: the first build in a new process with
+    the allocator as it is (``heap=True``: with the thresholds the cyclo-fmu command sets for
+    its own process, the reference). Best of ``repeat``."""
     import os
     import subprocess
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(
@@ -104,10 +107,10 @@ def main():
             best, med = best_of(lambda: ModeMap(d, mode, 30.0, 350.0), rep)
             ref, _ = best_of(lambda: ModeMap(d, mode, 30.0, 350.0, dedup=False), 1)
             fresh = fresh_process_modemap(profile, mode, 2 if quick else 3)
-            plain = fresh_process_modemap(profile, mode, 2 if quick else 3, heap=False)
+            plain = fresh_process_modemap(profile, mode, 2 if quick else 3, heap=True)
             print(f"  FMU map (ModeMap 36 x 28 x 2), {mode}: best {best * 1e3:6.1f} ms, median "
                   f"{med * 1e3:6.1f} ms, first build in a new process {fresh * 1e3:5.1f} ms "
-                  f"(without map_solving_heap {plain * 1e3:5.1f} ms) "
+                  f"(with the command's heap thresholds {plain * 1e3:5.1f} ms) "
                   f"(straightforward path {ref * 1e3:5.0f} ms; target <= "
                   f"{TARGET_MODEMAP_MS:.0f} ms: {verdict(best * 1e3, TARGET_MODEMAP_MS)} / "
                   f"{verdict(fresh * 1e3, TARGET_MODEMAP_MS)} new process)")
