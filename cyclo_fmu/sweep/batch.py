@@ -99,6 +99,15 @@ def _folder_names(paths) -> dict:
             for p in paths}
 
 
+#: summary.csv's columns, in order
+SUMMARY_COLUMNS = ["recording", "folder", "effect", "rmse_before_mNm", "rmse_after_mNm",
+                   "zeta_d_before", "zeta_d_after", "error"]
+#: [s] serial cost of diagnosing one recording, lower bound measured (benchmarks/bench_sweep.py:
+#: a "tiny" synthetic recording, 0.3-0.5 s; a bench run of minutes takes seconds). Far above
+#: the pool's start-up, so two recordings already run in the pool.
+SECONDS_PER_RECORDING = 0.3
+
+
 def _task(design, mode, columns, out, item, calibrate=False):
     path, name = item
     from cyclo_fmu.diagnosis import write_diagnosis
@@ -109,24 +118,47 @@ def _task(design, mode, columns, out, item, calibrate=False):
     except (ValueError, OSError) as exc:     # RecordingError, CycloidInputError, unreadable
         row["error"] = " ".join(str(exc).split())
         return row
+    except Exception as exc:     # noqa: BLE001 - one file's failure is its row, not the batch's
+        import shutil
+        shutil.rmtree(Path(out) / name, ignore_errors=True)
+        row["error"] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+        return row
     row.update(effect=result["effect"], rmse_before_mNm=1e3 * result["rmse_before_Nm"],
                rmse_after_mNm=1e3 * result["rmse_after_Nm"],
                zeta_d_before=result["zeta_d_before"], zeta_d_after=result["zeta_d_after"])
     return row
 
 
-def diagnose_batch(folder, out, design, mode, *, columns=None, scheduler=None, workers=None,
-                   serial=False, progress=True, calibrate=False):
-    """Diagnose every recording of ``folder`` into ``out``; returns the summary DataFrame (also
-    written as ``out/summary.csv``)."""
+def read_summary(path):
+    """``summary.csv`` as a DataFrame (text columns as text: an empty error stays "")."""
     import pandas as pd
-    from .cluster import run_tasks
+    text = {"recording": str, "folder": str, "effect": str, "error": str}
+    return pd.read_csv(path, dtype=text, keep_default_na=False,
+                       na_values={c: [""] for c in SUMMARY_COLUMNS if c not in text})
+
+
+def diagnose_batch(folder, out, design, mode, *, columns=None, scheduler=None, workers=None,
+                   serial=False, progress=True, calibrate=False, backend=None):
+    """Diagnose every recording of ``folder`` into ``out``; returns the summary DataFrame
+    (read back from ``out/summary.csv``, which gets each row as its recording is done, in
+    the order of the files: nothing but the rows in flight is held in memory)."""
+    import csv
+    from .cluster import choose_backend, stream_tasks
     paths = find_recordings(folder)
     names = _folder_names(paths)
-    rows = run_tasks(partial(_task, design, mode, columns, str(out), calibrate=calibrate),
-                     [(p, names[p]) for p in paths], scheduler=scheduler, workers=workers,
-                     progress=progress, desc="diagnose", serial=serial)
-    df = pd.DataFrame(rows, columns=["recording", "folder", "effect", "rmse_before_mNm",
-                                     "rmse_after_mNm", "zeta_d_before", "zeta_d_after", "error"])
-    df.to_csv(Path(out) / "summary.csv", index=False)
-    return df
+    if backend is None:
+        backend = choose_backend(len(paths), SECONDS_PER_RECORDING, workers=workers,
+                                 scheduler=scheduler, serial=serial)
+    summary = Path(out) / "summary.csv"
+    with open(summary, "w", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, fieldnames=SUMMARY_COLUMNS)
+        w.writeheader()
+        f.flush()
+        for row in stream_tasks(partial(_task, design, mode, columns, str(out),
+                                        calibrate=calibrate),
+                                ((p, names[p]) for p in paths), backend=backend,
+                                workers=workers, scheduler=scheduler, progress=progress,
+                                desc="diagnose", total=len(paths)):
+            w.writerow(row)
+            f.flush()
+    return read_summary(summary)
