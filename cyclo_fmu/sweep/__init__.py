@@ -78,6 +78,9 @@ def iter_sweep(spec: SweepSpec, *, scheduler=None, workers=None, serial=False, p
     if backend is None:
         backend = choose_backend(remaining, cost, workers=w, scheduler=scheduler,
                                  serial=serial)
+    if backend == "dask" and workers is None and remaining:
+        with client(scheduler) as c:      # the tasks are cut for the cluster's workers
+            w = len(c.scheduler_info().get("workers", {})) or w
     size = chunk or task_size(remaining, cost, w)
     if plan is not None:
         plan.backend, plan.workers, plan.chunk = backend, (1 if backend == "serial" else w), size
