@@ -102,9 +102,9 @@ def _folder_names(paths) -> dict:
 #: summary.csv's columns, in order
 SUMMARY_COLUMNS = ["recording", "folder", "effect", "rmse_before_mNm", "rmse_after_mNm",
                    "zeta_d_before", "zeta_d_after", "error"]
-#: [s] serial cost of diagnosing one recording, lower bound measured (benchmarks/bench_sweep.py:
-#: a "tiny" synthetic recording, 0.3-0.5 s; a bench run of minutes takes seconds). Far above
-#: the pool's start-up, so two recordings already run in the pool.
+#: [s] serial cost of diagnosing one recording assumed for the backend choice: a floor, well
+#: below the 1.8 s of CPU measured per 42-s "tiny" synthetic recording (benchmarks/bench_sweep.py
+#: batch) and far above the pool's start-up (0.05 s), so two recordings already run in the pool.
 SECONDS_PER_RECORDING = 0.3
 
 
