@@ -4,6 +4,7 @@ process pool, peak memory at two counts, and the references the backend choice r
 
     python benchmarks/bench_sweep.py                 # everything (~10 min on 2 idle cores)
     python benchmarks/bench_sweep.py speed           # 45-design example and 1000 designs
+    python benchmarks/bench_sweep.py example         # the 45-design example, 6 pairs
     python benchmarks/bench_sweep.py memory          # 10^3 vs 10^4 designs
     python benchmarks/bench_sweep.py batch           # diagnose-batch, 50 vs 200 recordings
     python benchmarks/bench_sweep.py reference       # cost per design, pool and dask start-up
@@ -124,10 +125,10 @@ def show(label, r):
           f"{r['peak_MB']:6.0f} MB  load {r['load']:.2f}")
 
 
-def pair(label, argv_serial, argv_par, out, workers):
+def pair(label, argv_serial, argv_par, out, workers, repeats=None):
     """serial vs default, alternating REPEATS times."""
     rs, rp = [], []
-    for _ in range(REPEATS):
+    for _ in range(repeats or REPEATS):
         for argv, acc in ((argv_serial, rs), (argv_par, rp)):
             shutil.rmtree(out, ignore_errors=True)
             acc.append(run(argv, label))
@@ -135,11 +136,24 @@ def pair(label, argv_serial, argv_par, out, workers):
     print(f"{label}")
     show("--serial", s)
     show(f"default ({p['out'].split(';')[-1].strip(' )')})", p)
+    if len(rs) > 2:
+        print(f"  median wall: serial {statistics.median(r['wall'] for r in rs):.2f} s, default "
+              f"{statistics.median(r['wall'] for r in rp):.2f} s; per pair serial/default: "
+              + ", ".join(f"{a['wall'] / b['wall']:.2f}" for a, b in zip(rs, rp)))
     print(f"  ratio serial/default: wall {s['wall'] / p['wall']:.2f}x; from the CPU times "
           f"(idle cores: command's own CPU + workers' CPU / {workers}) "
           f"{s['cpu'] / idle_wall(p, workers):.2f}x (serial {s['cpu']:.2f} s against "
           f"{p['cpu_root']:.2f} + {p['cpu'] - p['cpu_root']:.2f} / {workers} s)")
     return s, p
+
+
+def example(d, workers):
+    """The README example alone, 6 alternating pairs."""
+    out = d / "s.parquet"
+    pair("README example (examples/sweep.toml, 45 designs x S1, S2 x 8 x 8), 6 pairs",
+         ["sweep", str(ROOT / "examples/sweep.toml"), "--out", str(out), "--serial", "--quiet"],
+         ["sweep", str(ROOT / "examples/sweep.toml"), "--out", str(out), "--quiet"], out,
+         workers, repeats=6)
 
 
 def speed(d, workers):
@@ -270,7 +284,8 @@ def main(argv):
     with tempfile.TemporaryDirectory() as d:
         d = Path(d)
         for part in parts:
-            {"reference": reference, "speed": speed, "memory": memory, "batch": batch}[part](d, workers)
+            {"reference": reference, "speed": speed, "example": example, "memory": memory,
+             "batch": batch}[part](d, workers)
     print(f"load average at the end {os.getloadavg()}")
 
 
