@@ -821,32 +821,35 @@ EFFECTS_NONE_LEFT = "no effect of the library explains the mismatch (see unexpla
 
 
 def _workers(args):
-    if getattr(args, "workers", None) is not None and args.workers < 1:
-        raise CycloidInputError("workers", args.workers, "must be at least 1")
-    if not args.serial:
+    if getattr(args, "workers", None) is not None and not 1 <= args.workers <= 1024:
+        raise CycloidInputError("workers", args.workers, "must be from 1 to 1024")
+    if args.scheduler and args.serial:
+        raise CycloidInputError("serial", "--serial", "contradicts --scheduler (choose one)")
+    if args.scheduler:
         from .sweep import require_dask
         require_dask()
 
 
 def cmd_sweep(args) -> int:
-    from .sweep import load_spec, run_sweep
+    from .sweep import load_spec, staged_dataset, write_sweep
     spec = load_spec(args.spec)
     if args.profile:
         spec.base.setdefault("model", {})["profile"] = args.profile
         if args.profile == "paper":
             spec.base["model"]["losses"] = "load_dependent"
-    _output_file("out", args.out)
     if Path(args.out).suffix.lower() != ".parquet":
         raise CycloidInputError("out", args.out, "must end in .parquet")
     _workers(args)
-    n = len(spec.designs())
-    df = run_sweep(spec, scheduler=args.scheduler, workers=args.workers, serial=args.serial,
-                   progress=_progress_on(args))
-    with _staged_file("out", args.out) as tmp:
-        df.to_parquet(tmp, index=False)
-    bad = int((df["error"] != "").sum())
-    print(f"sweep: {n} designs x {len(spec.modes)} modes -> {args.out} ({len(df)} rows"
-          f"{f', {bad} with an error (column error)' if bad else ''})")
+    with staged_dataset("out", args.out) as tmp:
+        plan = write_sweep(spec, tmp, scheduler=args.scheduler, workers=args.workers,
+                           serial=args.serial, progress=_progress_on(args))
+    bad = plan.errors
+    where = ("in this process" if plan.backend == "serial" else
+             f"{plan.workers} local workers" if plan.backend == "pool" else args.scheduler)
+    print(f"sweep: {plan.n} designs x {len(spec.modes)} modes -> {args.out} ({plan.rows} rows"
+          f" in {plan.partitions} Parquet partition{'s' if plan.partitions > 1 else ''}"
+          f"{f', {bad} with an error (column error)' if bad else ''}; {where}, "
+          f"{1e3 * plan.seconds_per_design:.0f} ms/design serially)")
     return 0
 
 
@@ -893,11 +896,13 @@ def cmd_diagnose_batch(args) -> int:
 
 
 def _cluster_options(p):
-    p.add_argument("--scheduler", help="address of a running dask scheduler "
-                   "(default: a local cluster)")
-    p.add_argument("--workers", type=int, help="worker processes of the local cluster "
-                   "(default: the CPU count, at most 8)")
-    p.add_argument("--serial", action="store_true", help="run in this process, without dask")
+    p.add_argument("--scheduler", help="address of a running dask.distributed scheduler, "
+                   "e.g. tcp://host:8786 (default: this machine: in this process below the "
+                   "cut-off, else a local process pool)")
+    p.add_argument("--workers", type=int, help="processes of the local pool (default: the "
+                   "CPUs this process may use, at most 8)")
+    p.add_argument("--serial", action="store_true", help="run in this process, whatever the "
+                   "size")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -1050,9 +1055,10 @@ def build_parser() -> argparse.ArgumentParser:
     _add_profile(dg)
     dg.set_defaults(func=cmd_diagnose)
     sw = sub.add_parser("sweep", help="design study: many designs over the bench envelope "
-                        "(dask)")
+                        "(local processes or dask)")
     sw.add_argument("spec", help="sweep spec (TOML; see examples/sweep.toml)")
-    sw.add_argument("--out", required=True, help="results file (.parquet)")
+    sw.add_argument("--out", required=True, help="results (.parquet): a folder of Parquet "
+                    "partitions, read as one table by pandas.read_parquet")
     _cluster_options(sw)
     sw.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_profile(sw)

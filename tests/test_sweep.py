@@ -1,5 +1,7 @@
-"""Design sweeps and batch diagnosis: dask on a 2-worker local cluster gives exactly the serial
-results (issue 9, item 6); specs are checked with errors naming the field."""
+"""Design sweeps and batch diagnosis: the local process pool and dask (a 2-worker local cluster
+standing in for a real one) give exactly the serial results (issue 9, item 6; issue 21,
+item 5); a local run stays serial below the cut-off; results stream to Parquet partitions that
+read as one table; specs are checked with errors naming the field."""
 from __future__ import annotations
 
 import json
@@ -75,6 +77,65 @@ def test_sweep_on_dask_equals_serial(tmp_path, cluster):
     assert len(serial) == 12 and (serial["error"] == "").all()
 
 
+def test_three_backends_stream_identical_partitioned_tables(tmp_path, cluster, monkeypatch):
+    """serial, the local pool and dask write the same rows, in design order, as Parquet
+    partitions that pandas reads as one table; a design that cannot be built keeps its rows
+    with the reason (the pool and dask included)."""
+    import cyclo_fmu.sweep as sw
+    monkeypatch.setattr(sw, "PARTITION_ROWS", 5)     # several partitions from 8 designs
+    spec = _spec(tmp_path, lam="[1.2, 2.0, 4]", mu="[0.08, 0.1, 2]")
+    tables, plans = {}, {}
+    for backend, kw in (("serial", {}), ("pool", {"workers": 2}), ("dask", {"scheduler": cluster})):
+        out = tmp_path / f"{backend}.parquet"
+        out.mkdir()
+        # (dask cuts its tasks for the cluster's workers itself)
+        plans[backend] = sw.write_sweep(spec, out, backend=backend, progress=False,
+                                        chunk=None if backend == "dask" else 2, **kw)
+        assert len(list(out.glob("part-*.parquet"))) == plans[backend].partitions > 1
+        tables[backend] = pd.read_parquet(out)
+    pd.testing.assert_frame_equal(tables["serial"], tables["pool"])
+    pd.testing.assert_frame_equal(tables["serial"], tables["dask"])
+    df = tables["pool"]
+    assert list(df["design_id"]) == sorted(df["design_id"]) and len(df) == 16
+    bad = df[df["geometry.lam"] == 1.2]
+    assert len(bad) == 4 and bad["error"].str.contains("d_v1").all()
+    assert bad["eta_mean"].isna().all() and (df[df["geometry.lam"] > 1.5]["error"] == "").all()
+    assert plans["pool"].errors == (df["error"] != "").sum() >= 4 and plans["pool"].rows == 16
+
+
+def test_backend_choice_at_the_cut_off():
+    """Serial below the cut-off (the pool would not save twice its start-up), the pool above,
+    dask only with a scheduler; one worker is always serial."""
+    from cyclo_fmu.sweep import cluster as cl
+    cut = cl.serial_cutoff_s(2)
+    assert cut == pytest.approx(cl.POOL_SAFETY * cl.pool_start_s() * 2)
+    c = 0.01                                    # s per design
+    n_cut = cut / c
+    assert cl.choose_backend(math.floor(n_cut) - 1, c, workers=2) == "serial"
+    assert cl.choose_backend(math.ceil(n_cut) + 1, c, workers=2) == "pool"
+    assert cl.choose_backend(10_000, c, workers=1) == "serial"
+    assert cl.choose_backend(10_000, c, workers=2, serial=True) == "serial"
+    assert cl.choose_backend(3, c, workers=2, scheduler="tcp://h:8786") == "dask"
+    # with 3 workers the pool gains 2/3 of the work instead of 1/2: a lower cut-off
+    assert cl.serial_cutoff_s(3) < cut
+
+
+def test_task_size_follows_n_and_workers():
+    from cyclo_fmu.sweep import cluster as cl
+    assert cl.task_size(1000, 0.01, 2) == 125                   # 4 tasks per worker
+    assert cl.task_size(1000, 0.01, 8) == 32
+    assert cl.task_size(10_000, 0.01, 2) == int(cl.TASK_MAX_S / 0.01)   # capped at 2 s
+    assert cl.task_size(3, 0.01, 2) == 1
+
+
+def test_small_sweep_stays_in_this_process(tmp_path):
+    from cyclo_fmu.sweep import SweepPlan
+    spec = _spec(tmp_path)
+    plan = SweepPlan("", 0, 0, 0.0, 0)
+    run_sweep(spec, progress=False, plan=plan, workers=2)
+    assert plan.backend == "serial" and plan.n == 4 and plan.seconds_per_design > 0
+
+
 def test_sweep_row_is_the_efficiency_map_summary(tmp_path):
     """A row's summary columns are the statistics of model_core's map of that design."""
     spec = _spec(tmp_path)
@@ -133,15 +194,17 @@ def test_diagnose_batch_on_dask_equals_serial(tmp_path, cluster):
         write_synth(rec_dir / f"r{seed}.csv", synthesize(effect, seed, "S1", "tiny"))
     (rec_dir / "broken.csv").write_text("time_s,speed_in_rpm\n0,1\n")
     outs = {}
-    for kind in ("serial", "dask"):
+    for kind in ("serial", "pool", "dask"):
         out = tmp_path / kind
         out.mkdir()
         df = diagnose_batch(rec_dir, out, DriveDesign(), "S1", serial=kind == "serial",
-                            scheduler=None if kind == "serial" else cluster, progress=False)
+                            scheduler=cluster if kind == "dask" else None, progress=False,
+                            workers=2)
         outs[kind] = (df, {p.name: json.loads((out / p.stem / "diagnosis.json").read_text())
                            for p in sorted(rec_dir.glob("r*.csv"))})
-    pd.testing.assert_frame_equal(outs["serial"][0], outs["dask"][0])
-    assert outs["serial"][1] == outs["dask"][1]
+    for kind in ("pool", "dask"):
+        pd.testing.assert_frame_equal(outs["serial"][0], outs[kind][0])
+        assert outs["serial"][1] == outs[kind][1]
     df = outs["serial"][0].set_index("recording")
     assert df.loc["broken.csv", "error"] and not (tmp_path / "serial" / "broken").exists()
     assert df.loc["r1.csv", "error"] == "" and math.isfinite(df.loc["r1.csv", "rmse_after_mNm"])
@@ -156,6 +219,23 @@ def test_cli_sweep_writes_parquet(tmp_path, capsys):
     assert main(["sweep", str(p), "--out", str(out), "--serial"]) == 0
     df = pd.read_parquet(out)
     assert len(df) == 8 and sorted(tmp_path.iterdir()) == [out, p]
+    # a second run replaces the earlier results, not adds to them
+    assert main(["sweep", str(p), "--out", str(out)]) == 0
+    pd.testing.assert_frame_equal(pd.read_parquet(out), df)
+    assert sorted(tmp_path.iterdir()) == [out, p]
+
+
+def test_cli_sweep_never_replaces_another_folder(tmp_path, capsys):
+    from cyclo_fmu.cli import main
+    p = tmp_path / "spec.toml"
+    p.write_text(SPEC.format(method="grid", lam="[1.6, 2.0, 2]", mu="[0.08, 0.1, 2]"))
+    out = tmp_path / "mine.parquet"
+    out.mkdir()
+    (out / "notes.txt").write_text("keep me")
+    assert main(["sweep", str(p), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(out) in err[0]
+    assert (out / "notes.txt").read_text() == "keep me" and sorted(tmp_path.iterdir()) == [out, p]
 
 
 @pytest.mark.parametrize("extra,field", [(["--workers", "0"], "workers"),
@@ -172,11 +252,15 @@ def test_cli_sweep_bad_options(tmp_path, capsys, extra, field):
 
 
 def test_missing_dask_is_one_line(tmp_path, capsys, monkeypatch):
+    """dask is needed for --scheduler only: without it that is one line; a local run works."""
     from cyclo_fmu.cli import main
     monkeypatch.setitem(sys.modules, "distributed", None)     # import fails as if absent
     p = tmp_path / "spec.toml"
     p.write_text(SPEC.format(method="grid", lam="[1.6, 2.0, 2]", mu="[0.08, 0.1, 2]"))
-    assert main(["sweep", str(p), "--out", str(tmp_path / "r.parquet")]) == 2
+    assert main(["sweep", str(p), "--out", str(tmp_path / "r.parquet"),
+                 "--scheduler", "tcp://127.0.0.1:1"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "cyclo-fmu[sweep]" in err[0]
     assert sorted(tmp_path.iterdir()) == [p]
+    assert main(["sweep", str(p), "--out", str(tmp_path / "r.parquet"), "--workers", "2"]) == 0
+    assert len(pd.read_parquet(tmp_path / "r.parquet")) == 8

@@ -100,6 +100,15 @@ def _folder_names(paths) -> dict:
             for p in paths}
 
 
+#: summary.csv's columns, in order
+SUMMARY_COLUMNS = ["recording", "folder", "mode", "effect", "rmse_before_mNm", "rmse_after_mNm",
+                   "zeta_d_before", "zeta_d_after", "error"]
+#: [s] serial cost of diagnosing one recording assumed for the backend choice: a floor, well
+#: below the 1.8 s of CPU measured per 42-s "tiny" synthetic recording (benchmarks/bench_sweep.py
+#: batch) and far above the pool's start-up (0.05 s), so two recordings already run in the pool.
+SECONDS_PER_RECORDING = 0.3
+
+
 def _task(design, mode, columns, out, item, units=None, calibrate=False):
     path, name = item
     from cyclo_fmu.diagnosis import write_diagnosis
@@ -112,6 +121,8 @@ def _task(design, mode, columns, out, item, units=None, calibrate=False):
         return row
     except Exception as exc:     # noqa: BLE001 - a fault on one file must not end the batch:
         # it is that file's row, named as an internal error (a bug to report, not bad input)
+        import shutil
+        shutil.rmtree(Path(out) / name, ignore_errors=True)
         row["error"] = " ".join(f"internal error ({type(exc).__name__}: {exc})".split())[:500]
         return row
     row.update(mode=result["mode"], effect=result["effect"],
@@ -121,20 +132,36 @@ def _task(design, mode, columns, out, item, units=None, calibrate=False):
     return row
 
 
-def diagnose_batch(folder, out, design, mode, *, columns=None, units=None, scheduler=None,
-                   workers=None, serial=False, progress=True, calibrate=False):
-    """Diagnose every recording of ``folder`` into ``out``; returns the summary DataFrame (also
-    written as ``out/summary.csv``; a recording that could not be diagnosed is a row with its
-    reason in ``error``). ``mode`` may be 'auto'; ``units`` as ``diagnose --units``."""
+def read_summary(path):
+    """``summary.csv`` as a DataFrame (text columns as text: an empty error stays "")."""
     import pandas as pd
-    from .cluster import run_tasks
+    text = {"recording": str, "folder": str, "effect": str, "error": str}
+    return pd.read_csv(path, dtype=text, keep_default_na=False,
+                       na_values={c: [""] for c in SUMMARY_COLUMNS if c not in text})
+
+
+def diagnose_batch(folder, out, design, mode, *, columns=None, scheduler=None, workers=None,
+                   serial=False, progress=True, calibrate=False, backend=None):
+    """Diagnose every recording of ``folder`` into ``out``; returns the summary DataFrame
+    (read back from ``out/summary.csv``, which gets each row as its recording is done, in
+    the order of the files: nothing but the rows in flight is held in memory)."""
+    import csv
+    from .cluster import choose_backend, stream_tasks
     paths = find_recordings(folder)
     names = _folder_names(paths)
-    rows = run_tasks(partial(_task, design, mode, columns, str(out), units=units,
-                             calibrate=calibrate),
-                     [(p, names[p]) for p in paths], scheduler=scheduler, workers=workers,
-                     progress=progress, desc="diagnose", serial=serial)
-    df = pd.DataFrame(rows, columns=["recording", "folder", "mode", "effect", "rmse_before_mNm",
-                                     "rmse_after_mNm", "zeta_d_before", "zeta_d_after", "error"])
-    df.to_csv(Path(out) / "summary.csv", index=False)
-    return df
+    if backend is None:
+        backend = choose_backend(len(paths), SECONDS_PER_RECORDING, workers=workers,
+                                 scheduler=scheduler, serial=serial)
+    summary = Path(out) / "summary.csv"
+    with open(summary, "w", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, fieldnames=SUMMARY_COLUMNS)
+        w.writeheader()
+        f.flush()
+        for row in stream_tasks(partial(_task, design, mode, columns, str(out), units=units,
+                                        calibrate=calibrate),
+                                ((p, names[p]) for p in paths), backend=backend,
+                                workers=workers, scheduler=scheduler, progress=progress,
+                                desc="diagnose", total=len(paths)):
+            w.writerow(row)
+            f.flush()
+    return read_summary(summary)

@@ -63,8 +63,8 @@ def evaluate_design(spec, design_id: int, values: dict) -> list:
     base = {"design_id": design_id, **values}
     try:
         design = spec.build(values)
-    except CycloidInputError as exc:
-        return [{**base, "mode": m, "error": str(exc)} for m in spec.modes]
+    except Exception as exc:     # noqa: BLE001 - the design keeps its row, with the reason
+        return [{**base, "mode": m, "error": _reason(exc)} for m in spec.modes]
     stiff = stiffness_columns(design)
     env = spec.envelope
     from model_core.stiffness import ring_torque_rating
@@ -89,8 +89,8 @@ def evaluate_design(spec, design_id: int, values: dict) -> list:
         try:
             with np.errstate(all="ignore"):
                 m = efficiency_map(design, mode, env.speeds(), env.torques())
-        except ValueError as exc:          # CycloidInputError, or the model out of its range
-            row["error"] = " ".join(str(exc).split())
+        except Exception as exc:     # noqa: BLE001 - kept as a row with its reason
+            row["error"] = _reason(exc)
             rows.append(row)
             continue
         row["error"] = ""
@@ -110,6 +110,42 @@ def evaluate_design(spec, design_id: int, values: dict) -> list:
         row["error"] = row.pop("error")     # last column
         rows.append(row)
     return rows
+
+
+def _reason(exc) -> str:
+    """One line: a CycloidInputError's own message (it names the field), else the exception's
+    type and message (a failure of the model on this design, not of the sweep)."""
+    msg = " ".join(str(exc).split())
+    return msg if isinstance(exc, CycloidInputError) else f"{type(exc).__name__}: {msg}"
+
+
+def result_schema(spec):
+    """The pyarrow schema of the sweep's rows, fixed before the first design is evaluated, so
+    that every Parquet partition has the same columns and types (a partition of failed
+    designs too): the columns of :func:`evaluate_design` in its order."""
+    import pyarrow as pa
+    f64 = pa.float64()
+    if spec.method == "table":
+        names = list(dict.fromkeys(k for row in spec.table for k in row))
+        fields = [(k, pa.array([row.get(k) for row in spec.table]).type) for k in names]
+        fields = [(k, pa.string() if t == pa.null() else t) for k, t in fields]
+    else:
+        fields = [(k, f64) for k in spec.fields]
+    cols = [("design_id", pa.int64()), *fields, ("mode", pa.string()),
+            ("stiffness_Nm_rad", f64), ("torsional_rigidity_Nm_arcmin", f64),
+            ("lost_motion_arcmin", f64)]
+    from model_core.design import design_from_dict
+    calibrated = (any(k.startswith("calibration.") for k, _ in fields)
+                  or not design_from_dict(spec.base).calibration.is_default)
+    if calibrated:
+        cols += [("calibrated", pa.bool_()), ("calibration_mesh_loss_k", f64),
+                 ("calibration_idle_loss_scale", f64), ("calibration_source", pa.string())]
+    cols += [("n_points", pa.int64()), ("n_locked", pa.int64()), ("eta_min", f64),
+             ("eta_mean", f64), ("eta_max", f64)]
+    for k in LOSS_NAMES:
+        cols += [(f"loss_{k}_W", f64), (f"loss_share_{k}", f64)]
+    cols.append(("error", pa.string()))
+    return pa.schema(cols)
 
 
 def evaluate_chunk(spec, chunk) -> list:

@@ -65,22 +65,29 @@ class SweepSpec:
     def designs(self) -> list:
         """The designs to evaluate, as a list of {qualified field name: value} (design-file
         units), in a fixed order (the design id is the index)."""
+        return list(self.iter_designs())
+
+    def iter_designs(self):
+        """:meth:`designs` one at a time (a grid is not expanded in memory; a Latin hypercube
+        keeps one float per design and field)."""
         if self.method == "table":
-            return list(self.table)
+            yield from self.table
+            return
         names = list(self.fields)
         if self.method == "grid":
             axes = [self.fields[k] for k in names]
-            return [dict(zip(names, combo)) for combo in itertools.product(*axes)]
+            for combo in itertools.product(*axes):
+                yield dict(zip(names, combo))
+            return
         rng = np.random.default_rng(self.seed)
-        n, out = self.n, []
+        n = self.n
         cols = {}
         for k in names:     # one stratified, shuffled column per field (McKay et al. 1979)
             lo, hi = self.fields[k]
             u = (rng.permutation(n) + rng.random(n)) / n
             cols[k] = lo + u * (hi - lo)
         for i in range(n):
-            out.append({k: float(cols[k][i]) for k in names})
-        return out
+            yield {k: float(cols[k][i]) for k in names}
 
     def build(self, values: dict) -> DriveDesign:
         """The DriveDesign of one row (raises CycloidInputError naming the field)."""
