@@ -134,7 +134,7 @@ def test_cli_bounds_error_is_one_line_naming_the_field(tmp_path):
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 2
     lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and "calibration.idle_loss_scale" in lines[0]
+    assert len(lines) == 1 and "[calibration].idle_loss_scale = 12" in lines[0]
 
 
 def test_map_carries_the_calibration():

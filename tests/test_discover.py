@@ -275,8 +275,10 @@ def test_native_fmu_equals_the_python_fmu_with_discovered_terms(py_fmu, tmp_path
     assert var["discovered2_load_exponent"].variability == "constant"
     assert float(var["discovered2_load_exponent"].start) == 1.5
     params = {k.split(".", 1)[1]: v for k, v in drive_parameters(d).items()}
-    a, b = Inst(nat), Inst(py_fmu, **params)
-    plain = Inst(py_fmu, drag_torque=0.003)
+    # the grease held at the design's temperature (use_T_oil_input): with the heat balance the
+    # discovered terms' heat would warm the grease of ``b`` and not that of ``plain``
+    a, b = Inst(nat, use_T_oil_input=True), Inst(py_fmu, use_T_oil_input=True, **params)
+    plain = Inst(py_fmu, drag_torque=0.003, use_T_oil_input=True)
     for k, (w, tq) in enumerate(quadrant_points("S1", 48, np.random.default_rng(4))):
         x, y, z = a.step(w, tq), b.step(w, tq), plain.step(w, tq)
         assert_same(x, y, k)

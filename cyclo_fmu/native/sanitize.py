@@ -93,7 +93,9 @@ def run_native(cc: str, work: Path, iterations: int) -> subprocess.CompletedProc
     src = work / "native"
     src.mkdir()
     lt, lw, modes = nb.export_map(design)
-    data = nb.generate_data_c(design, lt, lw, modes, nb.design_constants(design),
+    # one node over the grease temperature (the design's own) is enough to drive the code
+    nodes = [(design.operating_temperature, modes)]
+    data = nb.generate_data_c(design, lt, lw, nodes, nb.design_constants(design),
                               "{sanitize}", nb.MAP_TORQUE_MAX, nb.MAP_SPEED_MAX)
     (src / nb.GENERATED).write_text(data)
     for f in nb.C_SOURCES + nb.C_HEADERS:

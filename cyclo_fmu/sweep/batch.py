@@ -135,13 +135,13 @@ def _task(design, mode, columns, out, item, units=None, calibrate=False):
 def read_summary(path):
     """``summary.csv`` as a DataFrame (text columns as text: an empty error stays "")."""
     import pandas as pd
-    text = {"recording": str, "folder": str, "effect": str, "error": str}
+    text = {"recording": str, "folder": str, "mode": str, "effect": str, "error": str}
     return pd.read_csv(path, dtype=text, keep_default_na=False,
                        na_values={c: [""] for c in SUMMARY_COLUMNS if c not in text})
 
 
-def diagnose_batch(folder, out, design, mode, *, columns=None, scheduler=None, workers=None,
-                   serial=False, progress=True, calibrate=False, backend=None):
+def diagnose_batch(folder, out, design, mode, *, columns=None, units=None, scheduler=None,
+                   workers=None, serial=False, progress=True, calibrate=False, backend=None):
     """Diagnose every recording of ``folder`` into ``out``; returns the summary DataFrame
     (read back from ``out/summary.csv``, which gets each row as its recording is done, in
     the order of the files: nothing but the rows in flight is held in memory)."""

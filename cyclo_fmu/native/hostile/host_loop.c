@@ -12,7 +12,8 @@ long bench_loop(int n_comp, void **comps, void **set_fns, void **step_fns, void 
                 unsigned int **out_vrs, const size_t *n_out, const int *out_off,
                 const int *link_start, const int *dst, const int *src, int gauss,
                 double *buf, int buf_len, double *rows, long rows_cap, int row_len, long k0,
-                long n_steps, double step, int *fail);
+                long n_steps, double step, int *fail, int n_ext, const int *ext_dst,
+                const double *ext);
 
 static double state[2];
 
@@ -44,7 +45,8 @@ int main(void)
     double buf[4] = {0}, rows[4 * 10];
     int fail[3], problems = 0, i;
     long r = bench_loop(2, comps, sets, steps, gets, vrs, n_in, in_off, vrs, n_out, out_off,
-                        link_start, dst, src, 1, buf, 4, rows, 10, 4, 0, 10, 1e-3, fail);
+                        link_start, dst, src, 1, buf, 4, rows, 10, 4, 0, 10, 1e-3, fail,
+                        0, NULL, NULL);
     if (r != 0 || rows[4 * 9] < 9) { problems++; fprintf(stderr, "valid run: %ld\n", r); }
 #define BAD(stmt, label) do { \
         size_t n_in2[2] = {1, 1}, n_out2[2] = {1, 1}; \
@@ -53,7 +55,7 @@ int main(void)
         void **cp = comps; \
         stmt; \
         r = bench_loop(2, cp, sets, steps, gets, vrs, n_in2, in2, vrs, n_out2, out2, ls2, d2, s2, \
-                       1, buf, blen, rows, cap, rlen, 0, steps_n, h, fail); \
+                       1, buf, blen, rows, cap, rlen, 0, steps_n, h, fail, 0, NULL, NULL); \
         if (r != -1) { problems++; fprintf(stderr, "not refused: %s (%ld)\n", label, r); } \
     } while (0)
     BAD(in2[1] = 4, "input offset past the buffer");
@@ -71,6 +73,18 @@ int main(void)
     BAD(h = NAN, "NaN step");
     BAD(h = -1e-3, "negative step");
     BAD(cp = NULL, "NULL components");
+    {   /* the external signals of a replay: a bad count or destination is refused too */
+        int ext_dst[1] = {4};
+        double ext[10] = {0};
+        r = bench_loop(2, comps, sets, steps, gets, vrs, n_in, in_off, vrs, n_out, out_off,
+                       link_start, dst, src, 1, buf, 4, rows, 10, 4, 0, 10, 1e-3, fail,
+                       1, ext_dst, ext);
+        if (r != -1) { problems++; fprintf(stderr, "not refused: external past the buffer\n"); }
+        r = bench_loop(2, comps, sets, steps, gets, vrs, n_in, in_off, vrs, n_out, out_off,
+                       link_start, dst, src, 1, buf, 4, rows, 10, 4, 0, 10, 1e-3, fail,
+                       -1, NULL, NULL);
+        if (r != -1) { problems++; fprintf(stderr, "not refused: negative external count\n"); }
+    }
     for (i = 0; i < 3; i++) (void)fail[i];
     fprintf(stderr, "host_loop: %d problems\n", problems);
     return problems ? 1 : 0;
