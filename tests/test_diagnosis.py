@@ -7,6 +7,7 @@ library give ``unexplained.present`` and no wrongly named effect; fitted paramet
 their physical bounds; a recording with nothing to diagnose says so. The full matrix is marked
 slow; the default run keeps a representative case of each kind.
 """
+import math
 from types import SimpleNamespace
 
 import numpy as np
@@ -571,7 +572,14 @@ def test_friction_error_next_to_a_drift_is_kept_in_the_fit():
     assert d.rmse_after_Nm < 0.7 * d.rmse_before_Nm
     assert named(d) == {"viscosity_drift"}
     drift = next(e for e in d.effects if e["id"] == "viscosity_drift")
-    assert -2.0 < drift["parameters"]["ln_viscosity_change"]["value"] < -0.6
+    # on a 2-minute recording a drift of 300 s and one of 600 s differ only by their size
+    # (both nearly linear over it: look-alikes on the time-constant grid); what the recording
+    # determines is the change it saw, ln nu at its end: c (1 - exp(-t_end/tau)), the truth's
+    # -1.36 (1 - exp(-120/300)) = -0.45, of the right size within a third
+    p = drift["parameters"]
+    t_end = float(r["time_s"][-1] - r["time_s"][0])
+    seen = p["ln_viscosity_change"]["value"] * (1 - math.exp(-t_end / p["tau"]["value"]))
+    assert seen == pytest.approx(-1.36 * (1 - math.exp(-t_end / 300.0)), rel=1 / 3)
     assert d.calibration["mu_boundary_rel_error"]["value"] == pytest.approx(0.146, abs=0.05)
     assert not d.unexplained["present"]
 
