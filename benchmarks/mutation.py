@@ -74,8 +74,11 @@ CURATED = [
      "MAX_SPIKE_SHARE = 0.20"),
     ("Walther 0.7 -> 0.6", "model_core/thermal.py", "np.log10(np.log10(nu * 1e6 + 0.7))",
      "np.log10(np.log10(nu * 1e6 + 0.6))"),
-    ("Hertz radius doubled (rating x2)", "model_core/contact.py",
-     "(np.pi * design.b1 * design.d_v1 / 2))", "(np.pi * design.b1 * design.d_v1))"),
+    # the ring contacts' Hertz radius doubled: that element's rating x2 (the rating moved from
+    # contact.py to stiffness.py's elements; the drive's rating is now their minimum)
+    ("Hertz radius doubled (ring-contact rating x2)", "model_core/stiffness.py",
+     "line_contact_pressure(F_r, design.b1, design.d_v1 / 2)",
+     "line_contact_pressure(F_r, design.b1, design.d_v1)"),
     ("degF inverted", "cyclo_fmu/io/units.py", '"degf": 5.0 / 9.0}', '"degf": 9.0 / 5.0}'),
     ("N*mm as 1e-6", "cyclo_fmu/io/units.py", '"n*mm": 1e-3', '"n*mm": 1e-6'),
     ("efficiency max 1.05 -> 1.5", "cyclo_fmu/io/checks.py", "EFFICIENCY_MAX = 1.05",
@@ -173,6 +176,9 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=21)
     ap.add_argument("--no-curated", action="store_true")
     ap.add_argument("--timeout", type=float, default=300.0)
+    ap.add_argument("--select", action="append", default=[],
+                    help="run only the mutants whose 'file: description' contains this text "
+                         "(repeatable; the sample is drawn as without it)")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "mutation_results.md"))
     args = ap.parse_args(argv)
 
@@ -199,6 +205,8 @@ def main(argv=None):
         desc, src = mutate((ROOT / path).read_text(), i)
         mutants.append(("random", path, desc, src))
 
+    if args.select:
+        mutants = [m for m in mutants if any(t in f"{m[1]}: {m[2]}" for t in args.select)]
     rows = []
     try:
         for k, (kind, path, desc, src) in enumerate(mutants, 1):
