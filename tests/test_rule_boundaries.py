@@ -459,3 +459,20 @@ def test_peak_level_flanks_and_dc_rule():
     assert _level(P[:, None], slice(None), 21)[1][50] == 100.0
     P[40] = 1.0
     assert _level(P[:, None], slice(None), 21)[1][50] == 1.0
+
+
+@pytest.mark.parametrize("T_in", [0.5, 1e-4])
+def test_power_balance_efficiency_is_scale_free(T_in):
+    """The efficiency the power balance reports is the ratio of the energies that leave and
+    enter, a ratio free of the power's scale: with torque_out = 15 * 0.8 * torque_in at a
+    15:1 speed ratio it is 0.8 at 0.5 N*m (~50 W) and at 1e-4 N*m (~10 mW) alike; driven
+    backwards (both torques negative, |P_in| = 0.8 |P_out|) it is 0.8 too."""
+    f = checks.check_units(rec(T_in=T_in))
+    msg = [x for x in f if x["id"] == "power_balance"][-1]["message"]
+    assert "forward: 1000 samples, efficiency 0.8;" in msg + ";", msg
+    d = s1(T_in=T_in)
+    d["torque_in_Nm"] = -d["torque_in_Nm"]
+    d["torque_out_Nm"] = -d["torque_in_Nm"] * (-15.0 / 0.8)   # P_out = P_in / 0.8, both < 0
+    f = checks.check_units(recording_from_arrays(**d, check=False))
+    msg = [x for x in f if x["id"] == "power_balance"][-1]["message"]
+    assert "back-driven: 1000 samples, efficiency 0.8;" in msg + ";", msg
