@@ -8,6 +8,8 @@ tree and takes hours here). Two sets of one-change mutants:
   speed-ratio tolerance 3 % -> 12 % / 30 %, the spike threshold 8 -> 5 / 3 / 40 robust sigma,
   the spike share 2 % -> 20 %, Walther's 0.7, the Hertz radius doubled, degF inverted, ...),
   each an exact text replacement;
+* **regression**: the real survivors of earlier runs (the random sample moves with the code;
+  these stay measured), exact text replacements too;
 * **random**: a deterministic sample (``--seed``) of AST mutants over ``model_core/``,
   ``cyclo_fmu/io/``, ``cyclo_fmu/recordings.py`` and the diagnosis's rules
   (``cyclo_fmu/diagnosis/residual.py``, ``selection.py``): a number doubled (an integer
@@ -95,6 +97,22 @@ CURATED = [
      "MAX_SPEED_RPM = 1.0e6"),
 ]
 
+# (name, file, old text, new text): the real survivors of earlier runs (the random sample moves
+# with the code; these stay measured), each killed since by a test with a known answer
+REGRESSION = [
+    ("Legendre basis [0]*k -> [1]*k (was residual.py line 59)", "cyclo_fmu/diagnosis/residual.py",
+     "legendre.legval(x, [0] * k + [1])", "legendre.legval(x, [1] * k + [1])"),
+    ("burst run count 1 + -> 2 + (was residual.py line 339)", "cyclo_fmu/diagnosis/residual.py",
+     "runs = 1 + int(", "runs = 2 + int("),
+    ("peak level: median window width -> width + 2 bins", "cyclo_fmu/diagnosis/residual.py",
+     'median_filter(P, size=width, mode="nearest")',
+     'median_filter(P, size=width + 2, mode="nearest")'),
+    ("peak level: flank median 3 -> 4 bins (was: window 3 -> 4, line 227)",
+     "cyclo_fmu/diagnosis/residual.py", "sliding_window_view(P, 3)", "sliding_window_view(P, 4)"),
+    ("power-balance sum offset 1 W (io/checks.py line 196)", "cyclo_fmu/io/checks.py",
+     '"forward": [0, 0.0, 0.0]', '"forward": [0, 1.0, 0.0]'),
+]
+
 RANDOM_FILES = ["model_core/thermal.py", "model_core/contact.py", "model_core/kinematics.py",
                 "model_core/friction.py", "model_core/drag.py", "model_core/stiffness.py",
                 "model_core/losses.py", "model_core/efficiency.py", "cyclo_fmu/io/checks.py",
@@ -175,6 +193,7 @@ def main(argv=None):
     ap.add_argument("--random", type=int, default=24, help="random AST mutants (default 24)")
     ap.add_argument("--seed", type=int, default=21)
     ap.add_argument("--no-curated", action="store_true")
+    ap.add_argument("--no-regression", action="store_true")
     ap.add_argument("--timeout", type=float, default=300.0)
     ap.add_argument("--select", action="append", default=[],
                     help="run only the mutants whose 'file: description' contains this text "
@@ -195,6 +214,13 @@ def main(argv=None):
                 print(f"curated mutant {name!r}: text not found once in {path}; skipped")
                 continue
             mutants.append(("curated", path, name, src.replace(old, new)))
+    if not args.no_regression:
+        for name, path, old, new in REGRESSION:
+            src = (ROOT / path).read_text()
+            if src.count(old) != 1:
+                print(f"regression mutant {name!r}: text not found once in {path}; skipped")
+                continue
+            mutants.append(("regression", path, name, src.replace(old, new)))
     rng = random.Random(args.seed)
     sizes = {p: len(candidates(ast.parse((ROOT / p).read_text()))) for p in RANDOM_FILES}
     picked = set()
@@ -224,7 +250,7 @@ def main(argv=None):
 
     lines = ["| set | file | mutant | result | s |", "|---|---|---|---|---|"]
     lines += [f"| {a} | `{b}` | {c} | {d} | {e:.0f} |" for a, b, c, d, e in rows]
-    for kind in ("curated", "random"):
+    for kind in ("curated", "regression", "random"):
         sub = [r for r in rows if r[0] == kind]
         if sub:
             killed = sum(r[3].startswith("killed") for r in sub)
