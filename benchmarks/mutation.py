@@ -48,6 +48,8 @@ DIAG_TESTS = ["tests/test_rule_boundaries.py", "tests/test_diagnosis.py"]
 
 
 def tests_for(path: str) -> list:
+    if path == "model_core/thermal.py":       # its own file last (it also runs FMUs: ~30 s)
+        return MODEL_TESTS + ["tests/test_thermal.py"]
     if path.startswith("model_core/"):
         return MODEL_TESTS
     if path.startswith("cyclo_fmu/diagnosis/"):
