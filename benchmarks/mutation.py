@@ -2,7 +2,7 @@
 
 Outside the default suite: ``python benchmarks/mutation.py [--random N] [--seed S]``.
 A small self-written mutator (no mutmut: its runner assumes one test command for the whole
-tree and takes hours here). Two sets of one-change mutants:
+tree and takes hours here). Three sets of one-change mutants:
 
 * **curated**: the one-line changes of the issue 21 audit (bounds no longer enforced, the
   speed-ratio tolerance 3 % -> 12 % / 30 %, the spike threshold 8 -> 5 / 3 / 40 robust sigma,
