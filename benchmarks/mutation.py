@@ -2,12 +2,14 @@
 
 Outside the default suite: ``python benchmarks/mutation.py [--random N] [--seed S]``.
 A small self-written mutator (no mutmut: its runner assumes one test command for the whole
-tree and takes hours here). Two sets of one-change mutants:
+tree and takes hours here). Three sets of one-change mutants:
 
 * **curated**: the one-line changes of the issue 21 audit (bounds no longer enforced, the
   speed-ratio tolerance 3 % -> 12 % / 30 %, the spike threshold 8 -> 5 / 3 / 40 robust sigma,
   the spike share 2 % -> 20 %, Walther's 0.7, the Hertz radius doubled, degF inverted, ...),
   each an exact text replacement;
+* **regression**: the real survivors of earlier runs (the random sample moves with the code;
+  these stay measured), exact text replacements too;
 * **random**: a deterministic sample (``--seed``) of AST mutants over ``model_core/``,
   ``cyclo_fmu/io/``, ``cyclo_fmu/recordings.py`` and the diagnosis's rules
   (``cyclo_fmu/diagnosis/residual.py``, ``selection.py``): a number doubled (an integer
@@ -46,6 +48,8 @@ DIAG_TESTS = ["tests/test_rule_boundaries.py", "tests/test_diagnosis.py"]
 
 
 def tests_for(path: str) -> list:
+    if path == "model_core/thermal.py":       # its own file last (it also runs FMUs: ~30 s)
+        return MODEL_TESTS + ["tests/test_thermal.py"]
     if path.startswith("model_core/"):
         return MODEL_TESTS
     if path.startswith("cyclo_fmu/diagnosis/"):
@@ -74,8 +78,11 @@ CURATED = [
      "MAX_SPIKE_SHARE = 0.20"),
     ("Walther 0.7 -> 0.6", "model_core/thermal.py", "np.log10(np.log10(nu * 1e6 + 0.7))",
      "np.log10(np.log10(nu * 1e6 + 0.6))"),
-    ("Hertz radius doubled (rating x2)", "model_core/contact.py",
-     "(np.pi * design.b1 * design.d_v1 / 2))", "(np.pi * design.b1 * design.d_v1))"),
+    # the ring contacts' Hertz radius doubled: that element's rating x2 (the rating moved from
+    # contact.py to stiffness.py's elements; the drive's rating is now their minimum)
+    ("Hertz radius doubled (ring-contact rating x2)", "model_core/stiffness.py",
+     "line_contact_pressure(F_r, design.b1, design.d_v1 / 2)",
+     "line_contact_pressure(F_r, design.b1, design.d_v1)"),
     ("degF inverted", "cyclo_fmu/io/units.py", '"degf": 5.0 / 9.0}', '"degf": 9.0 / 5.0}'),
     ("N*mm as 1e-6", "cyclo_fmu/io/units.py", '"n*mm": 1e-3', '"n*mm": 1e-6'),
     ("efficiency max 1.05 -> 1.5", "cyclo_fmu/io/checks.py", "EFFICIENCY_MAX = 1.05",
@@ -90,6 +97,22 @@ CURATED = [
      "cap = ring_torque_rating(d) / (d.z1 - 1)", "cap = 10 * ring_torque_rating(d) / (d.z1 - 1)"),
     ("speed bound 1e5 -> 1e6 r/min", "cyclo_fmu/limits.py", "MAX_SPEED_RPM = 1.0e5",
      "MAX_SPEED_RPM = 1.0e6"),
+]
+
+# (name, file, old text, new text): the real survivors of earlier runs (the random sample moves
+# with the code; these stay measured), each killed since by a test with a known answer
+REGRESSION = [
+    ("Legendre basis [0]*k -> [1]*k (was residual.py line 59)", "cyclo_fmu/diagnosis/residual.py",
+     "legendre.legval(x, [0] * k + [1])", "legendre.legval(x, [1] * k + [1])"),
+    ("burst run count 1 + -> 2 + (was residual.py line 339)", "cyclo_fmu/diagnosis/residual.py",
+     "runs = 1 + int(", "runs = 2 + int("),
+    ("peak level: median window width -> width + 2 bins", "cyclo_fmu/diagnosis/residual.py",
+     'median_filter(P, size=width, mode="nearest")',
+     'median_filter(P, size=width + 2, mode="nearest")'),
+    ("peak level: flank median 3 -> 4 bins (was: window 3 -> 4, line 227)",
+     "cyclo_fmu/diagnosis/residual.py", "sliding_window_view(P, 3)", "sliding_window_view(P, 4)"),
+    ("power-balance sum offset 1 W (io/checks.py line 196)", "cyclo_fmu/io/checks.py",
+     '"forward": [0, 0.0, 0.0]', '"forward": [0, 1.0, 0.0]'),
 ]
 
 RANDOM_FILES = ["model_core/thermal.py", "model_core/contact.py", "model_core/kinematics.py",
@@ -172,7 +195,11 @@ def main(argv=None):
     ap.add_argument("--random", type=int, default=24, help="random AST mutants (default 24)")
     ap.add_argument("--seed", type=int, default=21)
     ap.add_argument("--no-curated", action="store_true")
+    ap.add_argument("--no-regression", action="store_true")
     ap.add_argument("--timeout", type=float, default=300.0)
+    ap.add_argument("--select", action="append", default=[],
+                    help="run only the mutants whose 'file: description' contains this text "
+                         "(repeatable; the sample is drawn as without it)")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "mutation_results.md"))
     args = ap.parse_args(argv)
 
@@ -189,6 +216,13 @@ def main(argv=None):
                 print(f"curated mutant {name!r}: text not found once in {path}; skipped")
                 continue
             mutants.append(("curated", path, name, src.replace(old, new)))
+    if not args.no_regression:
+        for name, path, old, new in REGRESSION:
+            src = (ROOT / path).read_text()
+            if src.count(old) != 1:
+                print(f"regression mutant {name!r}: text not found once in {path}; skipped")
+                continue
+            mutants.append(("regression", path, name, src.replace(old, new)))
     rng = random.Random(args.seed)
     sizes = {p: len(candidates(ast.parse((ROOT / p).read_text()))) for p in RANDOM_FILES}
     picked = set()
@@ -199,6 +233,8 @@ def main(argv=None):
         desc, src = mutate((ROOT / path).read_text(), i)
         mutants.append(("random", path, desc, src))
 
+    if args.select:
+        mutants = [m for m in mutants if any(t in f"{m[1]}: {m[2]}" for t in args.select)]
     rows = []
     try:
         for k, (kind, path, desc, src) in enumerate(mutants, 1):
@@ -216,7 +252,7 @@ def main(argv=None):
 
     lines = ["| set | file | mutant | result | s |", "|---|---|---|---|---|"]
     lines += [f"| {a} | `{b}` | {c} | {d} | {e:.0f} |" for a, b, c, d, e in rows]
-    for kind in ("curated", "random"):
+    for kind in ("curated", "regression", "random"):
         sub = [r for r in rows if r[0] == kind]
         if sub:
             killed = sum(r[3].startswith("killed") for r in sub)

@@ -171,3 +171,19 @@ def test_known_output_torque_gives_the_same_point(design, mode, sign):
         assert float(back.torques[s]) == pytest.approx(float(fwd.torques[s]), rel=1e-7)
     assert float(back.loss_power) == pytest.approx(float(fwd.loss_power), rel=1e-7)
     assert bool(back.flow_forward) == bool(fwd.flow_forward)
+
+
+def test_mesh_loss_closes_the_energy_balance():
+    """The calibrated mesh-loss element (efficiency 1 - k in series, disc side) closes the gear's
+    energy balance in both relative flow directions, with eta0 = eta0_m (1 - k): ring driving,
+    |T1 w1'| (1 - eta0) = x |T1 w1'| + PL_mesh with eta0_m = 1 - x; disc driving,
+    |T1 w1'| (1 / eta0 - 1) = x |T1 w1'| + PL_mesh with eta0_m = 1 / (1 + x)."""
+    from model_core.efficiency import mesh_loss
+    x = np.array([0.02, 0.1, 0.3])
+    P = np.array([1.0, 50.0, 400.0])                     # |T1 w1'| [W]
+    for k in (0.0, 0.05, 0.2):
+        eta0, PL = mesh_loss(1.0 - x, x, np.ones(3), P, k)
+        np.testing.assert_allclose(eta0, (1.0 - x) * (1.0 - k), rtol=1e-14)
+        np.testing.assert_allclose(P * (1.0 - eta0), x * P + PL, rtol=1e-12)
+        eta0, PL = mesh_loss(1.0 / (1.0 + x), x, -np.ones(3), P, k)
+        np.testing.assert_allclose(P * (1.0 / eta0 - 1.0), x * P + PL, rtol=1e-12)

@@ -394,3 +394,85 @@ def test_viscosity_floor():
     with pytest.raises(CycloidInputError, match="lubricant.kinematic_viscosity_100"):
         DriveDesign(lubricant=Lubricant(kinematic_viscosity=20e-6,
                                         kinematic_viscosity_100=0.99e-6))
+
+
+# --- the diagnosis's residual rules against closed forms and hand counts (mutation survivors) ---
+
+def test_generic_time_basis_is_legendre():
+    """The generic basis's time columns are Legendre P1..P5 (closed forms, Abramowitz & Stegun
+    22.3.8) and orthogonal on [-1, 1]: integral of Pm Pn = 2 / (2n + 1) delta_mn."""
+    from cyclo_fmu.diagnosis.residual import _legendre
+    x = np.linspace(-1.0, 1.0, 7)
+    closed = np.stack([x, (3 * x**2 - 1) / 2, (5 * x**3 - 3 * x) / 2,
+                       (35 * x**4 - 30 * x**2 + 3) / 8, (63 * x**5 - 70 * x**3 + 15 * x) / 8], -1)
+    np.testing.assert_allclose(_legendre(x, 5), closed, atol=1e-12)
+    g, wq = np.polynomial.legendre.leggauss(8)        # exact for degree <= 15
+    P = _legendre(g, 5)
+    np.testing.assert_allclose(P.T @ (wq[:, None] * P),
+                               np.diag(2.0 / (2 * np.arange(1, 6) + 1)), atol=1e-12)
+
+
+def test_burst_length_and_ties_counted_by_hand():
+    """One speed reversal at t = 4.995 s (blocks of 10 ms, +1 -> -1): spike blocks 497-499 and
+    501-502 are two bursts of 3 and 2 blocks at it (mean 2.5 blocks), block 100 lies elsewhere.
+    5 of the 6 spike blocks within EVENT_WINDOW (0.1 s: 20 of 1000 blocks, p = 0.02) of the one
+    reversal: the binomial tail P(X >= 5 | n = 6, p = 0.02) ~ 6 p^5 = 2e-8 < BURST_P (1e-6)."""
+    from cyclo_fmu.diagnosis.residual import EVENT_WINDOW, bursts
+    assert EVENT_WINDOW == 0.1
+    t = np.arange(1000) * 0.01
+    w = np.where(t < 4.995, 1.0, -1.0)
+    T_out = np.ones_like(t)
+    spikes = np.zeros(t.size, bool)
+    spikes[[497, 498, 499, 501, 502, 100]] = True
+    b = bursts(t, spikes, w, T_out)
+    assert b["count"] == 6
+    assert b["at"]["speed reversals"] == 5 and b["at"]["elsewhere"] == 1
+    assert b["burst_blocks"]["speed reversals"] == pytest.approx(2.5)
+    assert b["events_with_burst"]["speed reversals"] == (1, 1)
+    assert b["tied"] == ["speed reversals"]
+    # one burst of 5 consecutive blocks: mean length 5
+    spikes[497] = False
+    spikes[500] = True                       # blocks 498-502
+    assert bursts(t, spikes, w, T_out)["burst_blocks"]["speed reversals"] == pytest.approx(5.0)
+
+
+def test_peak_level_flanks_and_dc_rule():
+    """The local level of a bin (residual._level) on a flat spectrum of 1 with a plateau of
+    height 100: the flanks are the three bins PEAK_FLANK_BINS (2) to 4 away on each side, so a
+    plateau of half-width 2 (5 bins) stands on a level of 1, one of half-width 3 (7 bins) has
+    two of each flank's three bins on it and its level is 100 (not narrow); a bin whose lower
+    flank would reach the DC bin (index < 5) is not judged (NaN)."""
+    from cyclo_fmu.diagnosis.residual import PEAK_FLANK_BINS, _level
+    assert PEAK_FLANK_BINS == 2
+    for half, want in ((0, 1.0), (2, 1.0), (3, 100.0)):
+        P = np.ones(101)
+        P[50 - half:51 + half] = 100.0
+        got, level = _level(P[:, None], slice(None), 21)
+        np.testing.assert_array_equal(got, P)
+        assert level[50] == want, half
+        assert np.all(np.isnan(level[:5])) and np.all(np.isfinite(level[5:]))
+    # the median over the width (21 bins, 40-60 for bin 50), outside the centre's flanks: 11 of
+    # them at 100 (40-45, 55-59) lift its level to 100 (of 23 bins they would not); 10 of them
+    # (41-45, 55-59) do not (of 19 bins they would)
+    P = np.ones(101)
+    P[40:46] = P[55:60] = 100.0
+    assert _level(P[:, None], slice(None), 21)[1][50] == 100.0
+    P[40] = 1.0
+    assert _level(P[:, None], slice(None), 21)[1][50] == 1.0
+
+
+@pytest.mark.parametrize("T_in", [0.5, 1e-4])
+def test_power_balance_efficiency_is_scale_free(T_in):
+    """The efficiency the power balance reports is the ratio of the energies that leave and
+    enter, a ratio free of the power's scale: with torque_out = 15 * 0.8 * torque_in at a
+    15:1 speed ratio it is 0.8 at 0.5 N*m (~50 W) and at 1e-4 N*m (~10 mW) alike; driven
+    backwards (both torques negative, |P_in| = 0.8 |P_out|) it is 0.8 too."""
+    f = checks.check_units(rec(T_in=T_in))
+    msg = [x for x in f if x["id"] == "power_balance"][-1]["message"]
+    assert "forward: 1000 samples, efficiency 0.8;" in msg + ";", msg
+    d = s1(T_in=T_in)
+    d["torque_in_Nm"] = -d["torque_in_Nm"]
+    d["torque_out_Nm"] = -d["torque_in_Nm"] * (-15.0 / 0.8)   # P_out = P_in / 0.8, both < 0
+    f = checks.check_units(recording_from_arrays(**d, check=False))
+    msg = [x for x in f if x["id"] == "power_balance"][-1]["message"]
+    assert "back-driven: 1000 samples, efficiency 0.8;" in msg + ";", msg

@@ -210,3 +210,16 @@ def test_sweep_stiffness_columns_are_the_catalogue_values():
         v["torsional_rigidity_Nm_per_arcmin"], rel=1e-12)
     assert cols["lost_motion_arcmin"] == pytest.approx(v["lost_motion_arcmin"], rel=1e-12)
     assert cols["stiffness_Nm_rad"] == pytest.approx(v["stiffness_Nm_per_rad"], rel=1e-12)
+
+
+def test_ring_contact_rating_is_hertz_inverted_on_the_roller_radius():
+    """At the ring contacts' element torque the most loaded ring roller carries exactly the force
+    at which Johnson's line-contact pressure reaches 4000 MPa on the roller's own radius,
+    R = d_v1 / 2 (the conforming flank only enlarges the contact): F = pi b1 R p0^2 / E*
+    (Eq. 4.45 inverted), with E* = 210 GPa / (2 (1 - 0.3^2))."""
+    d = DriveDesign()
+    T = st.static_torque_rating(d)["elements"]["ring_contact"]
+    share = max(d.torque_share, 1.0 - d.torque_share)
+    F_max = float(np.max(st.gear_path(d, share * T)["F_ring"]))
+    E_star = 210e9 / (2 * (1 - 0.3 ** 2))
+    assert F_max == pytest.approx(np.pi * d.b1 * (d.d_v1 / 2) * 4.0e9 ** 2 / E_star, rel=1e-6)

@@ -71,6 +71,28 @@ def test_housing_step_is_exact_for_a_held_loss():
         assert T == pytest.approx(closed, rel=1e-12)
 
 
+def test_housing_heat_balance_by_hand():
+    """k_h = 20 W/(m^2 K) over A_h = 0.1 m^2: R = 1/(k_h A_h) = 0.5 K/W; a held 30 W loss warms
+    the housing to 15 K above the ambient, where it gives the ambient (T - T_amb)/R = 30 W, the
+    loss; 5 K below the ambient it takes 10 W from it. Over one step from the ambient, the loss's
+    heat P h is the stored heat C (T(h) - T_amb) plus the heat to the ambient, int (T - T_amb)/R
+    dt (Simpson's rule on the step's closed-form trajectory)."""
+    d = DriveDesign(housing_heat_transfer=20.0, housing_area=0.1, housing_heat_capacity=600.0)
+    R, C = thermal.housing_resistance(d), d.housing_heat_capacity
+    assert R == pytest.approx(0.5, rel=1e-15)
+    amb = 293.15
+    T_end = thermal.housing_step(amb, 30.0, 1e6, amb, C, R)       # 1e6 s = 3333 tau
+    assert T_end == pytest.approx(amb + 15.0, rel=1e-12)
+    assert thermal.heat_to_ambient(T_end, amb, R) == pytest.approx(30.0, rel=1e-9)
+    assert thermal.heat_to_ambient(amb - 5.0, amb, R) == pytest.approx(-10.0, rel=1e-12)
+    h = 200.0                                                     # 2/3 of tau = 300 s
+    ts = np.linspace(0.0, h, 2001)
+    T = np.array([thermal.housing_step(amb, 30.0, t, amb, C, R) for t in ts])
+    q = thermal.heat_to_ambient(T, amb, R)
+    to_ambient = h / 6000 * (q[0] + q[-1] + 4 * q[1:-1:2].sum() + 2 * q[2:-1:2].sum())
+    assert 30.0 * h == pytest.approx(C * (T[-1] - amb) + to_ambient, rel=1e-10)
+
+
 def test_thermal_map_is_the_one_temperature_map_at_its_nodes():
     d = DriveDesign()
     tm = ThermalMap(d, "S1", 30.0, 350.0)
