@@ -24,7 +24,7 @@ from pathlib import Path
 from xml.etree import ElementTree as ET
 
 from .. import __version__
-from .build import CFLAGS, build_native_fmu, find_compiler, fmi_header_dir
+from .build import BUILD_DESCRIPTION, CFLAGS, build_native_fmu, find_compiler, fmi_header_dir
 from .cross import compile_win64
 
 HERE = Path(__file__).resolve().parent
@@ -133,18 +133,6 @@ def model_description3(md2: str, name3: str = NAME3):
          "const unsigned int FMI3_VR2[] = {" + ", ".join(v for _, v in table) + "};", ""]
     return ('<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode")
             + "\n", "\n".join(c))
-
-
-BUILD_DESCRIPTION = '''<?xml version="1.0" encoding="UTF-8"?>
-<fmiBuildDescription fmiVersion="3.0">
-  <BuildConfiguration modelIdentifier="{name}">
-    <SourceFileSet language="C99" compilerOptions="-ffp-contract=off">
-{files}
-    </SourceFileSet>
-    <Library name="m"/>
-  </BuildConfiguration>
-</fmiBuildDescription>
-'''
 
 
 def _fmi2_for(design, folder: Path):

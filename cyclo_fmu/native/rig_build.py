@@ -27,7 +27,8 @@ from xml.etree import ElementTree as ET
 
 from .. import __version__
 from .cross import compile_win64
-from .build import CFLAGS, FMI_HEADERS, MIT_LICENSE, _fmi_license, find_compiler, fmi_header_dir
+from .build import (BUILD_DESCRIPTION, CFLAGS, FMI_HEADERS, MIT_LICENSE, _fmi_license,
+                    find_compiler, fmi_header_dir)
 
 HERE = Path(__file__).resolve().parent
 
@@ -160,18 +161,6 @@ def model_description(name: str, root: ET.Element, guid: str, sources) -> str:
         ET.SubElement(cats, "Category", name=cname, description=desc)
     ET.indent(root, "  ")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
-
-
-BUILD_DESCRIPTION = '''<?xml version="1.0" encoding="UTF-8"?>
-<fmiBuildDescription fmiVersion="3.0">
-  <BuildConfiguration modelIdentifier="{name}">
-    <SourceFileSet language="C99" compilerOptions="-ffp-contract=off">
-{files}
-    </SourceFileSet>
-    <Library name="m"/>
-  </BuildConfiguration>
-</fmiBuildDescription>
-'''
 
 
 def compile_rig(src: Path, sources, out: Path, cc=None) -> None:
