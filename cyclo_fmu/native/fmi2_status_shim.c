@@ -46,6 +46,25 @@ static pthread_mutex_t lib_lock = PTHREAD_MUTEX_INITIALIZER;
 static void *lib = NULL;
 static char load_error[768] = "";
 
+/* pythonfmu 0.7 keeps its interpreter state in a static std::shared_ptr and resets it again in
+ * a library destructor. At process exit (library still loaded) the C++ exit handlers destroy
+ * the shared_ptr first and the destructor then resets the destroyed object: a use-after-free
+ * that glibc reports at random as "corrupted double-linked list" or "double free" (exit 134).
+ * Our handler, registered after pythonfmu's binary is loaded, runs before its exit handlers
+ * (LIFO) and releases the state through pythonfmu's own exported finalizePythonInterpreter,
+ * leaving an empty shared_ptr that both later resets handle. A host's dlclose unloads neither
+ * library (pythonfmu's is kept by glibc for its unique symbols, this one pins itself when it
+ * loads pythonfmu's), so the handler always runs at exit, never at an unload, and a host that
+ * loads the FMU again finds the interpreter as it left it. */
+static void finalize_at_exit(void)
+{
+    void *h = __atomic_load_n(&lib, __ATOMIC_ACQUIRE);
+    void (*fin)(void);
+    if (h == NULL) return;
+    *(void **)&fin = dlsym(h, "finalizePythonInterpreter");
+    if (fin) fin();
+}
+
 static void *load(void)
 {
     Dl_info info;
@@ -61,6 +80,12 @@ static void *load(void)
             memcpy(path, info.dli_fname, n - 3);          /* strip ".so" */
             memcpy(path + n - 3, SUFFIX, sizeof(SUFFIX));
             h = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+            if (h) {
+                /* stay loaded as pythonfmu's binary does (its unique C++ symbols make glibc
+                 * keep it to the end): the exit handler below must outlive a host's dlclose */
+                dlopen(info.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
+                atexit(finalize_at_exit);
+            }
             if (!h) {
                 const char *e = dlerror();
                 snprintf(load_error, sizeof load_error, "%s", e ? e : path);
@@ -80,7 +105,7 @@ static void why_not_loaded(char *out, size_t n)
     pthread_mutex_unlock(&lib_lock);
 }
 
-/* unloaded with this library: pythonfmu's binary goes when ours goes, as without the front */
+/* at exit (this library pins itself once it has loaded pythonfmu's): drop our reference */
 __attribute__((destructor)) static void unload(void)
 {
     void *h = __atomic_exchange_n(&lib, NULL, __ATOMIC_ACQ_REL);
