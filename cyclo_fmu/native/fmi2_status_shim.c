@@ -28,10 +28,15 @@
  * Thread safety: the library handle and the resolved functions are published with atomic
  * stores (loaded once under a mutex); the list of live handles is guarded by a mutex. Calls on
  * one instance must not overlap (FMI 2.0); calls on different instances may. */
+#ifndef _WIN32
 #define _GNU_SOURCE
 #include <dlfcn.h>
-#include <math.h>
 #include <pthread.h>
+#else
+#define WIN32_LEAN_AND_MEAN
+#include <windows.h>
+#endif
+#include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -40,12 +45,36 @@
 
 #include "fmi2Functions.h"
 
+/* -- the platform: a statically initialised lock, pythonfmu's binary next to ours ----------
+ * Linux: <id>.so loads <id>.pythonfmu.so with dlopen; Windows (mingw-w64): <id>.dll loads
+ * <id>.pythonfmu.dll with LoadLibraryEx (its folder searched for its dependencies), a slim
+ * reader/writer lock in place of the pthread mutex. The library handle and the resolved
+ * functions are published with GCC's __atomic builtins on both. */
+#ifndef _WIN32
+typedef pthread_mutex_t Lock;
+#define LOCK_INIT PTHREAD_MUTEX_INITIALIZER
+#define lock(l) pthread_mutex_lock(l)
+#define unlock(l) pthread_mutex_unlock(l)
 #define SUFFIX ".pythonfmu.so"
+#define OWN_EXT ".so"
+#define NEEDS_PYTHON "a non-Python host needs libpython preloaded (LD_PRELOAD) and " \
+    "numpy/scipy on PYTHONPATH (README, Use it in your tool)"
+#else
+typedef SRWLOCK Lock;
+#define LOCK_INIT SRWLOCK_INIT
+#define lock(l) AcquireSRWLockExclusive(l)
+#define unlock(l) ReleaseSRWLockExclusive(l)
+#define SUFFIX L".pythonfmu.dll"
+#define OWN_EXT L".dll"
+#define NEEDS_PYTHON "pythonfmu's DLL needs python3.dll of a 64-bit Python with numpy and " \
+    "scipy on PATH (docs/how-to/hosts.md)"
+#endif
 
-static pthread_mutex_t lib_lock = PTHREAD_MUTEX_INITIALIZER;
+static Lock lib_lock = LOCK_INIT;
 static void *lib = NULL;
 static char load_error[768] = "";
 
+#ifndef _WIN32
 /* pythonfmu 0.7 keeps its interpreter state in a static std::shared_ptr and resets it again in
  * a library destructor. At process exit (library still loaded) the C++ exit handlers destroy
  * the shared_ptr first and the destructor then resets the destroyed object: a use-after-free
@@ -65,45 +94,38 @@ static void finalize_at_exit(void)
     if (fin) fin();
 }
 
-static void *load(void)
+/* pythonfmu's binary, loaded by the caller under lib_lock; NULL with load_error set */
+static void *open_pythonfmu(void)
 {
     Dl_info info;
     char path[4096];
     size_t n;
-    void *h = __atomic_load_n(&lib, __ATOMIC_ACQUIRE);
-    if (h) return h;
-    pthread_mutex_lock(&lib_lock);
-    h = lib;
-    if (h == NULL && dladdr((void *)&load, &info) && info.dli_fname != NULL) {
-        n = strlen(info.dli_fname);
-        if (n >= 3 && n + sizeof(SUFFIX) <= sizeof(path)) {
-            memcpy(path, info.dli_fname, n - 3);          /* strip ".so" */
-            memcpy(path + n - 3, SUFFIX, sizeof(SUFFIX));
-            h = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-            if (h) {
-                /* stay loaded as pythonfmu's binary does (its unique C++ symbols make glibc
-                 * keep it to the end): the exit handler below must outlive a host's dlclose */
-                dlopen(info.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
-                atexit(finalize_at_exit);
-            }
-            if (!h) {
-                const char *e = dlerror();
-                snprintf(load_error, sizeof load_error, "%s", e ? e : path);
-            }
-            __atomic_store_n(&lib, h, __ATOMIC_RELEASE);
-        }
+    void *h = NULL;
+    if (!dladdr((void *)&open_pythonfmu, &info) || info.dli_fname == NULL) {
+        snprintf(load_error, sizeof load_error, "cannot find the front's own file");
+        return NULL;
     }
-    pthread_mutex_unlock(&lib_lock);
+    n = strlen(info.dli_fname);
+    if (n < 3 || n + sizeof(SUFFIX) > sizeof(path)) {
+        snprintf(load_error, sizeof load_error, "path of %lu characters", (unsigned long)n);
+        return NULL;
+    }
+    memcpy(path, info.dli_fname, n - 3);          /* strip ".so" */
+    memcpy(path + n - 3, SUFFIX, sizeof(SUFFIX));
+    h = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (h) {
+        /* stay loaded as pythonfmu's binary does (its unique C++ symbols make glibc keep it
+         * to the end): the exit handler below must outlive a host's dlclose */
+        dlopen(info.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
+        atexit(finalize_at_exit);
+    } else {
+        const char *e = dlerror();
+        snprintf(load_error, sizeof load_error, "%s", e ? e : path);
+    }
     return h;
 }
 
-/* why the binary did not load, copied under the lock (another thread may be retrying) */
-static void why_not_loaded(char *out, size_t n)
-{
-    pthread_mutex_lock(&lib_lock);
-    snprintf(out, n, "%s", load_error[0] ? load_error : "not found");
-    pthread_mutex_unlock(&lib_lock);
-}
+static void *lib_sym(void *h, const char *name) { return dlsym(h, name); }
 
 /* at exit (this library pins itself once it has loaded pythonfmu's): drop our reference */
 __attribute__((destructor)) static void unload(void)
@@ -111,11 +133,83 @@ __attribute__((destructor)) static void unload(void)
     void *h = __atomic_exchange_n(&lib, NULL, __ATOMIC_ACQ_REL);
     if (h) dlclose(h);
 }
+#else
+/* Windows: pythonfmu's DLL (built with MSVC) needs no exit fix and is never freed here. On
+ * DLL_PROCESS_DETACH the MSVC runtime calls a DLL's DllMain first and runs its static
+ * destructors after it, so pythonfmu's DllMain (which resets the interpreter state) finds the
+ * shared_ptr alive, and if its DllMain is not the one linked (pythonfmu declares it in an
+ * anonymous namespace) the static destructor alone resets the state once: either way no reset
+ * of a destroyed object, the glibc order of the use-after-free above does not arise. Its
+ * interpreter thread, started through the C runtime, holds a reference to the DLL, so a
+ * FreeLibrary here would not unload it, and freeing a library from DllMain (under the loader
+ * lock) is forbidden. */
+static void *open_pythonfmu(void)
+{
+    HMODULE self = NULL, h;
+    wchar_t path[4096];
+    DWORD n;
+    size_t ext = wcslen(OWN_EXT), suf = wcslen(SUFFIX);
+    if (!GetModuleHandleExW(GET_MODULE_HANDLE_EX_FLAG_FROM_ADDRESS
+                            | GET_MODULE_HANDLE_EX_FLAG_UNCHANGED_REFCOUNT,
+                            (LPCWSTR)(void *)&open_pythonfmu, &self)) {
+        snprintf(load_error, sizeof load_error, "cannot find the front's own DLL (error %lu)",
+                 (unsigned long)GetLastError());
+        return NULL;
+    }
+    n = GetModuleFileNameW(self, path, sizeof path / sizeof path[0]);
+    if (n == 0 || n >= sizeof path / sizeof path[0] - suf || n < ext
+        || _wcsicmp(path + n - ext, OWN_EXT) != 0) {
+        snprintf(load_error, sizeof load_error, "cannot name the front's own DLL");
+        return NULL;
+    }
+    memcpy(path + n - ext, SUFFIX, (suf + 1) * sizeof(wchar_t));
+    /* the DLL's own folder is searched for its dependencies (python3.dll: the documented
+     * Python on PATH) */
+    h = LoadLibraryExW(path, NULL, LOAD_WITH_ALTERED_SEARCH_PATH);
+    if (h == NULL) {
+        DWORD e = GetLastError();
+        char msg[512] = "";
+        FormatMessageA(FORMAT_MESSAGE_FROM_SYSTEM | FORMAT_MESSAGE_IGNORE_INSERTS, NULL, e, 0,
+                       msg, sizeof msg, NULL);
+        msg[strcspn(msg, "\r\n")] = '\0';
+        snprintf(load_error, sizeof load_error, "%ls: error %lu %s", path, (unsigned long)e,
+                 msg);
+    }
+    return (void *)h;
+}
+
+static void *lib_sym(void *h, const char *name)
+{
+    return (void *)GetProcAddress((HMODULE)h, name);
+}
+#endif
+
+static void *load(void)
+{
+    void *h = __atomic_load_n(&lib, __ATOMIC_ACQUIRE);
+    if (h) return h;
+    lock(&lib_lock);
+    h = lib;
+    if (h == NULL) {
+        h = open_pythonfmu();
+        __atomic_store_n(&lib, h, __ATOMIC_RELEASE);
+    }
+    unlock(&lib_lock);
+    return h;
+}
+
+/* why the binary did not load, copied under the lock (another thread may be retrying) */
+static void why_not_loaded(char *out, size_t n)
+{
+    lock(&lib_lock);
+    snprintf(out, n, "%s", load_error[0] ? load_error : "not found");
+    unlock(&lib_lock);
+}
 
 static void *sym(const char *name)
 {
     void *h = load();
-    return h ? dlsym(h, name) : NULL;
+    return h ? lib_sym(h, name) : NULL;
 }
 
 /* a function of pythonfmu's binary, resolved once per process (atomic publication) */
@@ -150,7 +244,7 @@ typedef struct Wrap {
     struct Wrap *next;
 } Wrap;
 
-static pthread_mutex_t list_lock = PTHREAD_MUTEX_INITIALIZER;
+static Lock list_lock = LOCK_INIT;
 static Wrap *wraps = NULL;
 
 /* A message to the host: text with every '%' doubled, given as the message and no arguments.
@@ -336,9 +430,7 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     if (!f) {
         char why[768];
         why_not_loaded(why, sizeof why);
-        snprintf(buf, sizeof buf, "cannot load the pythonfmu binary (%s): a non-Python host needs "
-                 "libpython preloaded (LD_PRELOAD) and numpy/scipy on PYTHONPATH (README, Use it "
-                 "in your tool)", why);
+        snprintf(buf, sizeof buf, "cannot load the pythonfmu binary (%s): %s", why, NEEDS_PYTHON);
         host_log(functions, name, fmi2Error, buf);
         return NULL;
     }
@@ -361,10 +453,10 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
         free(w);
         return NULL;
     }
-    pthread_mutex_lock(&list_lock);
+    lock(&list_lock);
     w->next = wraps;
     wraps = w;
-    pthread_mutex_unlock(&list_lock);
+    unlock(&list_lock);
     return w;
 }
 
@@ -373,14 +465,14 @@ FMI2_Export void fmi2FreeInstance(fmi2Component c)
     fmi2FreeInstanceTYPE *f;
     Wrap **p, *w = NULL;
     if (c == NULL) return;
-    pthread_mutex_lock(&list_lock);
+    lock(&list_lock);
     for (p = &wraps; *p; p = &(*p)->next)
         if (*p == (Wrap *)c) {
             w = *p;
             *p = w->next;
             break;
         }
-    pthread_mutex_unlock(&list_lock);
+    unlock(&list_lock);
     if (w == NULL) return;                  /* not ours, or freed already */
     RESOLVE(f, fmi2FreeInstance);
     if (f) f(w->comp);
