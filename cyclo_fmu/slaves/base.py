@@ -18,6 +18,7 @@ import hashlib
 import json
 import math
 import operator
+import os
 import sys
 import uuid
 from pathlib import Path
@@ -93,6 +94,20 @@ UNITS = {
 }
 
 
+def _drop_repeated_path(folder):
+    """pythonfmu 0.7 puts the FMU's resources folder in front of the host's ``sys.path`` at
+    every fmi2Instantiate and never takes it out: a host creating many instances got a
+    ``sys.path`` one entry longer each time (20 instances, 20 copies; every later import walks
+    them). The entry just put there is dropped when the same folder stands further down, so
+    ``sys.path`` holds it once, as after the first instance (same folder, same imports)."""
+    if not folder or len(sys.path) < 2 or not isinstance(sys.path[0], str):
+        return
+    head = os.path.normpath(sys.path[0])
+    if head == os.path.normpath(str(folder)) and any(
+            isinstance(p, str) and os.path.normpath(p) == head for p in sys.path[1:]):
+        del sys.path[0]
+
+
 class UnitSlave(Fmi2Slave):
     """Fmi2Slave with units, descriptions and declared output dependencies."""
 
@@ -103,6 +118,7 @@ class UnitSlave(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        _drop_repeated_path(getattr(self, "resources", None))
         self._failed = False
         self.register_variable(Boolean("_failed", causality=Fmi2Causality.local,
                                        variability=Fmi2Variability.discrete,
