@@ -120,7 +120,7 @@ static void *open_pythonfmu(void)
         atexit(finalize_at_exit);
     } else {
         const char *e = dlerror();
-        snprintf(load_error, sizeof load_error, "%s", e ? e : path);
+        snprintf(load_error, sizeof load_error, "%.700s", e ? e : path);
     }
     return h;
 }
@@ -518,21 +518,28 @@ FMI2_Export fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDef, 
     return map(f(w->comp, tolDef, tol, start, stopDef, stop));
 }
 
-static fmi2EnterInitializationModeTYPE *cache_fmi2EnterInitializationMode = NULL;
+/* A call on the component alone, allowed while ``allowed`` holds: the instance goes to phase
+ * ``next`` when pythonfmu answers fmi2OK or fmi2Warning. (fmi2ExitInitializationMode, which
+ * also reads the slave's failure flag, is written out below.) */
+#define PHASE_FN(name, allowed, next)                                                  \
+    static name##TYPE *cache_##name = NULL;                                            \
+    FMI2_Export fmi2Status name(fmi2Component c)                                       \
+    {                                                                                  \
+        name##TYPE *f;                                                                 \
+        fmi2Status s;                                                                  \
+        Wrap *w = handle(c);                                                           \
+        if (w == NULL) return fmi2Error;                                               \
+        ALLOW(#name, allowed);                                                         \
+        RESOLVE(f, name);                                                              \
+        if (!f) return fmi2Error;                                                      \
+        s = map(f(w->comp));                                                           \
+        if (s <= fmi2Warning) w->phase = next;                                         \
+        return s;                                                                      \
+    }
 
-FMI2_Export fmi2Status fmi2EnterInitializationMode(fmi2Component c)
-{
-    fmi2EnterInitializationModeTYPE *f;
-    fmi2Status s;
-    Wrap *w = handle(c);
-    if (w == NULL) return fmi2Error;
-    ALLOW("fmi2EnterInitializationMode", w->phase == PH_INSTANTIATED);
-    RESOLVE(f, fmi2EnterInitializationMode);
-    if (!f) return fmi2Error;
-    s = map(f(w->comp));
-    if (s <= fmi2Warning) w->phase = PH_INIT;
-    return s;
-}
+PHASE_FN(fmi2EnterInitializationMode, w->phase == PH_INSTANTIATED, PH_INIT)
+PHASE_FN(fmi2Terminate, w->phase == PH_STEP || w->phase == PH_INIT, PH_TERMINATED)
+PHASE_FN(fmi2Reset, 1, PH_INSTANTIATED)      /* allowed in every phase (FMI 2.0) */
 
 static fmi2ExitInitializationModeTYPE *cache_fmi2ExitInitializationMode = NULL;
 
@@ -550,87 +557,61 @@ FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     return s;
 }
 
-static fmi2TerminateTYPE *cache_fmi2Terminate = NULL;
-
-FMI2_Export fmi2Status fmi2Terminate(fmi2Component c)
-{
-    fmi2TerminateTYPE *f;
-    fmi2Status s;
-    Wrap *w = handle(c);
-    if (w == NULL) return fmi2Error;
-    ALLOW("fmi2Terminate", w->phase == PH_STEP || w->phase == PH_INIT);
-    RESOLVE(f, fmi2Terminate);
-    if (!f) return fmi2Error;
-    s = map(f(w->comp));
-    if (s <= fmi2Warning) w->phase = PH_TERMINATED;
-    return s;
-}
-
-static fmi2ResetTYPE *cache_fmi2Reset = NULL;
-
-FMI2_Export fmi2Status fmi2Reset(fmi2Component c)
-{
-    fmi2ResetTYPE *f;
-    fmi2Status s;
-    Wrap *w = handle(c);
-    if (w == NULL) return fmi2Error;
-    RESOLVE(f, fmi2Reset);
-    if (!f) return fmi2Error;
-    s = map(f(w->comp));
-    if (s <= fmi2Warning) w->phase = PH_INSTANTIATED;
-    return s;
-}
-
 /* -- get and set ---------------------------------------------------------------------------- */
-#define GET_FN(name, T)                                                                \
+/* What fmi2Set<T> may set now: nothing once terminated or failed; a parameter only before
+ * fmi2ExitInitializationMode (``params``/``names``: the model's parameters of the type).
+ * fmi2Get<T> may read in every phase. */
+static fmi2Status set_allowed(Wrap *w, const char *fn, const fmi2ValueReference *vr, size_t n,
+                              const fmi2ValueReference *params, const char *const *names,
+                              size_t np)
+{
+    const char *p;
+    if (!(w->phase == PH_INSTANTIATED || w->phase == PH_INIT || w->phase == PH_STEP))
+        return not_in_phase(w, fn);
+    if (w->phase == PH_STEP && np && (p = fixed_parameter(vr, n, params, names, np)) != NULL)
+        return fail(w, "%s is a fixed parameter: set it before fmi2ExitInitializationMode", p);
+    return fmi2OK;
+}
+
+static fmi2Status get_allowed(Wrap *w, const char *fn, const fmi2ValueReference *vr, size_t n,
+                              const fmi2ValueReference *params, const char *const *names,
+                              size_t np)
+{
+    (void)w; (void)fn; (void)vr; (void)n; (void)params; (void)names; (void)np;
+    return fmi2OK;
+}
+
+#define get_QUAL
+#define set_QUAL const
+/* fmi2Get<K> (DIR get) and fmi2Set<K> (DIR set) of the C type T: the arrays checked, then
+ * DIR's rule, then pythonfmu's function */
+#define VALUE_FN(DIR, name, T, K)                                                      \
     static name##TYPE *cache_##name = NULL;                                            \
     FMI2_Export fmi2Status name(fmi2Component c, const fmi2ValueReference vr[], size_t n, \
-                                T v[])                                                 \
+                                DIR##_QUAL T v[])                                      \
     {                                                                                  \
         name##TYPE *f;                                                                 \
+        fmi2Status s;                                                                  \
         Wrap *w = handle(c);                                                           \
         if (w == NULL) return fmi2Error;                                               \
         if (n && (vr == NULL || v == NULL))                                            \
             return fail(w, #name ": %lu values but no array", (unsigned long)n);       \
+        s = DIR##_allowed(w, #name, vr, n, SHIM_PARAM_##K, SHIM_PARAM_##K##_NAME,      \
+                          SHIM_N_PARAM_##K);                                           \
+        if (s != fmi2OK) return s;                                                     \
         RESOLVE(f, name);                                                              \
         if (!f) return fmi2Error;                                                      \
         return map(f(w->comp, vr, n, v));                                              \
     }
 
-GET_FN(fmi2GetReal, fmi2Real)
-GET_FN(fmi2GetInteger, fmi2Integer)
-GET_FN(fmi2GetBoolean, fmi2Boolean)
-GET_FN(fmi2GetString, fmi2String)
-
-/* Set: parameters only before fmi2ExitInitializationMode; nothing once terminated or failed */
-#define SET_FN(name, T, K)                                                             \
-    static name##TYPE *cache_##name = NULL;                                            \
-    FMI2_Export fmi2Status name(fmi2Component c, const fmi2ValueReference vr[], size_t n, \
-                                const T v[])                                           \
-    {                                                                                  \
-        name##TYPE *f;                                                                 \
-        Wrap *w = handle(c);                                                           \
-        if (w == NULL) return fmi2Error;                                               \
-        if (n && (vr == NULL || v == NULL))                                            \
-            return fail(w, #name ": %lu values but no array", (unsigned long)n);       \
-        ALLOW(#name, w->phase == PH_INSTANTIATED || w->phase == PH_INIT                \
-                     || w->phase == PH_STEP);                                          \
-        if (w->phase == PH_STEP && SHIM_N_PARAM_##K) {                                 \
-            const char *p = fixed_parameter(vr, n, SHIM_PARAM_##K, SHIM_PARAM_##K##_NAME, \
-                                            SHIM_N_PARAM_##K);                         \
-            if (p)                                                                     \
-                return fail(w, "%s is a fixed parameter: set it before "               \
-                            "fmi2ExitInitializationMode", p);                          \
-        }                                                                              \
-        RESOLVE(f, name);                                                              \
-        if (!f) return fmi2Error;                                                      \
-        return map(f(w->comp, vr, n, v));                                              \
-    }
-
-SET_FN(fmi2SetReal, fmi2Real, Real)
-SET_FN(fmi2SetInteger, fmi2Integer, Integer)
-SET_FN(fmi2SetBoolean, fmi2Boolean, Boolean)
-SET_FN(fmi2SetString, fmi2String, String)
+VALUE_FN(get, fmi2GetReal, fmi2Real, Real)
+VALUE_FN(get, fmi2GetInteger, fmi2Integer, Integer)
+VALUE_FN(get, fmi2GetBoolean, fmi2Boolean, Boolean)
+VALUE_FN(get, fmi2GetString, fmi2String, String)
+VALUE_FN(set, fmi2SetReal, fmi2Real, Real)
+VALUE_FN(set, fmi2SetInteger, fmi2Integer, Integer)
+VALUE_FN(set, fmi2SetBoolean, fmi2Boolean, Boolean)
+VALUE_FN(set, fmi2SetString, fmi2String, String)
 
 /* -- FMU state ------------------------------------------------------------------------------
  * The front's own state around pythonfmu's: the phase of the instance (a state taken in Step
@@ -861,31 +842,16 @@ static fmi2Status no_status(fmi2Component c)
     return fmi2Discard;
 }
 
-FMI2_Export fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind k, fmi2Status *v)
-{
-    (void)k; (void)v;
-    return no_status(c);
-}
-FMI2_Export fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind k, fmi2Real *v)
-{
-    (void)k; (void)v;
-    return no_status(c);
-}
-FMI2_Export fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind k,
-                                            fmi2Integer *v)
-{
-    (void)k; (void)v;
-    return no_status(c);
-}
-FMI2_Export fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind k,
-                                            fmi2Boolean *v)
-{
-    (void)k; (void)v;
-    return no_status(c);
-}
-FMI2_Export fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind k,
-                                           fmi2String *v)
-{
-    (void)k; (void)v;
-    return no_status(c);
-}
+/* fmi2GetStatus and its typed kin: nothing to ask (no asynchronous steps) */
+#define STATUS_FN(name, T)                                                             \
+    FMI2_Export fmi2Status name(fmi2Component c, const fmi2StatusKind k, T *v)         \
+    {                                                                                  \
+        (void)k; (void)v;                                                              \
+        return no_status(c);                                                           \
+    }
+
+STATUS_FN(fmi2GetStatus, fmi2Status)
+STATUS_FN(fmi2GetRealStatus, fmi2Real)
+STATUS_FN(fmi2GetIntegerStatus, fmi2Integer)
+STATUS_FN(fmi2GetBooleanStatus, fmi2Boolean)
+STATUS_FN(fmi2GetStringStatus, fmi2String)
