@@ -42,10 +42,16 @@ class Inst:
         self.fmu.instantiate(loggingOn=logging, callbacks=self.callbacks)
         self.t = 0.0
         if start:
-            self.fmu.setupExperiment(startTime=0.0)
-            self.fmu.enterInitializationMode()
-            self.set(**params)
-            self.fmu.exitInitializationMode()
+            self.start(**params)
+
+    def start(self, **params):
+        """Set up at t = 0, set ``params`` in Initialization Mode, initialise (also after
+        ``fmu.reset()``)."""
+        self.fmu.setupExperiment(startTime=0.0)
+        self.fmu.enterInitializationMode()
+        self.set(**params)
+        self.fmu.exitInitializationMode()
+        self.t = 0.0
 
     def set(self, **values):
         for k, v in values.items():
@@ -60,7 +66,11 @@ class Inst:
                 self.fmu.setString([self.vr[k]], [str(v)])
 
     def get(self, *names):
-        return self.fmu.getReal([self.vr[n] for n in names])
+        """Real values by name; a Boolean among them is read as a Boolean."""
+        if all(self.types[n] == "Real" for n in names):
+            return self.fmu.getReal([self.vr[n] for n in names])
+        return [self.fmu.getBoolean([self.vr[n]])[0] if self.types[n] == "Boolean"
+                else self.fmu.getReal([self.vr[n]])[0] for n in names]
 
     def outputs(self):
         """The reducer's outputs by name (REDUCER_OUTPUTS and ``locked``)."""
