@@ -40,7 +40,7 @@ HERE = Path(__file__).resolve().parent
 NAME = "CycloidDriveNative"
 #: The C sources written for this project, in this package.
 C_SOURCES = ("fmi2_cycloid.c", "cd_model.c")
-C_HEADERS = ("cd_model.h",)
+C_HEADERS = ("cd_model.h", "fmi2_front.h")
 #: FMI 2.0 headers (2-clause BSD, Modelica Association), taken from the installed fmpy.
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 GENERATED = "cd_map_data.c"

@@ -33,6 +33,8 @@ import dataclasses
 import math
 import pickle
 import sys
+import threading
+import weakref
 from pathlib import Path
 
 from . import core
@@ -272,6 +274,40 @@ def _shipped_map(key, temperature, folder=_MAP_DIR):
     return m
 
 
+class _MapTables:
+    """The solved tables of one loss map (a ``ModeMap``'s attributes but its ``out_of_range``
+    counter): read-only once solved, so every instance in this process that needs the map of
+    the same key (``_map_key``: design, mode, ranges) shares one copy. Each instance's
+    ``ModeMap`` holds a reference; when the last one is freed (fmi2FreeInstance) the tables go
+    with it (``_TABLES`` holds them weakly)."""
+    __slots__ = ("state", "__weakref__")
+
+    def __init__(self, state):
+        self.state = state
+
+
+_TABLES = weakref.WeakValueDictionary()      # map key -> _MapTables, while an instance uses it
+_TABLES_LOCK = threading.Lock()              # instances may initialise on different threads
+
+
+def _shared_map(key, build):
+    """A ``ModeMap`` with the tables of ``key``: the ones another live instance holds, else
+    ``build()``'s (a shipped map or a solve, outside the lock), shared from then on. Its own
+    ``out_of_range`` counter starts at 0."""
+    with _TABLES_LOCK:
+        tables = _TABLES.get(key)
+    if tables is None:
+        state = dict(build().__dict__)
+        state.pop("out_of_range", None)
+        with _TABLES_LOCK:      # another thread may have solved it meanwhile: take the first
+            tables = _TABLES.setdefault(key, _MapTables(state))
+    m = core.lossmap.ModeMap.__new__(core.lossmap.ModeMap)
+    m.__dict__.update(tables.state)
+    m.out_of_range = 0
+    m._tables_ref = tables            # keeps the shared tables alive while this map lives
+    return m
+
+
 class CycloidDrive(UnitSlave):
     author = "cyclo-fmu"
     description = ("Constrained cycloid drive: load-dependent losses and efficiency "
@@ -461,10 +497,15 @@ class CycloidDrive(UnitSlave):
                     # needs them). No mallopt here: an FMU must not change the host's
                     # allocator (the map solves 10-20 % slower with glibc's default
                     # thresholds early in a process; docs/explanation/fmu-safety.md)
-                    m = _shipped_map(_map_key(design_T, mode, tmax, smax),
-                                     design_T.operating_temperature, folder)
-                    return m if m is not None else core.lossmap.ModeMap(design_T, mode, tmax,
-                                                                        smax)
+                    # The tables are shared with the other instances of this process that
+                    # use the same map (_shared_map).
+                    key = _map_key(design_T, mode, tmax, smax)
+
+                    def build():
+                        m = _shipped_map(key, design_T.operating_temperature, folder)
+                        return m if m is not None else core.lossmap.ModeMap(design_T, mode,
+                                                                            tmax, smax)
+                    return _shared_map(key, build)
                 self._map = core.lossmap.ThermalMap(self._design, mode, tmax, smax, node)
                 self._map_key = map_key
             self._dependent = core.thermal.temperature_dependent(self._design)
