@@ -375,6 +375,7 @@ class CycloidDrive(UnitSlave):
         self._map_key = None
         self._last_inputs = None
         self._design = None
+        self._warm_in_time = False
         self._warned_range = False
 
     # -- life cycle ---------------------------------------------------------------------------
@@ -468,6 +469,8 @@ class CycloidDrive(UnitSlave):
                 self._map = core.lossmap.ThermalMap(self._design, mode, tmax, smax, node)
                 self._map_key = map_key
             self._dependent = core.thermal.temperature_dependent(self._design)
+            # one warm-up: a warm-up in time holds the losses at the start's temperature
+            self._warm_in_time = bool(self._design.extra.thermal_loss_change)
             self._R = core.thermal.housing_resistance(self._design)
             ex = self._design.extra
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
@@ -548,7 +551,7 @@ class CycloidDrive(UnitSlave):
             self.require_finite(w_in=w_in, tau_out=tau_ext, alpha_in=alpha)
         T = self._temperature(t, dt, w_in, tau_ext, alpha)
         # the temperature counts where the losses depend on it (physical profile)
-        inputs = (w_in, tau_ext, alpha, T if self._dependent else None)
+        inputs = (w_in, tau_ext, alpha, self._loss_T() if self._dependent else None)
         if inputs == self._last_inputs:
             # the same inputs as the last step, bit for bit (a steady state: 88 % of the
             # paper scenario's steps), and no time-dependent physics: the outputs stand
@@ -597,7 +600,7 @@ class CycloidDrive(UnitSlave):
     def _gear_torque(self, w_in, tau_out):
         """Driving-shaft torque of the gear alone (map or exact core) at a load torque."""
         if self._map is not None:
-            return self._map.solve(w_in, tau_out, self._T)[1][self._shaft_index[0]]
+            return self._map.solve(w_in, tau_out, self._loss_T())[1][self._shaft_index[0]]
         if w_in == 0:
             return 0.0
         op = core.operating_point(self._design_at_T(), self._mode, w_in, T_out=tau_out)
@@ -605,8 +608,8 @@ class CycloidDrive(UnitSlave):
 
     def _update_at(self, t, dt, w_in, tau_out):
         if self._map is not None:
-            speeds, torques, losses, eta, eta0, locked, forward = self._map.solve(w_in, tau_out,
-                                                                                  self._T)
+            speeds, torques, losses, eta, eta0, locked, forward = self._map.solve(
+                w_in, tau_out, self._loss_T())
             # below the grid (|w_in| < map_speed_max/1000: start-up, standstill) the edge values
             # are the physics' own limit, not a lack of range: warn only beyond the maxima
             if (not self._warned_range and (abs(tau_out) > self.map_torque_max
@@ -675,9 +678,19 @@ class CycloidDrive(UnitSlave):
 
     def _design_at_T(self):
         """The design with its grease at the present temperature (physical profile)."""
-        if not self._dependent or self._T == self._design.operating_temperature:
+        T = self._loss_T()
+        if not self._dependent or T == self._design.operating_temperature:
             return self._design
-        return core.thermal.at_temperature(self._design, self._T)
+        return core.thermal.at_temperature(self._design, T)
+
+    def _loss_T(self):
+        """The grease temperature the losses are evaluated at [K]: the present one, or, with a
+        warm-up in time in the design (``thermal_loss_change``), the start's ``T_oil_start``.
+        A warm-up in time was fitted against the model held at one temperature, so it holds the
+        model's own temperature physics already: the losses following the heat balance (or
+        the input) as well would count that warm-up twice. T_oil and Q_ambient still follow
+        the heat balance or the input (docs/explanation/thermal.md, "One warm-up")."""
+        return self.T_oil_start if self._warm_in_time else self._T
 
     def _exact(self, w_in, tau_out):
         a, b = self._mode[0], self._mode[1]
