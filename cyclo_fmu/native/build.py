@@ -219,6 +219,11 @@ def design_constants(design: DriveDesign):
     values = discovered_values(design)
     out += [(name, "Real", values[name], unit, desc) for name, _k, _f, unit, desc, *_ in
             DISCOVERED_PARAMETERS]
+    # the Python FMU's newer design parameters, last (the older constants' value references
+    # stay)
+    from ..slaves.cycloid_drive import LATE_DESIGN_PARAMETERS
+    for name, section, field, unit, desc, kind in LATE_DESIGN_PARAMETERS:
+        out.append((name, kind.__name__, getattr(getattr(design, section), field), unit, desc))
     return out
 
 

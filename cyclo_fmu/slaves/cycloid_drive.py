@@ -127,6 +127,14 @@ DESIGN_PARAMETERS = [
     ("housing_area", None, "housing_area", "m2", "housing surface A_h giving heat to the "
      "ambient (R = 1/(k_h A_h))", Real),
 ]
+#: design parameters registered after every other variable (newer: the value references of the
+#: older ones stay); entries as DESIGN_PARAMETERS
+LATE_DESIGN_PARAMETERS = [
+    ("nu_100", "lubricant", "kinematic_viscosity_100", "m2/s", "lubricant kinematic viscosity "
+     "at 100 degC: with nu (at 40 degC) the Walther line by which the grease temperature sets "
+     "the viscosity (physical profile; a diagnosed viscosity-temperature slope rewrites both)",
+     Real)]
+ALL_DESIGN_PARAMETERS = DESIGN_PARAMETERS + LATE_DESIGN_PARAMETERS
 #: design parameters of the heat balance only (run-time in both FMUs; not in the loss map)
 THERMAL_PARAMETERS = ("ambient_temperature", "housing_heat_capacity", "housing_heat_transfer",
                       "housing_area")
@@ -162,6 +170,7 @@ def discovered_values(design) -> dict:
 #: fall below zero when warm (that also keeps P_loss >= 0).
 PARAMETER_LIMITS = dict(
     z1=(3, None), n_disc_rollers=(3, None), lam=(1.0, None),
+    nu_100=(0.0, None),
     **{n: (0.0, None) for n in ("e", "d_v1", "d_o1", "b1", "d_v2", "d_o2", "b2", "d_m2", "D_cz",
                                 "D_p", "d_p", "delta_z", "nu", "rho_oil", "pin_roughness",
                                 "drag_torque", "stribeck_torque", "input_inertia")},
@@ -366,6 +375,10 @@ class CycloidDrive(UnitSlave):
                     depends=("T_oil_in",))
         self.output("Q_ambient", 0.0, "W", "heat flow from the housing to the ambient "
                     "(T_oil - ambient_temperature)/R", depends=("T_oil_in",))
+        for name, section, field, unit, desc, kind in LATE_DESIGN_PARAMETERS:
+            lo, hi = PARAMETER_LIMITS.get(name, (None, None))
+            self.parameter(name, getattr(getattr(default, section), field), unit, desc, kind,
+                           min=lo, max=hi)
         self._T = default.operating_temperature
         self._theta = 0.0
         self._distance = 0.0
@@ -381,7 +394,7 @@ class CycloidDrive(UnitSlave):
     # -- life cycle ---------------------------------------------------------------------------
     def _build_design(self):
         changes, lub, fr, ex, cal = {}, {}, {}, {}, {}
-        for name, section, field, unit, desc, kind in DESIGN_PARAMETERS:
+        for name, section, field, unit, desc, kind in ALL_DESIGN_PARAMETERS:
             v = getattr(self, name)
             {None: changes, "lubricant": lub, "friction": fr, "extra": ex,
              "calibration": cal}[section][field] = v
