@@ -237,9 +237,10 @@ def test_defaults_at_the_operating_temperature_give_the_one_temperature_map(fmu)
 
 
 def test_python_and_native_fmus_agree_for_the_calibrated_preset_while_warm(preset_fmus):
-    """mackic-rig (calibrated) warming up from 15 degC with 60 s steps across the map's
-    temperature nodes, and then driven at a measured-looking warm temperature: every output
-    equal to 1e-9."""
+    """mackic-rig (calibrated: mesh_loss_k, idle_loss_scale) warming up from 15 degC with 60 s
+    steps across the map's temperature nodes (the internal heat balance), then at a held warm
+    temperature, then along a temperature trajectory on the input T_oil_in in all four
+    quadrants: every output equal to 1e-9."""
     native, python = preset_fmus
     params = dict(T_oil_start=288.15, ambient_temperature=298.15, J_out=2e-3,
                   housing_heat_capacity=600.0)
@@ -261,6 +262,20 @@ def test_python_and_native_fmus_agree_for_the_calibrated_preset_while_warm(prese
         a, b = advance(n, 1e-3, w_in=w, tau_out=t), advance(p, 1e-3, w_in=w, tau_out=t)
         for key in OUT:
             assert a[key] == pytest.approx(b[key], rel=RTOL, abs=ATOL), (k, key)
+    # and a measured-looking temperature trajectory on the input: 12 to 85 degC and back,
+    # across every node of the map and between them, in all four quadrants
+    seen = set()
+    for k in range(200):
+        T_in = 321.65 + 36.5 * math.sin(0.037 * k) + 0.3 * math.sin(1.7 * k)
+        w = 240.0 * math.sin(0.09 * k + 0.3)
+        t = 7.0 * math.sin(0.061 * k)
+        a = advance(n, 0.05, w_in=w, tau_out=t, T_oil_in=T_in)
+        b = advance(p, 0.05, w_in=w, tau_out=t, T_oil_in=T_in)
+        assert a["T_oil"] == b["T_oil"] == T_in
+        for key in OUT:
+            assert a[key] == pytest.approx(b[key], rel=RTOL, abs=ATOL), (k, key)
+        seen.add((int(T_in // 10), w > 0, t * w < 0))
+    assert len({x[0] for x in seen}) >= 7 and len({x[1:] for x in seen}) == 4
     n.close()
     p.close()
 
