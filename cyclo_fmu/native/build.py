@@ -411,8 +411,9 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
             sv("PL_mesh", 52, "output", "continuous", "partial loss PL_mesh: additional mesh "
                "loss, a fraction mesh_loss_k of the mesh power (calibrated; 0 uncalibrated)",
                f'<Real {_real_attrs("W", "Power")}/>', "calculated")
-            sv("T_oil", 53, "output", "continuous", "grease/housing temperature the losses are "
-               "evaluated at (T_oil_in, or the heat balance's)",
+            sv("T_oil", 53, "output", "continuous", "grease/housing temperature (T_oil_in, or "
+               "the heat balance's); the losses are evaluated at it, or at T_oil_start while "
+               "thermal_loss_change is not 0 (one warm-up)",
                f'<Real {_real_attrs("K", "ThermodynamicTemperature")}/>', "calculated")
             sv("Q_ambient", 54, "output", "continuous", "heat flow from the housing to the "
                "ambient (T_oil - ambient_temperature)/R", f'<Real {_real_attrs("W", "Power")}/>',

@@ -371,7 +371,8 @@ class CycloidDrive(UnitSlave):
         for name, _k, _field, unit, desc, lo, hi in DISCOVERED_PARAMETERS:
             self.parameter(name, 0.0, unit, desc, Real, min=lo, max=hi)
         self.output("T_oil", default.operating_temperature, "K", "grease/housing temperature "
-                    "the losses are evaluated at (T_oil_in, or the heat balance's)",
+                    "(T_oil_in, or the heat balance's); the losses are evaluated at it, or at "
+                    "T_oil_start while thermal_loss_change is not 0 (one warm-up)",
                     depends=("T_oil_in",))
         self.output("Q_ambient", 0.0, "W", "heat flow from the housing to the ambient "
                     "(T_oil - ambient_temperature)/R", depends=("T_oil_in",))
