@@ -253,20 +253,22 @@ def test_closure_load_ripple(sets, tmp_path):
     _assert_closes(good, bad, bad_min=2.0)
 
 
-@pytest.mark.slow
-def test_closure_temperature_driven_warm_up(sets, tmp_path):
+@pytest.mark.parametrize("duration, tau, measured", [
+    (20.0, 10.0, "slope -0.0247 1/K, 1.01 of the noise floor against 2.55"),
+    pytest.param(60.0, 30.0, "slope -0.0239 1/K, 1.01 against 2.48", marks=pytest.mark.slow)])
+def test_closure_temperature_driven_warm_up(sets, tmp_path, duration, tau, measured):
     """A warm-up driven by a measured temperature: the reducer FMU's grease follows a
-    temperature rising 14 K from the operating temperature (time constant 30 s; the recording's
-    temperature column), its true lubricant thinning at d ln(nu)/dT = -0.025 1/K (the default
-    grease: -0.058). The diagnosis (model held at the operating temperature) names the
-    viscosity drift per 10 K, design_updated.toml carries it as the lubricant's Walther line
+    temperature rising 14 K from the operating temperature (time constant ``tau``; the
+    recording's temperature column), its true lubricant thinning at d ln(nu)/dT = -0.025 1/K
+    (the default grease: -0.058). The diagnosis (model held at the operating temperature) names
+    the viscosity drift per 10 K, design_updated.toml carries it as the lubricant's Walther line
     (nu_100 rewritten), and the bench, its grease fed the recording's temperature column
     (T_oil_in), reproduces the recording to its noise floor; the default lubricant at the same
-    temperatures does not. Measured: slope -0.0239 1/K, 1.01 of the noise floor against 2.48.
-    The friction level is held right (friction_error 0): with a random 4 % friction error the
-    diagnosis named the viscosity drift alone and the closure left 1.6 of the noise floor."""
-    good, bad, d = _closure("viscosity_drift", sets, tmp_path, duration=60.0,
-                            temperature_rise=14.0, shape=30.0, friction_error=0.0,
+    temperatures does not (``measured``). The friction level is held right (friction_error 0):
+    with a random 4 % friction error the diagnosis named the viscosity drift alone and the
+    closure left 1.6 of the noise floor."""
+    good, bad, d = _closure("viscosity_drift", sets, tmp_path, duration=duration,
+                            temperature_rise=14.0, shape=tau, friction_error=0.0,
                             effect_values={"ln_viscosity_change": -0.25})
     e = {x["id"]: x for x in d.effects}
     assert list(e) == ["viscosity_drift"]
