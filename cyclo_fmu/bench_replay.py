@@ -149,7 +149,16 @@ def replay_recording(rec, mode: str, fmu_dir, design: DriveDesign = None,
         # the reducer's grease follows the recording's temperature column (its input T_oil_in;
         # the diagnosis's temperature forms are per 10 K of the same column)
         from model_core.design import KELVIN
-        signals["drive.T_oil_in"] = np.interp(grid, t, np.asarray(temperature, float)) + KELVIN
+
+        from .slaves.cycloid_drive import T_OIL_RANGE
+        T_oil = np.interp(grid, t, np.asarray(temperature, float)) + KELVIN
+        bad = ~((T_oil > T_OIL_RANGE[0]) & (T_oil < T_OIL_RANGE[1]))
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise RecordingError(f"temperature_C: {float(T_oil[k] - KELVIN):.6g} degC at t = "
+                                 f"{grid[k]:.6g} s is not a grease temperature the reducer "
+                                 "takes (-100 to 200 degC); a column in K or F needs --units")
+        signals["drive.T_oil_in"] = T_oil
         params["drive.use_T_oil_input"] = True
         notes.append("the reducer's grease temperature follows the recording's temperature "
                      "column (T_oil_in)")

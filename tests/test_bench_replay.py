@@ -127,6 +127,18 @@ def test_transducer_gain_error_has_bounds(sets, capfd):
     assert "gain_error = 0.6 outside its declared range [-0.5, 0.5]" in capfd.readouterr().out
 
 
+def test_a_temperature_the_reducer_cannot_take_is_refused_by_name(sets, short):
+    """A temperature column becomes the reducer's grease temperature: one out of the FMUs'
+    range (here a column in K read as degC) is refused before the run, naming the column."""
+    import dataclasses
+    from cyclo_fmu.recordings import RecordingError
+    py_dir, _ = sets
+    _, rec, mode = short
+    hot = dataclasses.replace(rec, temperature=np.full(len(rec.time), 313.15))
+    with pytest.raises(RecordingError, match="temperature_C: 313.15 degC"):
+        replay_recording(hot, mode, py_dir, DriveDesign(), Sensors(ideal=True), "python")
+
+
 def test_an_uneven_recording_is_run_on_its_median_step(sets):
     """A logger's dropped sample (a gap) and jitter: the run is on the median step, the result
     interpolated back onto the recording's own times."""
