@@ -1,16 +1,40 @@
 """Test helpers shared by the FMU tests (test_native_fmu.py, test_fmu_safety.py and the tests
 that import from them): ``Inst``, an FMI 2.0 co-simulation instance run through fmpy."""
+import itertools
 import shutil
 from ctypes import byref
 
 from fmpy import extract, fmi2, read_model_description
 from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi1 import printLogMessage
 from fmpy.logging import addLoggerProxy
 
 #: the reducer's Real outputs that ``Inst.outputs`` reads (both reducer FMUs have them)
 REDUCER_OUTPUTS = ("w_out", "tau_in", "tau_housing", "P_loss", "PL1", "PL2", "PL3", "PL5", "PL6",
                    "eta", "eta0", "P_extra", "P_stored", "PL_support", "PL_seal", "PL_churn",
                    "torque_out", "tau_in_static", "J_load", "J_load_dec", "PL_mesh")
+
+
+#: fmpy's logger proxy keeps ONE logger per process (the last one registered with
+#: addLoggerProxy), and fmpy's default callbacks go through it too. A logger owned by an
+#: instance would be freed with it and leave the proxy calling freed memory (a segfault in a
+#: later test's FMU call), so every instance registers this one, which lives as long as the
+#: module and routes each message by the instance's componentEnvironment.
+_SINKS = {}
+_IDS = itertools.count(1)
+
+
+def _route(env, instance, status, category, message):
+    sink = _SINKS.get(env)
+    if sink is None:                # not an Inst (fmpy's default callbacks): fmpy's printing
+        printLogMessage(env, instance, status, category, message)
+    else:
+        sink.append((status, message.decode(errors="replace")))
+
+
+_LOGGER = fmi2.fmi2CallbackLoggerTYPE(_route)
+_ALLOCATE = fmi2.fmi2CallbackAllocateMemoryTYPE(fmi2.calloc)
+_FREE = fmi2.fmi2CallbackFreeMemoryTYPE(fmi2.free)
 
 
 class Inst:
@@ -29,12 +53,13 @@ class Inst:
         self.dir = unzip or extract(path)
         self.messages = []
 
-        def logger(component, instance, status, category, message):
-            self.messages.append((status, message.decode(errors="replace")))
+        self._env = next(_IDS)
+        _SINKS[self._env] = self.messages
         self.callbacks = fmi2.fmi2CallbackFunctions()
-        self.callbacks.logger = fmi2.fmi2CallbackLoggerTYPE(logger)
-        self.callbacks.allocateMemory = fmi2.fmi2CallbackAllocateMemoryTYPE(fmi2.calloc)
-        self.callbacks.freeMemory = fmi2.fmi2CallbackFreeMemoryTYPE(fmi2.free)
+        self.callbacks.logger = _LOGGER
+        self.callbacks.allocateMemory = _ALLOCATE
+        self.callbacks.freeMemory = _FREE
+        self.callbacks.componentEnvironment = self._env
         addLoggerProxy(byref(self.callbacks))
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
                              modelIdentifier=self.md.coSimulation.modelIdentifier,
