@@ -203,7 +203,7 @@ class Diagnoser:
         if design == self.design:          # the first replay's residual
             return float(np.sqrt(np.sum(w * P0.y ** 2) / max(np.sum(w), 1e-300)))
         rp = replay(design, self.mode, rec, self.bandwidth,
-                    (P0.sig["sens_mu"], P0.sig["sens_nu"]))
+                    (P0.sig["sens_mu"], P0.sig["sens_nu"]), calibration=False)
         from .problem import masked_means
         n = len(P0.y) * P0.m
         y = masked_means((rec.torque_in - first_order(rp.T_model, P0.dt, self.bandwidth))[:n],

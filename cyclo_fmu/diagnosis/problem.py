@@ -92,17 +92,24 @@ def jump_mask(t, w_in, T_model, noise, dt) -> np.ndarray:
 
 def masked_means(x, mask, m):
     """Block means over the compared samples only (the plain mean where none is)."""
-    from .replay import block_means
+    from .replay import block_means, _block_sum
     if mask.all():
         return block_means(x, m)
     n = (len(x) // m) * m
     x = x[:n].reshape(-1, m, *x.shape[1:])
     mk = mask[:n].reshape(-1, m)
     cnt = mk.sum(1)
-    mk = mk.reshape(mk.shape + (1,) * (x.ndim - 2))
-    s = np.where(mk, x, 0.0).sum(1)
+    if x[0, 0].size == 1:    # one column: numpy sums each block's contiguous samples
+        s = np.where(mk, x.reshape(mk.shape), 0.0).sum(1).reshape(cnt.shape + x.shape[2:])
+    else:   # columns: summed block position by block position (see replay._block_sum)
+        mk3 = mk.reshape(mk.shape + (1,) * (x.ndim - 2))
+        s = _block_sum(x, lambda i: np.where(mk3[:, i], x[:, i], 0.0))
     c = cnt.reshape(cnt.shape + (1,) * (x.ndim - 2))
-    return np.where(c > 0, s / np.maximum(c, 1), x.mean(1))
+    out = s / np.maximum(c, 1)
+    empty = cnt == 0               # blocks with no compared sample: their plain mean
+    if empty.any():
+        out[empty] = x[empty].mean(1)
+    return out
 
 
 def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m):
@@ -152,7 +159,10 @@ def build_problem(rec, design, mode, candidates, bandwidth, block,
     the block-mean regression problem."""
     t = rec.time
     dt = float(np.median(np.diff(t)))
-    rp = replay(design, mode, rec, bandwidth, sensitivities)
+    # the calibration's sensitivities only where a candidate reads them (four replays)
+    calibration = any(r in ("sens_k", "sens_idle") for c in candidates
+                      for r in EFFECTS[c].requires)
+    rp = replay(design, mode, rec, bandwidth, sensitivities, calibration)
     sig = rp.signals
     T_model_f = first_order(rp.T_model, dt, bandwidth)
     m = max(1, int(round(block / dt)))
