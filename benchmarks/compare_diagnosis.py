@@ -57,14 +57,16 @@ def make(out: Path):
         "s_temperature_warmup": dict(effect="thermal_drift", seed=8, temperature_rise=20.0),
         "s_windage_remainder": dict(effect="none", seed=7, added_torque=_windage),
         "s_large_thermal_600k": dict(effect="thermal_drift", seed=1, size="large"),
+        "s_mesh_loss_calibrate": dict(effect="mesh_loss", seed=9),
     }
+    extra_args = {"s_mesh_loss_calibrate": ["--calibrate"]}
     cases = []
     for name, kw in synth.items():
         path = recs / f"{name}.csv"
         kw = dict(kw)
         effect, seed = kw.pop("effect"), kw.pop("seed")
         write_synth(path, synthesize(effect, seed, **kw))
-        cases.append(dict(id=name, file=str(path), args=[]))
+        cases.append(dict(id=name, file=str(path), args=extra_args.get(name, [])))
         print(f"wrote {path}")
     env = dict(os.environ, CYCLO_INDEPENDENT_OUT=str(out / "independent"),
                PYTHONPATH=str(ROOT))
@@ -76,8 +78,9 @@ def make(out: Path):
     (out / "cases.json").write_text(json.dumps(cases, indent=1))
 
 
-def run(out: Path, label: str, commit: str = None):
-    """Diagnose every case with the code of ``commit`` (default: this tree) into out/label."""
+def run(out: Path, label: str, commit: str = None, only=()):
+    """Diagnose every case (or those in ``only``) with the code of ``commit`` (default: this
+    tree) into out/label."""
     src = ROOT
     if commit:
         src = out / f"src-{commit}"
@@ -90,6 +93,8 @@ def run(out: Path, label: str, commit: str = None):
     dest = out / label
     dest.mkdir(parents=True, exist_ok=True)
     for c in json.loads((out / "cases.json").read_text()):
+        if only and c["id"] not in only:
+            continue
         d = dest / c["id"]
         if d.exists():
             subprocess.run(["rm", "-r", str(d)], check=True)
@@ -161,6 +166,7 @@ def main():
     p.add_argument("dir", type=Path)
     p.add_argument("label")
     p.add_argument("--commit")
+    p.add_argument("--only", nargs="*", default=())
     p = sub.add_parser("compare")
     p.add_argument("dir", type=Path)
     p.add_argument("before")
@@ -172,7 +178,7 @@ def main():
     if a.cmd == "make":
         make(a.dir)
     elif a.cmd == "run":
-        run(a.dir, a.label, a.commit)
+        run(a.dir, a.label, a.commit, a.only)
     else:
         sys.exit(compare(a.dir, a.before, a.after, a.rtol, a.atol))
 

@@ -144,7 +144,7 @@ class Diagnoser:
                               # the friction level's own sensitivity is reused (forced, it
                               # is a nuisance there); the viscosity's is taken again at the
                               # corrected level (a drift acting through it changes with it)
-                              (P0.sig["sens_mu"], None))
+                              (P0.sig["sens_mu"], None), reuse=P0)
             sel = select(P, self.n_folds, forced=("friction_miscalibrated",))
         self._stage("twins")
         J = judge(P, sel)
