@@ -133,6 +133,30 @@ class _Reads(dict):
         self.read.add(key)
         return super().__contains__(key)
 
+    # any other look at the whole dict counts as reading every signal (never reused wrongly)
+    def _every(self):
+        self.read.update(super().keys())
+
+    def keys(self):
+        self._every()
+        return super().keys()
+
+    def items(self):
+        self._every()
+        return super().items()
+
+    def values(self):
+        self._every()
+        return super().values()
+
+    def __iter__(self):
+        self._every()
+        return super().__iter__()
+
+    def copy(self):
+        self._every()
+        return dict(self)
+
 
 def _same_signal(a, b) -> bool:
     if a is b:
