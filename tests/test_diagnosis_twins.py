@@ -148,3 +148,79 @@ def test_the_noise_model_recovers_an_autoregression():
     a, inn = fit_ar(x)
     assert a[0] == pytest.approx(0.8, abs=0.02) and np.all(np.abs(a[1:]) < 0.05)
     assert np.std(inn) == pytest.approx(1.0, rel=0.03)
+
+
+def test_block_means_are_numpys_to_the_bit():
+    """The diagnosis's block means (faster than numpy's mean over a middle axis) add in
+    numpy's order: the same numbers to the bit, for one column and several, masked or not,
+    blocks with no compared sample included (a block mean of a speed at standstill is 0 or
+    1e-18 by the order of the sums; its sign enters the generic basis)."""
+    from cyclo_fmu.diagnosis.problem import masked_means
+    from cyclo_fmu.diagnosis.replay import block_means
+    rng = np.random.default_rng(5)
+    for m in (1, 7, 10, 20):
+        for shape in [(m * 97 + 3,), (m * 97 + 3, 1), (m * 97 + 3, 4), (m * 97, 2, 3)]:
+            x = rng.normal(size=shape) * 10.0 ** rng.integers(-5, 5, size=shape)
+            mask = rng.random(shape[0]) > 0.2
+            mask[:3 * m] = False
+            n = (shape[0] // m) * m
+            xb = x[:n].reshape(-1, m, *shape[1:])
+            mk = mask[:n].reshape(-1, m)
+            c = mk.sum(1).reshape(-1, *(1,) * (len(shape) - 1))
+            mk = mk.reshape(mk.shape + (1,) * (len(shape) - 1))
+            ref = np.where(c > 0, np.where(mk, xb, 0.0).sum(1) / np.maximum(c, 1), xb.mean(1))
+            assert np.array_equal(masked_means(x, mask, m), ref)
+            assert np.array_equal(block_means(x, m), xb.mean(1))
+
+
+def test_the_relinearised_problem_reuses_columns_to_the_bit(monkeypatch):
+    """The re-linearised problem (another friction level) takes from the first problem only the
+    candidate columns whose signals did not change, and its matrix is the one built afresh, to
+    the bit; the columns that read the model (thermal drift: the model's loss) are computed
+    again, those of the recording alone (inertia: its acceleration) are not. (Reuse needs the
+    same samples compared: one held speed, where no jump of the model moves with its level.)"""
+    from cyclo_fmu.diagnosis import problem
+    from model_core.design import scale_friction_level
+    from model_core.effects import DEFAULT_CANDIDATES
+    rec = as_recording(synthesize("thermal_drift", 3, "S1", "tiny", plan="one_speed"))
+    cands = tuple(c for c in DEFAULT_CANDIDATES if c != "none")
+    design = DriveDesign()
+    P0 = problem.build_problem(rec, design, "S1", cands, 1000.0, 0.01)
+    reads = {k: v[0] for k, v in P0.columns.items()}
+    assert "loss_in" in reads[("thermal_drift", 300.0)]
+    assert reads[("inertia", None)] == {"alpha_in"}
+    changed = scale_friction_level(design, 1.08)
+    sens = (P0.sig["sens_mu"], None)
+    fresh = problem.build_problem(rec, changed, "S1", cands, 1000.0, 0.01, sens)
+    computed = []
+    basis = problem.EFFECTS["inertia"].basis.__func__
+
+    def counting(self, s, shape=None):
+        computed.append(self.id)
+        return basis(self, s, shape)
+    monkeypatch.setattr(type(problem.EFFECTS["inertia"]), "basis", counting)
+    reused = problem.build_problem(rec, changed, "S1", cands, 1000.0, 0.01, sens, reuse=P0)
+    assert np.array_equal(reused.mask, P0.mask)
+    assert np.array_equal(reused.X, fresh.X) and np.array_equal(reused.y, fresh.y)
+    assert "thermal_drift" in computed and "inertia" not in computed
+    assert P0.columns is None                     # released with the earlier problem
+
+
+def test_a_run_in_no_distance_can_resolve_is_left_out():
+    """A run-in is scanned only at distances the first fold does not run through (a fifth of
+    the recording's distance); an hour at speed runs through every distance of the grid, and
+    the effect is left out of the candidates instead of being evaluated without a distance."""
+    from cyclo_fmu.diagnosis.problem import _candidates
+    from model_core.effects import RUN_IN_DISTANCES, RUN_IN_MIN_SHARE
+    n = 3600
+    t = np.arange(n, dtype=float)                  # an hour, one block a second
+    distance = 300.0 * t                           # 300 rad/s: 1.08e6 rad in all
+    assert RUN_IN_MIN_SHARE * distance[-1] > max(RUN_IN_DISTANCES)
+    sig = {"t": t, "w_in": np.full(n, 300.0), "distance_in": distance,
+           "loss_in": np.full(n, 0.02), "temperature": None}
+    cols, options, _ = _candidates(sig, ("run_in",), True, 1.0, 0.0, np.ones(n, bool), 1)
+    assert cols == [] and options["run_in"] == []
+    short = dict(sig, distance_in=distance / 20)    # three minutes' distance: resolvable
+    cols, options, _ = _candidates(short, ("run_in",), True, 1.0, 0.0, np.ones(n, bool), 1)
+    assert [t.shape for t in options["run_in"]] == [s for s in RUN_IN_DISTANCES
+                                                    if s >= RUN_IN_MIN_SHARE * distance[-1] / 20]

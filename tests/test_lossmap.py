@@ -72,3 +72,25 @@ def test_heap_settings_can_be_switched_off(monkeypatch):
     monkeypatch.setenv("CYCLO_FMU_KEEP_MALLOC", "1")
     assert heap._glibc() is None
     assert heap.keep_temporaries_on_heap() is False
+
+
+@pytest.mark.parametrize("mode", ["S1", "S2", "1S", "2S", "12", "21"])
+def test_replay_kernel_gives_solve_arrays_input_torque_to_the_bit(design, mode):
+    """The replay's input-torque kernel (``input_torque_arrays``, only what tau_in needs) is
+    the same arithmetic as ``solve_arrays``: the same numbers to the bit, both flow
+    directions, standstill, zero load, below the grid's lowest speed, and with the speed
+    location shared from a map of another design on the same grid."""
+    from model_core.design import scale_friction_level
+    rng = np.random.default_rng(3)
+    n = 20000
+    w = rng.normal(0, 150, n)
+    w[::50] = 0.0
+    w[1::50] = rng.normal(0, 0.05, w[1::50].size)      # below the grid's lowest speed
+    T = rng.normal(0, 8, n)
+    T[::70] = 0.0
+    m = ModeMap(design, mode, 30.0, 300.0)
+    ref = m.solve_arrays(w, T)["tau_in"]
+    assert np.array_equal(m.input_torque_arrays(w, T), ref)
+    other = ModeMap(scale_friction_level(design, 1.1), mode, 30.0, 300.0)
+    assert other.same_speed_grid(m)
+    assert np.array_equal(m.input_torque_arrays(w, T, other.locate_speeds(w)), ref)

@@ -586,7 +586,7 @@ def refine_closure(design, rec, mode, bandwidth, samples_per_block, weights,
     dt = float(np.median(np.diff(rec.time)))
     w = np.asarray(weights, float)
     for _ in range(steps):
-        rp = replay(design, mode, rec, bandwidth)
+        rp = replay(design, mode, rec, bandwidth, calibration=False)   # (not read here)
         s = rp.signals
         y = block_means(rec.torque_in - first_order(rp.T_model, dt, bandwidth), m)
         g = 1.0 + design.extra.torque_in_gain_error

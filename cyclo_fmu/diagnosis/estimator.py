@@ -31,7 +31,7 @@ from model_core.kinematics import parse_mode
 from . import residual as R
 from .problem import MIN_LOAD, build_problem
 from .remainder import PEAK_MIN_AMPLITUDE_NM, remainder
-from .replay import block_means, first_order, replay
+from .replay import Replay, block_means, first_order, replay
 from .result import Diagnosis, DiagnosisError, report, zeta_d
 from .select_effects import MIN_EXPLAINED_NM, select
 from .twins import FALSE_ALARM, N_TWINS, judge
@@ -144,7 +144,12 @@ class Diagnoser:
                               # the friction level's own sensitivity is reused (forced, it
                               # is a nuisance there); the viscosity's is taken again at the
                               # corrected level (a drift acting through it changes with it)
-                              (P0.sig["sens_mu"], None))
+                              (P0.sig["sens_mu"], None), reuse=P0)
+            # of the first replay's sample-level signals only the friction and viscosity
+            # sensitivities are read again (residual_rms, the report's friction torque): the
+            # others (~50 MB at 600 000 samples) are released before the later stages' peaks
+            P0.sig = {k: P0.sig[k] for k in ("sens_mu", "sens_nu")}
+            P0.rp = Replay(P0.rp.T_model, P0.sig)
             sel = select(P, self.n_folds, forced=("friction_miscalibrated",))
         self._stage("twins")
         J = judge(P, sel)
@@ -203,7 +208,7 @@ class Diagnoser:
         if design == self.design:          # the first replay's residual
             return float(np.sqrt(np.sum(w * P0.y ** 2) / max(np.sum(w), 1e-300)))
         rp = replay(design, self.mode, rec, self.bandwidth,
-                    (P0.sig["sens_mu"], P0.sig["sens_nu"]))
+                    (P0.sig["sens_mu"], P0.sig["sens_nu"]), calibration=False)
         from .problem import masked_means
         n = len(P0.y) * P0.m
         y = masked_means((rec.torque_in - first_order(rp.T_model, P0.dt, self.bandwidth))[:n],

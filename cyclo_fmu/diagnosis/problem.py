@@ -67,6 +67,8 @@ class Problem:
     valid: np.ndarray = field(repr=False, default=None)
     noise_sample: float = 0.0
     bandwidth: float = 0.0
+    #: {(effect, shape): (signals its basis read, block-mean column)} (``_candidates``)
+    columns: dict = field(repr=False, default=None)
 
     def __getitem__(self, key):          # the dict interface of earlier versions
         return getattr(self, key)
@@ -92,21 +94,99 @@ def jump_mask(t, w_in, T_model, noise, dt) -> np.ndarray:
 
 def masked_means(x, mask, m):
     """Block means over the compared samples only (the plain mean where none is)."""
-    from .replay import block_means
+    from .replay import block_means, _block_sum
     if mask.all():
         return block_means(x, m)
     n = (len(x) // m) * m
     x = x[:n].reshape(-1, m, *x.shape[1:])
     mk = mask[:n].reshape(-1, m)
     cnt = mk.sum(1)
-    mk = mk.reshape(mk.shape + (1,) * (x.ndim - 2))
-    s = np.where(mk, x, 0.0).sum(1)
+    if x[0, 0].size == 1:    # one column: numpy sums each block's contiguous samples
+        s = np.where(mk, x.reshape(mk.shape), 0.0).sum(1).reshape(cnt.shape + x.shape[2:])
+    else:   # columns: summed block position by block position (see replay._block_sum)
+        mk3 = mk.reshape(mk.shape + (1,) * (x.ndim - 2))
+        s = _block_sum(x, lambda i: np.where(mk3[:, i], x[:, i], 0.0))
     c = cnt.reshape(cnt.shape + (1,) * (x.ndim - 2))
-    return np.where(c > 0, s / np.maximum(c, 1), x.mean(1))
+    out = s / np.maximum(c, 1)
+    empty = cnt == 0               # blocks with no compared sample: their plain mean
+    if empty.any():
+        out[empty] = x[empty].mean(1)
+    return out
 
 
-def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m):
-    cols, options = [], {}
+class _Reads(dict):
+    """The signals dict, noting which signals a basis reads (``_candidates``' reuse)."""
+
+    def __init__(self, sig):
+        super().__init__(sig)
+        self.read = set()
+
+    def __getitem__(self, key):
+        self.read.add(key)
+        return super().__getitem__(key)
+
+    def get(self, key, default=None):
+        self.read.add(key)
+        return super().get(key, default)
+
+    def __contains__(self, key):
+        self.read.add(key)
+        return super().__contains__(key)
+
+    # any other look at the whole dict counts as reading every signal (never reused wrongly)
+    def _every(self):
+        self.read.update(super().keys())
+
+    def keys(self):
+        self._every()
+        return super().keys()
+
+    def items(self):
+        self._every()
+        return super().items()
+
+    def values(self):
+        self._every()
+        return super().values()
+
+    def __iter__(self):
+        self._every()
+        return super().__iter__()
+
+    def copy(self):
+        self._every()
+        return dict(self)
+
+
+def _same_signal(a, b) -> bool:
+    if a is b:
+        return True
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return (isinstance(a, np.ndarray) and isinstance(b, np.ndarray)
+                and a.shape == b.shape and np.array_equal(a, b))
+    return type(a) is type(b) and a == b
+
+
+def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None):
+    """Every candidate's block-mean columns (each shape's basis at sample level, through the
+    transducer's low pass, block-averaged over the compared samples) and its Terms. ``reuse``:
+    (signals, columns) of an earlier problem with the same samples, mask and block length (the
+    re-linearised replay): a column whose basis read only signals equal to that problem's (the
+    recording's own speed, angle, time, load) is that problem's column, the same numbers; the
+    ones that read the model (its loss, sensitivities, torque) are computed again. Returns
+    (cols, options, columns) with columns {(effect, shape): (signals read, column)}."""
+    cols, options, columns = [], {}, {}
+    sig = _Reads(P_sig)
+    old_sig, old_cols = reuse if reuse is not None else ({}, {})
+    same = {}
+
+    def unchanged(keys):
+        for k in keys:
+            if k not in same:
+                same[k] = k in old_sig and _same_signal(P_sig.get(k), old_sig[k])
+            if not same[k]:
+                return False
+        return True
     for eid in candidates:
         eff = EFFECTS[eid]
         if any(P_sig.get(r) is None for r in eff.requires):
@@ -115,7 +195,21 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m):
             continue
         terms = []
         for shape in eff.shapes(P_sig):
-            B = masked_means(first_order(eff.basis(P_sig, shape), dt, bandwidth), mask, m)
+            if shape is None and eff.shape and not (eff.temperature_form
+                                                    and P_sig.get("temperature") is not None):
+                # Effect.shapes' fallback when its filter keeps no shape of the grid (a run-in
+                # on an hour-long recording: every distance settles within the first fold) is
+                # no shape: the effect cannot be resolved in this recording (its basis would
+                # divide by None)
+                continue
+            old = old_cols.get((eid, shape))
+            if old is not None and unchanged(old[0]):
+                keys, B = old
+            else:
+                sig.read = set()
+                B = masked_means(first_order(eff.basis(sig, shape), dt, bandwidth), mask, m)
+                keys = frozenset(sig.read)
+            columns[(eid, shape)] = (keys, B)
             k0 = sum(c.shape[1] for c in cols)
             cols.append(B)
             terms.append(Term(eid, shape, tuple(range(k0, k0 + B.shape[1])),
@@ -126,7 +220,7 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m):
                               len(eff.shape_names) if (eff.shape and shape is not None)
                               else 0))
         options[eid] = terms
-    return cols, options
+    return cols, options, columns
 
 
 def _structure(Gb, groups, k0):
@@ -147,12 +241,17 @@ def _structure(Gb, groups, k0):
 
 
 def build_problem(rec, design, mode, candidates, bandwidth, block,
-                  sensitivities=None) -> Problem:
+                  sensitivities=None, reuse=None) -> Problem:
     """Stage ``replay``: replay ``rec`` through ``design`` per sample, mask the jumps, and form
-    the block-mean regression problem."""
+    the block-mean regression problem. ``reuse``: an earlier Problem of the same recording
+    (another design): candidate columns that do not depend on the design are taken from it
+    (``_candidates``)."""
     t = rec.time
     dt = float(np.median(np.diff(t)))
-    rp = replay(design, mode, rec, bandwidth, sensitivities)
+    # the calibration's sensitivities only where a candidate reads them (four replays)
+    calibration = any(r in ("sens_k", "sens_idle") for c in candidates
+                      for r in EFFECTS[c].requires)
+    rp = replay(design, mode, rec, bandwidth, sensitivities, calibration)
     sig = rp.signals
     T_model_f = first_order(rp.T_model, dt, bandwidth)
     m = max(1, int(round(block / dt)))
@@ -172,12 +271,26 @@ def build_problem(rec, design, mode, candidates, bandwidth, block,
     loaded = float(np.max(np.abs(rec.torque_out))) >= MIN_LOAD
     sig_n = {k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == t.shape else v)
              for k, v in sig.items()}
-    cols, options = _candidates(sig_n, candidates, loaded, dt, bandwidth, mask_b, m)
+    prior = None
+    if (reuse is not None and reuse.columns is not None and reuse.m == m and reuse.dt == dt
+            and reuse.bandwidth == bandwidth and reuse.mask.shape == mask.shape
+            and np.array_equal(reuse.mask, mask)):
+        prior = ({k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == t.shape else v)
+                  for k, v in reuse.sig.items()}, reuse.columns)
+    cols, options, columns = _candidates(sig_n, candidates, loaded, dt, bandwidth, mask_b, m,
+                                         prior)
+    if reuse is not None:
+        reuse.columns = None       # (views of the earlier problem's X: released with it)
     Gb, groups = R.generic_basis(blocks)
     k0 = sum(c.shape[1] for c in cols)
     generic, steady, structure = _structure(Gb, groups, k0)
     X = np.hstack(cols + [Gb]) if cols else Gb
+    for eid, terms in options.items():   # kept for a re-linearised problem: views of X
+        for term in terms:
+            keys, B = columns[(eid, term.shape)]
+            columns[(eid, term.shape)] = (keys, X[:, list(term.cols)] if not term.cols else
+                                          X[:, term.cols[0]:term.cols[-1] + 1])
     return Problem(rp=rp, sig=sig, y=y, X=X, options=options, generic=generic, steady=steady,
                    structure=structure, groups=groups, blocks=blocks, m=m, dt=dt,
                    T_model_f=T_model_f, loaded=loaded, mask=mask, valid=valid,
-                   noise_sample=noise, bandwidth=bandwidth)
+                   noise_sample=noise, bandwidth=bandwidth, columns=columns)

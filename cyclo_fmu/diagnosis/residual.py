@@ -41,8 +41,9 @@ def robust_weights(X, y, iterations=4):
     Xs = X / np.maximum(np.sqrt((X * X).mean(0)), 1e-300)
     spikes = np.zeros(n, bool)
     sigma = 0.0
+    Xw = np.empty_like(Xs)          # one buffer for the weighted columns of every iteration
     for _ in range(iterations):
-        Xw = Xs * w[:, None]
+        np.multiply(Xs, w[:, None], out=Xw)
         b = np.linalg.lstsq(Xw.T @ Xs, Xw.T @ y, rcond=1e-12)[0]   # normal equations
         r = y - Xs @ b
         sigma = robust_sigma(r[~spikes]) or float(np.std(r)) or 1e-12

@@ -91,13 +91,12 @@ def _best_dialect(lines):
     """(score, delimiter, decimal, width): the choice that makes the most lines numeric with
     one field count; None when no line is numeric."""
     best = None
+    filled = [l for l in lines if l.strip()]
     for delim in _DELIMS:
+        split = [_split(l, delim) for l in filled]      # once for both decimals
         for decimal in ((".",) if delim == "," else (".", ",")):
             widths = {}
-            for l in lines:
-                if not l.strip():
-                    continue
-                cells = _split(l, delim)
+            for cells in split:
                 if len(cells) >= 2 and _numeric(cells, decimal):
                     widths[len(cells)] = widths.get(len(cells), 0) + 1
             if not widths:
@@ -395,6 +394,7 @@ def read_text(path, columns=None, units=None, block=None, chunk_bytes=8 << 20) -
 
 #: share of control characters (other than tab, CR, LF) above which a file is not text
 BINARY_SHARE = 0.01
+_CONTROL = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f]")
 
 
 def _refuse_binary(raw: bytes, text: str, source: str):
@@ -402,7 +402,7 @@ def _refuse_binary(raw: bytes, text: str, source: str):
         raise RecordingError(f"recording {source!r} is a zip archive (an .xlsx workbook?), not "
                              "CSV/ASCII or MDF; export it as CSV")
     sample = text[:65536]
-    ctrl = sum(1 for ch in sample if ord(ch) < 32 and ch not in "\t\r\n")
+    ctrl = len(_CONTROL.findall(sample))      # control characters other than tab, CR, LF
     if sample and ctrl > BINARY_SHARE * len(sample):
         raise RecordingError(f"recording {source!r} is a binary file, neither CSV/ASCII nor MDF "
                              f"(first bytes {raw[:8]!r})")
