@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from model_core import DriveDesign
-from model_core.effects import CALIBRATION_EFFECTS, DEFAULT_CANDIDATES
+from model_core.effects import CALIBRATION_EFFECTS, DEFAULT_CANDIDATES, EFFECTS
 from model_core.kinematics import parse_mode
 
 from . import residual as R
@@ -38,6 +38,16 @@ from .twins import FALSE_ALARM, N_TWINS, judge
 
 #: [1] re-linearise the friction level (replay again at the corrected mu) beyond this error
 FRICTION_RELINEARISE = 0.02
+#: [1] re-linearise a calibration effect (replay again at the corrected calibration, its
+#: sensitivities taken there) beyond these changes. The mesh loss enters the model as
+#: 1/(1 - k): a step dk taken from the slope at k misses by about dk^2 (4e-6 at 0.002, below
+#: the interval of k that a minute of recording gives, about 1e-5). The idle losses enter
+#: linearly but share their speed laws with the gear's flow direction: 0.1 of the scale
+CAL_RELINEARISE = {"mesh_loss": 0.002, "idle_loss_scale": 0.1}
+#: re-linearisation passes of the calibration at most (Gauss-Newton on the replay; the
+#: preset mackic-rig from the default design, k 0 -> 0.027 and the idle scale 1 -> 0.03,
+#: settles in two)
+CAL_PASSES = 3
 #: [s] at least this much moving recording (below it nothing can be separated)
 MIN_MOVING_S = 2.0
 #: [rad/s] a recording whose input never exceeds this speed (about 10 r/min) stands still
@@ -63,24 +73,25 @@ class Diagnoser:
     n_folds : int
         Time-ordered folds of the cross-validation.
     candidates : sequence of str, optional
-        Effect ids to consider (default: ``DEFAULT_CANDIDATES``, and with ``calibrate`` the
-        ``CALIBRATION_EFFECTS`` too).
+        Effect ids to consider (default: ``DEFAULT_CANDIDATES``, the whole registry; without
+        ``calibrate`` less the ``CALIBRATION_EFFECTS``).
     calibrate : bool
-        Also fit the calibration effects (mesh loss k, idle-loss scale: model_core.effects).
+        The calibration effects (mesh loss k, idle-loss scale: model_core.effects) are
+        candidates (default True; False leaves them out, ``diagnose --no-calibrate``).
     progress : bool
         A progress bar over the fit's stages on stderr (terminals only).
     """
 
     def __init__(self, design: DriveDesign = None, mode: str = "S1", bandwidth: float = 1000.0,
                  block: float = 0.01, n_folds: int = 5, candidates=None, progress=False,
-                 calibrate=False):
+                 calibrate=True):
         self.design = design or DriveDesign()
         self.mode = "".join(parse_mode(mode)[:2])
         self.bandwidth = bandwidth
         self.block = block
         self.n_folds = n_folds
-        self.candidates = tuple(c for c in (candidates or DEFAULT_CANDIDATES + (
-            CALIBRATION_EFFECTS if calibrate else ())) if c != "none")
+        self.candidates = tuple(c for c in (candidates or DEFAULT_CANDIDATES)
+                                if c != "none" and (calibrate or c not in CALIBRATION_EFFECTS))
         self.progress = progress
         self._bar = None
 
@@ -146,21 +157,86 @@ class Diagnoser:
                               # corrected level (a drift acting through it changes with it)
                               (P0.sig["sens_mu"], None))
             sel = select(P, self.n_folds, forced=("friction_miscalibrated",))
-        self._stage("twins")
-        J = judge(P, sel)
-        self._stage("remainder")
-        rem = remainder(P, sel, J, rec, self.design, self.mode)
-        self._stage("discover")
-        self._discover(rec, P, sel, rem, rel1)
+        self.calibration_offsets_ = {}
+        J, rem = self._judge(rec, P, sel, rel1)
+        if self._relinearise_needed(rem):
+            # the claims are judged (twins, remainder, discovery) at the first linearisation;
+            # the calibration effects that stand there are re-linearised for their values and
+            # the stages run again around the corrected calibration
+            notes = self._notes
+            P, sel, self.calibration_offsets_ = self._relinearise_calibration(
+                rec, P, sel, rem, rel1)
+            J, rem = self._judge(rec, P, sel, rel1)
+            self._notes = notes + [n for n in self._notes if n not in notes]
         rem.unexplained["_rejected"] = J.rejected
         self._stage("report")
-        d = report(rec, first, sel, J, rem, P, rel1, P0)
+        d = report(rec, first, sel, J, rem, P, rel1, P0, self.calibration_offsets_)
+        d.notes += self._notes
         d.stages = {"replay": P, "select": sel, "twins": J, "remainder": rem}
         self.diagnosis_ = d
         self._bar.close()
         self._bar = None
         self._rec, self._P0, self._weights = rec, P0, first.weights
         return self
+
+    def _judge(self, rec, P, sel, rel1):
+        """Stages ``twins``, ``remainder`` and ``discover`` on one selection."""
+        self._stage("twins")
+        J = judge(P, sel)
+        self._stage("remainder")
+        rem = remainder(P, sel, J, rec, self.design, self.mode)
+        self._stage("discover")
+        self._prob, self._notes = sel.prob, []
+        self._discover(rec, P, sel, rem, rel1)
+        return J, rem
+
+    @staticmethod
+    def _calibration_values(S):
+        return {t.effect: float(S.of(t)[0][0]) for t in S.terms
+                if t.effect in CALIBRATION_EFFECTS}
+
+    def _relinearise_needed(self, rem):
+        return any(abs(v) > CAL_RELINEARISE[e]
+                   for e, v in self._calibration_values(rem.S).items())
+
+    def _relinearise_calibration(self, rec, P, sel, rem, rel1):
+        """Gauss-Newton on the calibration: the calibration effects that stand after the
+        judged stages (``rem.S``) are applied to the design, the replay taken again there
+        (its sensitivities with it) and the selection run again with them forced (their claim
+        was judged at the first linearisation; here they carry the correction); repeated
+        while a change exceeds ``CAL_RELINEARISE`` (at most ``CAL_PASSES``). A calibration
+        effect the stages withdrew is no candidate any more. Returns ``(P, sel, offsets)``,
+        ``offsets`` {effect: change applied to the design}: the reported value is the offset
+        plus the last pass's change."""
+        from model_core.design import scale_friction_level
+        design = scale_friction_level(self.design, 1 + rel1) if rel1 else self.design
+        values = self._calibration_values(rem.S)
+        dropped = set(self._calibration_values(sel.S)) - set(values)
+        candidates = tuple(c for c in self.candidates if c not in dropped)
+        offsets = {}
+        for _ in range(CAL_PASSES):
+            moved = False
+            for eid, v in values.items():
+                name = ("mesh_loss_k" if eid == "mesh_loss" else "idle_loss_scale")
+                old = getattr(design.calibration, name)
+                design, _ = EFFECTS[eid].apply(design, {EFFECTS[eid].parameters[0].name: v})
+                applied = getattr(design.calibration, name) - old   # clipped at the bounds
+                if abs(applied) > 0:
+                    offsets[eid] = offsets.get(eid, 0.0) + applied
+                    moved = moved or abs(applied) > CAL_RELINEARISE[eid]
+            if not moved:
+                break
+            sens = (P.sig["sens_mu"], None) if P.sig.get("sens_mu") is not None else None
+            P.X, sel.prob.Xs = None, None
+            P = build_problem(rec, design, self.mode, candidates, self.bandwidth,
+                              self.block, sens)
+            forced = tuple(dict.fromkeys(tuple(sel.forced) + tuple(offsets)))
+            sel = select(P, self.n_folds, forced=forced)
+            values = {e: v for e, v in self._calibration_values(sel.S).items()
+                      if e in offsets}
+            if not any(abs(v) > CAL_RELINEARISE[e] for e, v in values.items()):
+                break
+        return P, sel, offsets
 
     def _discover(self, rec, P, sel, rem, rel1):
         """Stage ``discover``: a sparse closed form fitted to a confirmed smooth remainder by
@@ -183,6 +259,9 @@ class Diagnoser:
             noise=P.noise_sample / math.sqrt(P.m), nuisance=P.X[:, cols] if cols else None,
             model_T_in=P.T_model_f)
         out = d.to_json()
+        if d.proposed:
+            self._withdraw_stand_ins(P, rem, d, S)
+            S = rem.S
         change, i = {}, 0
         for t in S.terms:      # the selected effects' parameter changes next to the form
             k = len(t.cols)
@@ -193,6 +272,47 @@ class Diagnoser:
             i += k
         out["library_change"] = change
         rem.unexplained["proposed"] = out
+
+    def _withdraw_stand_ins(self, P, rem, d, S):
+        """A calibration effect refitted beside the proposed form (the discovery's nuisance
+        change) that falls within its 95 % interval of zero, its re-linearisation offset
+        included, stood in for the form (a free loss scale takes up part of any loss that
+        grows with the load): withdrawn, and its columns' change dropped from the form's
+        ``library_change``. The interval is the selection's (noise only)."""
+        out, i, keep = [], 0, []
+        for t in S.terms:
+            k = len(t.cols)
+            v, _ = S.of(t)
+            if t.effect in CALIBRATION_EFFECTS and k == 1:
+                whole = self.calibration_offsets_.get(t.effect, 0.0) + float(v[0])
+                beside = whole + d.nuisance_change[i]
+                if abs(beside) <= 1.96 * d.nuisance_se[i]:
+                    out.append((t.effect, whole, beside))
+                    i += k
+                    continue
+            keep.append((t, i))
+            i += k
+        if not out:
+            return
+        idx = [j for t, i0 in keep for j in range(i0, i0 + len(t.cols))]
+        d.nuisance_change = [d.nuisance_change[j] for j in idx]
+        d.nuisance_se = [d.nuisance_se[j] for j in idx]
+        rem.S = self._prob.fit(tuple(t for t, _ in keep))
+        import re
+        gone = {e for e, _, _ in out}
+        rem.dominant = [x for x in rem.dominant
+                        if (x if isinstance(x, str) else x[0]) not in gone]
+        un = rem.unexplained
+        un["statement"] = re.sub(r" \(beside [^)]*\)", "", un["statement"])
+        un["statement"] = un["statement"].rstrip(".") + "; " + ", ".join(sorted(gone)) + (
+            " stood in for it and is withdrawn (a form is proposed).")
+        for eid, whole, beside in out:
+            rem.withdrawn.append(eid)
+            self._notes.append(
+                f"{eid} withdrawn: it stood in for the proposed form (its change "
+                f"{whole:+.4g} falls to {beside:+.2g} beside the form, within its 95 % "
+                "interval of zero); a free loss scale takes up part of any loss that grows "
+                "with the load")
 
     def residual_rms(self, design: DriveDesign) -> float:
         """RMS (N*m) of the block-mean residual of the fitted recording under ``design`` (its
