@@ -21,6 +21,7 @@ typed result:
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -158,7 +159,7 @@ class Diagnoser:
                               (P0.sig["sens_mu"], None))
             sel = select(P, self.n_folds, forced=("friction_miscalibrated",))
         self.calibration_offsets_ = {}
-        J, rem = self._judge(rec, P, sel, rel1)
+        P, sel, J, rem = self._judge(rec, P, sel, rel1)
         if self._relinearise_needed(rem):
             # the claims are judged (twins, remainder, discovery) at the first linearisation;
             # the calibration effects that stand there are re-linearised for their values and
@@ -166,7 +167,7 @@ class Diagnoser:
             notes = self._notes
             P, sel, self.calibration_offsets_ = self._relinearise_calibration(
                 rec, P, sel, rem, rel1)
-            J, rem = self._judge(rec, P, sel, rel1)
+            P, sel, J, rem = self._judge(rec, P, sel, rel1, compete=False)
             self._notes = notes + [n for n in self._notes if n not in notes]
         rem.unexplained["_rejected"] = J.rejected
         self._stage("report")
@@ -179,16 +180,101 @@ class Diagnoser:
         self._rec, self._P0, self._weights = rec, P0, first.weights
         return self
 
-    def _judge(self, rec, P, sel, rel1):
-        """Stages ``twins``, ``remainder`` and ``discover`` on one selection."""
+    def _judge(self, rec, P, sel, rel1, compete=True):
+        """Stages ``twins``, ``remainder`` and ``discover`` on one selection (with
+        ``compete``, the calibration effects against the closed forms before the discovery);
+        returns ``(P, sel, J, rem)``."""
         self._stage("twins")
         J = judge(P, sel)
         self._stage("remainder")
         rem = remainder(P, sel, J, rec, self.design, self.mode)
         self._stage("discover")
         self._prob, self._notes = sel.prob, []
+        out = self._calibration_against_forms(rec, P, sel, rem) if compete else None
+        if out is not None:
+            # the calibration effects stood in for a form outside the library: the stages run
+            # again without them as candidates (what a diagnose --no-calibrate sees), and the
+            # discovery stage proposes the form
+            ids, note, text = out
+            P = replace(P, options={k: v for k, v in P.options.items()
+                                    if k not in CALIBRATION_EFFECTS})
+            sel = select(P, self.n_folds, forced=tuple(f for f in sel.forced
+                                                      if f not in CALIBRATION_EFFECTS))
+            P, sel, J, rem = self._judge(rec, P, sel, rel1, compete=False)
+            rem.withdrawn += [e for e in ids if e not in rem.withdrawn]
+            un = rem.unexplained
+            if un.get("present"):
+                un["statement"] = un["statement"].rstrip(".") + "; " + text + "."
+            self._notes.append(note)
+            return P, sel, J, rem
         self._discover(rec, P, sel, rem, rel1)
-        return J, rem
+        return P, sel, J, rem
+
+    def _calibration_against_forms(self, rec, P, sel, rem):
+        """A calibration effect against the closed forms of the discovery's dictionary.
+
+        The calibration effects are free scales of the model's own losses; a loss outside
+        the library that grows with the load or the speed (a load-squared or speed-times-load
+        loss) is taken up by them in large part, and what is left may lie within the twins.
+        So the recording is asked which explains it better: the selection as it is (model A),
+        or the selection without its calibration effects and with the sparse closed form the
+        discovery stage fits to what they held (model B, its own effects refitted beside the
+        form). B replaces them only where its BIC is lower by ``selection.DELTA_BIC``
+        ("very strong" evidence; its parameters counted as two per coefficient, a value and a
+        shape chosen on a grid, so that a tie keeps the library's physical effect). The
+        calibration effects are then withdrawn, the remainder is reported as unexplained and
+        the discovery stage proposes the form."""
+        from dataclasses import replace as _replace
+        S = rem.S
+        cal = [t for t in S.terms if t.effect in CALIBRATION_EFFECTS]
+        if not cal or rem.residual_raw is None:
+            return
+        try:
+            from .discover import discover
+        except ImportError:
+            return
+        from .selection import DELTA_BIC, GramProblem, Term
+        other = [t for t in S.terms if t not in cal]
+        ocols = [c for t in other for c in t.cols]
+        back = np.zeros(len(rec.time))
+        for t in cal:
+            v, _ = S.of(t)
+            back += first_order(EFFECTS[t.effect].basis(P.sig, t.shape), P.dt,
+                                self.bandwidth) @ v
+        resid = rem.residual_raw + back
+        d = discover(resid, rec.time, rec.speed_in, rec.torque_out, samples_per_block=P.m,
+                     weights=sel.weights, temperature=getattr(rec, "temperature", None),
+                     mode=self.mode, z1=self.design.z1, bandwidth=self.bandwidth,
+                     n_folds=self.n_folds, min_explained=sel.min_expl,
+                     noise=P.noise_sample / math.sqrt(P.m),
+                     nuisance=P.X[:, ocols] if ocols else None, model_T_in=P.T_model_f)
+        if not d.proposed or d.prediction is None:
+            return
+        n = min(len(P.y), len(d.prediction))
+        ccols = [c for t in cal for c in t.cols]
+        X = np.column_stack([P.X[:n, ocols + ccols], d.prediction[:n]])
+        prob = GramProblem(X, P.y[:n], np.asarray(sel.weights, float)[:n], self.n_folds)
+        i, A = 0, []
+        for t in other + cal:
+            A.append(_replace(t, cols=tuple(range(i, i + len(t.cols)))))
+            i += len(t.cols)
+        k_form = 2 * len(d.terms)
+        form = Term("form", None, (X.shape[1] - 1,), ("form",), ("N*m",), (-np.inf,),
+                    (np.inf,), k_form - 1)
+        fit_a = prob.fit(tuple(A), cv=False)
+        fit_b = prob.fit(tuple(A[:len(other)]) + (form,), cv=False)
+        gap = fit_a.bic - fit_b.bic
+        if gap < DELTA_BIC:
+            return
+        ids = [t.effect for t in cal]
+        rms = float(np.sqrt(np.mean(block_means(back, P.m) ** 2)))
+        text = (f"{' and '.join(ids)} ({1e3 * rms:.2f} mN*m) stood in for it: the proposed "
+                f"closed form explains that part better (BIC lower by {gap:.0f})")
+        note = (f"{', '.join(ids)} withdrawn: the sparse closed form of the discovery's "
+                f"dictionary explains what {'it' if len(ids) == 1 else 'they'} held better (BIC "
+                f"{fit_b.bic:.1f} against {fit_a.bic:.1f}, at least {DELTA_BIC:g} lower "
+                "needed); a free loss scale stands in for a loss of another law")
+        return ids, note, text
 
     @staticmethod
     def _calibration_values(S):

@@ -12,6 +12,7 @@ from . import residual as R
 from .replay import block_means, first_order
 from .problem import MIN_LOAD
 from .select_effects import fit_rms
+from .select_effects import backdriven
 from .selection import DELTA_BIC
 
 
@@ -101,17 +102,6 @@ def lookalikes(prob, S, opts) -> dict:
                     out.setdefault(t.effect, []).append(eid)
                     break
     return out
-
-
-def back_driven_blocks(rec, P) -> int:
-    """Blocks (of the compared block means) in which power flows from the output to the input
-    shaft: the replayed model's input torque opposes the input speed. Without any, a transducer
-    gain and the mesh loss with the idle-loss scale are alike by physics
-    (``model_core.effects.LOOKALIKE_GROUPS``)."""
-    n = len(P.y) * P.m
-    p = P.rp.T_model[:n] * np.asarray(rec.speed_in, float)[:n]
-    pb = block_means(p, P.m)
-    return int(np.count_nonzero(pb < 0))
 
 
 def evidence(prob, S, opts) -> list:
@@ -264,8 +254,9 @@ def report(rec, first, sel, J, rem, P, rel1, first_P, cal_offsets=None) -> Diagn
     close = (lookalikes(first.prob, first.S, first.opts) if cal_offsets and first is not sel
              else lookalikes(prob, S, sel.opts))
     close = {k: list(dict.fromkeys(e for e in v if e not in S.ids)) for k, v in close.items()}
-    if not back_driven_blocks(rec, first_P):
-        # power flows one way only: the look-alike groups are alike by physics, whatever the
+    if not backdriven(first_P.blocks):
+        # power flows one way only (select_effects.backdriven: too few back-driven blocks to
+        # tell a gain from losses): the look-alike groups are alike by physics, whatever the
         # fit's BIC says (a difference there comes from transients and shapes, not from the
         # flow reversal that separates them)
         for a, b in LOOKALIKE_GROUPS:
