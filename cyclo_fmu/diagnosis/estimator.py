@@ -235,6 +235,11 @@ class Diagnoser:
             return
         from .selection import DELTA_BIC, GramProblem, Term
         other = [t for t in S.terms if t not in cal]
+        fr = sel.opts.get("friction_miscalibrated")
+        if fr and "friction_miscalibrated" not in S.ids:
+            # the model's own friction level beside both (a loss scale of the whole gear is
+            # in large part a friction level; it must not count for the form)
+            other = [fr[0]] + other
         ocols = [c for t in other for c in t.cols]
         back = np.zeros(len(rec.time))
         for t in cal:
@@ -247,10 +252,18 @@ class Diagnoser:
                      mode=self.mode, z1=self.design.z1, bandwidth=self.bandwidth,
                      n_folds=self.n_folds, min_explained=sel.min_expl,
                      noise=P.noise_sample / math.sqrt(P.m),
-                     nuisance=P.X[:, ocols] if ocols else None, model_T_in=P.T_model_f)
+                     nuisance=P.X[:, ocols] if ocols else None,
+                     # without the feature in proportion to the model's input torque: it is a
+                     # library effect (torque_sensor_gain, the calibration's look-alike where
+                     # power flows one way: LOOKALIKE_GROUPS), not a form outside the library
+                     model_T_in=None)
         if not d.proposed or d.prediction is None:
             return
         n = min(len(P.y), len(d.prediction))
+        # model A holds the whole calibration family (the pair the design carries), B the form
+        for eid in CALIBRATION_EFFECTS:
+            if eid not in S.ids and sel.opts.get(eid):
+                cal = cal + [sel.opts[eid][0]]
         ccols = [c for t in cal for c in t.cols]
         X = np.column_stack([P.X[:n, ocols + ccols], d.prediction[:n]])
         prob = GramProblem(X, P.y[:n], np.asarray(sel.weights, float)[:n], self.n_folds)
@@ -266,7 +279,7 @@ class Diagnoser:
         gap = fit_a.bic - fit_b.bic
         if gap < DELTA_BIC:
             return
-        ids = [t.effect for t in cal]
+        ids = [t.effect for t in cal if t.effect in S.ids]
         rms = float(np.sqrt(np.mean(block_means(back, P.m) ** 2)))
         text = (f"{' and '.join(ids)} ({1e3 * rms:.2f} mN*m) stood in for it: the proposed "
                 f"closed form explains that part better (BIC lower by {gap:.0f})")
