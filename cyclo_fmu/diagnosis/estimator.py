@@ -15,12 +15,19 @@ typed result:
    bursts at events and spectral peaks, each judged against twins; effects the unknown could
    hold withdrawn;
 5. ``discover`` (``discover.discover``, when that module exists): a closed form for a
-   confirmed remainder, put in ``unexplained.proposed``;
+   confirmed remainder, put in ``unexplained.proposed``. Before it, a calibration effect
+   (``mesh_loss``, ``idle_loss_scale``: candidates unless ``calibrate=False``) that stands is
+   put against the dictionary's closed form for what it holds (``_calibration_against_forms``,
+   BIC): where the form wins, the calibration effects stood in for a loss of another law and
+   stages 2-5 run again without them; the calibration effects that stand and moved far are
+   then re-linearised (``_relinearise_calibration``: replay at the corrected calibration,
+   stages 2-5 again with them forced, Gauss-Newton);
 6. ``report`` (``result.report`` -> ``Diagnosis``).
 """
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -377,7 +384,8 @@ class Diagnoser:
         change) that falls within its 95 % interval of zero, its re-linearisation offset
         included, stood in for the form (a free loss scale takes up part of any loss that
         grows with the load): withdrawn, and its columns' change dropped from the form's
-        ``library_change``. The interval is the selection's (noise only)."""
+        ``library_change``. The interval is the joint fit's of the form and the library
+        terms (noise only)."""
         out, i, keep = [], 0, []
         for t in S.terms:
             k = len(t.cols)
@@ -397,7 +405,6 @@ class Diagnoser:
         d.nuisance_change = [d.nuisance_change[j] for j in idx]
         d.nuisance_se = [d.nuisance_se[j] for j in idx]
         rem.S = self._prob.fit(tuple(t for t, _ in keep))
-        import re
         gone = {e for e, _, _ in out}
         rem.dominant = [x for x in rem.dominant
                         if (x if isinstance(x, str) else x[0]) not in gone]
