@@ -52,6 +52,10 @@ FRICTION_RELINEARISE = 0.02
 #: the interval of k that a minute of recording gives, about 1e-5). The idle losses enter
 #: linearly but share their speed laws with the gear's flow direction: 0.1 of the scale
 CAL_RELINEARISE = {"mesh_loss": 0.002, "idle_loss_scale": 0.1}
+#: the dictionary's families (discover.Library) whose forms grow with the load: a form that a
+#: calibration effect may have stood in for must hold one of them (a form of speed alone is a
+#: drag, a library effect the selection weighs against the idle-loss scale itself)
+LOAD_FAMILIES = ("load", "speed*load")
 #: re-linearisation passes of the calibration at most (Gauss-Newton on the replay; the
 #: preset mackic-rig from the default design, k 0 -> 0.027 and the idle scale 1 -> 0.03,
 #: settles in two)
@@ -265,6 +269,10 @@ class Diagnoser:
                      # power flows one way: LOOKALIKE_GROUPS), not a form outside the library
                      model_T_in=None)
         if not d.proposed or d.prediction is None:
+            return
+        if not {t["family"] for t in d.terms} & set(LOAD_FAMILIES):
+            # a law of speed alone is the library's drag, which the selection already put
+            # against the idle-loss scale on the recording's BIC
             return
         n = min(len(P.y), len(d.prediction))
         # model A holds the whole calibration family (the pair the design carries), B the form
