@@ -737,10 +737,14 @@ def cmd_diagnose(args) -> int:
     if "calibration_fit" in result:
         c = result["calibration_fit"]
         ci = c["ci95"]
-        print(f"CALIBRATED to this recording (diagnosed): mesh_loss_k = {c['mesh_loss_k']:.5g}"
-              f" (+- {ci.get('mesh_loss_k', float('nan')):.2g}), idle_loss_scale = "
-              f"{c['idle_loss_scale']:.4g} (+- {ci.get('idle_loss_scale', float('nan')):.2g};"
-              " 95 %, noise only); written to design_updated.toml [calibration]")
+        def _val(name, fmt):
+            v = format(c[name], fmt)
+            return (f"{v} (+- {ci[name]:.2g})" if name in ci
+                    else f"{v} (as the design: not named)")
+        print(f"CALIBRATED to this recording (diagnosed): mesh_loss_k = "
+              f"{_val('mesh_loss_k', '.5g')}, idle_loss_scale = "
+              f"{_val('idle_loss_scale', '.4g')} (95 %, noise only); written to "
+              "design_updated.toml [calibration]")
         for n in c["notes"]:
             print(f"  note: {n}")
     print(f"located: {d.located['statement']}")

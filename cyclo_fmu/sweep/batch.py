@@ -20,7 +20,9 @@ def calibration_report(design, d) -> dict | None:
     ``diagnosis.estimator.CAL_RELINEARISE``), or None when it named neither. ``ci95``: the
     95 % half-widths (noise only), ``rms_*``: the held-out RMS of the input torque before and
     after the diagnosis, ``back_driven``: whether the recording has enough back-driven blocks
-    to tell k from a transducer gain (``select_effects.backdriven``)."""
+    to tell k from a transducer gain (``select_effects.backdriven``), ``back_driven_share``:
+    the share of its moving blocks (above 1 rad/s, the calibration fit's rule) in which the
+    input shaft gives power back."""
     cal = {e["id"]: e for e in d.effects if e["id"] in ("mesh_loss", "idle_loss_scale")}
     if not cal:
         return None
@@ -41,6 +43,12 @@ def calibration_report(design, d) -> dict | None:
     stages = getattr(d, "stages", None) or {}
     P = stages.get("replay")
     out["back_driven"] = bool(backdriven(P.blocks)) if P is not None else None
+    if P is not None:       # the share of moving blocks where the input shaft gives power back
+        import numpy as np
+        b = P.blocks
+        moving = np.abs(b["w_in"]) > 1.0
+        out["back_driven_share"] = float(np.mean((b["T_in"] * b["w_in"])[moving] < 0)) \
+            if moving.any() else 0.0
     out["source"] = ("cyclo-fmu diagnose: the calibration effects of the diagnosis "
                      "(model_core.effects), fitted on the recording's block means")
     return out
