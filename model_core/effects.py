@@ -100,11 +100,12 @@ class Effect:
 
     def shapes(self, s: dict) -> tuple:
         """The shape values to scan for these signals (``(None,)`` for a linear effect or the
-        temperature form)."""
+        temperature form; ``()`` where the shape filter leaves none: no candidate)."""
         if self.temperature_form and s.get("temperature") is not None:
             return (None,)
         if self.shape and self.shape_filter is not None:
-            return tuple(x for x in self.shape if self.shape_filter(s, x)) or (None,)
+            # none left: the effect cannot be resolved in this recording (no candidate)
+            return tuple(x for x in self.shape if self.shape_filter(s, x))
         return self.shape or (None,)
 
     @property
