@@ -742,11 +742,14 @@ def cmd_diagnose(args) -> int:
     if "calibration_fit" in result:
         c = result["calibration_fit"]
         ci = c["ci95"]
-        print(f"CALIBRATED to this recording first: mesh_loss_k = {c['mesh_loss_k']:.5g} "
-              f"(+- {ci.get('mesh_loss_k', float('nan')):.2g}), idle_loss_scale = "
-              f"{c['idle_loss_scale']:.4g} (+- {ci.get('idle_loss_scale', float('nan')):.2g}; "
-              f"95 %, noise only); input-torque RMS {1e3 * c['rms_before_Nm']:.2f} -> "
-              f"{1e3 * c['rms_after_Nm']:.2f} mN*m; the rest is relative to it")
+        def _val(name, fmt):
+            v = format(c[name], fmt)
+            return (f"{v} (+- {ci[name]:.2g})" if name in ci
+                    else f"{v} (as the design: not named)")
+        print(f"CALIBRATED to this recording (diagnosed): mesh_loss_k = "
+              f"{_val('mesh_loss_k', '.5g')}, idle_loss_scale = "
+              f"{_val('idle_loss_scale', '.4g')} (95 %, noise only); written to "
+              "design_updated.toml [calibration]")
         for n in c["notes"]:
             print(f"  note: {n}")
     print(f"located: {d.located['statement']}")
@@ -900,6 +903,23 @@ def cmd_diagnose_batch(args) -> int:
     return 0
 
 
+def _calibrate_options(p):
+    """``--no-calibrate`` (and ``--calibrate``, the default, kept for scripts of earlier
+    versions)."""
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--no-calibrate", dest="calibrate", action="store_false",
+                   help="leave the calibration effects (mesh_loss: a loss proportional to the "
+                   "mesh power, idle_loss_scale: a scale on the load-independent losses) out "
+                   "of the candidates; by default they are fitted with the other effects, "
+                   "checked against the closed forms of the discovery (a free loss scale "
+                   "must not stand in for a loss of another law) and written to "
+                   "design_updated.toml [calibration]")
+    g.add_argument("--calibrate", dest="calibrate", action="store_true",
+                   help="the default (kept for earlier scripts): the calibration effects are "
+                   "candidates")
+    p.set_defaults(calibrate=True)
+
+
 def _cluster_options(p):
     p.add_argument("--scheduler", help="address of a running dask.distributed scheduler, "
                    "e.g. tcp://host:8786 (default: this machine: in this process below the "
@@ -1044,11 +1064,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "auto (inferred from the measured speed ratio and its sign)")
     dg.add_argument("--design", help="design file (TOML) or preset name (mackic-rig)")
     dg.add_argument("--out", help="folder for plots, diagnosis.json, design_updated.toml")
-    dg.add_argument("--calibrate", action="store_true",
-                    help="also fit the calibration effects (mesh_loss: a loss proportional to "
-                    "the mesh power, idle_loss_scale: a scale on the load-independent losses) "
-                    "and write them to design_updated.toml [calibration]; left out by default "
-                    "because free loss scales can stand in for a mismatch outside the library")
+    _calibrate_options(dg)
     dg.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     dg.add_argument("--units", help="units of columns, overriding anything detected, e.g. "
                     "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")
@@ -1077,8 +1093,7 @@ def build_parser() -> argparse.ArgumentParser:
                     f"({', '.join(MODES)}) or auto (each recording's mode inferred from its "
                     "measured speed ratio and its sign)")
     db.add_argument("--design", help="design file (TOML) or preset name (mackic-rig)")
-    db.add_argument("--calibrate", action="store_true", help="also fit the calibration "
-                    "effects (mesh_loss, idle_loss_scale; see diagnose --calibrate)")
+    _calibrate_options(db)
     db.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     db.add_argument("--units", help="units of columns, overriding anything detected, e.g. "
                     "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")

@@ -23,7 +23,8 @@ import numpy as np
 
 from model_core import DriveDesign
 from model_core.errors import CycloidInputError
-from model_core.effects import EFFECTS, MODEL_PARAMETER_EFFECTS, effect_signals, switch_on
+from model_core.effects import (EFFECT_ALIASES, EFFECTS, MODEL_PARAMETER_EFFECTS, effect_signals,
+                                resolve_effect, switch_on)
 from model_core.kinematics import parse_mode, shaft_speeds
 from model_core.lossmap import replay_input_torque
 
@@ -104,6 +105,11 @@ def _hidden(effect, effect_values, shape) -> dict:
         effect = {e: (None, None) for e in effect}
     out = {}
     for eid, spec in effect.items():
+        if eid in EFFECT_ALIASES:      # an id of an earlier version (load_ripple)
+            v, sh = spec if spec is not None else (None, None)
+            eid, v, sh = resolve_effect(eid, v or {"B1_sin": 0.004, "B1_cos": 0.002,
+                                                    "Bz_sin": 0.006, "Bz_cos": 0.0}, sh)
+            spec = (v, sh)
         if eid not in EFFECTS:
             raise ValueError(f"effect = {eid!r}: must be one of {', '.join(EFFECTS)}")
         values, sh = spec if spec is not None else (None, None)
@@ -216,7 +222,8 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
             gain += values["gain_error"]
             continue
         sh = None if (eff.temperature_form and temperature is not None) else eff_shape
-        extra += eff.torque(sig, [values[p.name] for p in eff.parameters], sh)
+        extra += eff.torque(sig, [values.get(p.name, 0.0) for p in eff.parameters_for(sh)],
+                            sh)
     if added_torque is not None:
         extra = extra + np.asarray(added_torque(sig), float)
     tau_in_total = tau_in + extra

@@ -275,7 +275,7 @@ class ExtraPhysics:
         """Ripple whose amplitude grows with the load (N*m): |tau_out|/T_ref (A1L sin(theta +
         phi1L) + AzL sin(order theta + phizL)), T_ref = 10 N*m (model_core.discovered.T_REF):
         a transmission error times the mesh stiffness gives a torque ripple in proportion to
-        the load (model_core.effects 'load_ripple'). Next to ``ripple_1x``/``ripple_roller``
+        the load (model_core.effects 'mesh_ripple', load law 1). Next to ``ripple_1x``/``ripple_roller``
         (the load-independent part) the amplitude is a + b |tau_out|."""
         import numpy as _np
         from .discovered import T_REF

@@ -1,7 +1,10 @@
-"""The diagnosis learns the calibration (effects mesh_loss and idle_loss_scale, fitted with
-``calibrate=True``): recovered from synthetic recordings within their confidence intervals,
-written to design_updated's [calibration] with their source, told apart from a transducer gain
-error by back-driven runs, and reported as its look-alike where the plan cannot."""
+"""The diagnosis learns the calibration (effects mesh_loss and idle_loss_scale, candidates of
+every diagnosis; ``calibrate=False``/``--no-calibrate`` leaves them out): recovered from
+synthetic recordings within their confidence intervals, loss-scale errors of +-10 and +-15 %
+named as the mesh loss, written to design_updated's [calibration] with their source, told apart
+from a transducer gain error by back-driven runs, reported with their look-alike and the
+separating run where the plan cannot tell them apart, and withdrawn where they stood in for a
+loss of another law (a load-squared loss: unexplained, with a proposed form)."""
 from __future__ import annotations
 
 from types import SimpleNamespace
@@ -22,6 +25,7 @@ def as_recording(r):
 
 
 def diagnose(r, mode, design=None, calibrate=True):
+    """The plain diagnosis (``calibrate`` True is the default)."""
     return Diagnoser(design, mode, calibrate=calibrate).fit(as_recording(r)).diagnosis_
 
 
@@ -49,7 +53,9 @@ def test_registry_entries_and_default_candidates():
     for eid in CALIBRATION_EFFECTS:
         e = EFFECTS[eid]
         assert e.requires and e.separating_run and len(e.parameters) == 1
-        assert eid not in DEFAULT_CANDIDATES
+        assert eid in DEFAULT_CANDIDATES
+        assert eid in Diagnoser().candidates
+        assert eid not in Diagnoser(calibrate=False).candidates
     assert "S2" in EFFECTS["mesh_loss"].separating_run
     assert "back-driven" in EFFECTS["mesh_loss"].separating_run
 
@@ -78,6 +84,91 @@ def test_calibration_effects_recovered_over_seeds(effect, seed, mode):
     _recovered(effect, seed, mode)
 
 
+def test_no_calibrate_leaves_them_out():
+    """``calibrate=False`` (``diagnose --no-calibrate``): the calibration effects are no
+    candidates."""
+    r = synthesize("mesh_loss", 11, "S1", "tiny", friction_error=0.0)
+    d = diagnose(r, "S1", calibrate=False)
+    assert not {e["id"] for e in d.evidence} & set(CALIBRATION_EFFECTS)
+
+
+# -- loss-scale errors -------------------------------------------------------------------------
+#: the preset's load-dependent losses as a fraction of the mesh power, L = 1 - eta0 (1 - k):
+#: about 0.042 at its k = 0.027 (the gear's own losses about 0.015). A loss-scale error s on
+#: them, (1 + s) L, is a change dk of about s L / (1 - L) of the mesh loss
+_RIG_LOAD_LOSS = 0.042
+
+
+@pytest.mark.parametrize("scale, seed", [(0.10, 21), (-0.10, 22), (0.15, 23), (-0.15, 24)])
+def test_a_loss_scale_error_is_named_mesh_loss_with_k_in_its_ci(scale, seed):
+    """The drive is the calibrated preset with its load-dependent losses off by +-10 or
+    +-15 % (the most common real mismatch), recorded with the four-quadrant plan and
+    diagnosed against the preset by a plain diagnosis: named ``mesh_loss``, the truth in its
+    95 % interval, nothing unexplained, and the design's k corrected."""
+    from model_core.presets import load_design
+    rig = load_design("mackic-rig")
+    dk = scale * _RIG_LOAD_LOSS / (1 - _RIG_LOAD_LOSS)
+    r = synthesize("mesh_loss", seed, "S1", "small", design=rig, plan="four_quadrant",
+                   friction_error=0.0, effect_values={"mesh_loss_k_change": dk})
+    d = diagnose(r, "S1", design=rig)
+    assert d.effect == "mesh_loss", [e["id"] for e in d.effects]
+    lo, hi = d.parameters["mesh_loss_k_change"]["ci95"]
+    # the interval is the noise's for independent block means; the transducer's first-order
+    # filter correlates neighbouring 10 ms blocks, which widens it by about
+    # sqrt((1 + rho)/(1 - rho)) ~ 2 (the factor diagnosis.calibration_fit applies); measured
+    # (seed 21): 4e-6 off at a half-width of 3.6e-6, a torque difference of 0.02 mN*m RMS
+    half = 0.5 * (hi - lo)
+    assert abs(0.5 * (lo + hi) - dk) <= 2 * half, (lo, dk, hi)
+    assert not d.unexplained["present"], d.unexplained["statement"]
+    fixed, _ = updated_design(rig, d)
+    assert fixed.calibration.mesh_loss_k == pytest.approx(rig.calibration.mesh_loss_k + dk,
+                                                          abs=4 * half)
+
+
+def _gen3():
+    import sys
+    from pathlib import Path
+    here = Path(__file__).resolve().parents[1] / "benchmarks" / "independent"
+    if str(here) not in sys.path:
+        sys.path.insert(0, str(here))
+    import gen3
+    return gen3
+
+
+@pytest.mark.parametrize("plan, mode, factor, seed", [
+    ("4q", "S1", 1.10, 41), ("4q", "S2", 0.85, 42), ("duty", "S2", 0.90, 43),
+    ("duty", "S1", 1.15, 44)])
+def test_a_loss_scale_of_the_whole_gear_is_a_loss_or_the_calibration(plan, mode, factor, seed):
+    """The independent generator's loss-scale error (benchmarks/independent/gen3.py: every
+    load-dependent loss of the core, PL1..PL6, times the factor; written without reading the
+    diagnosis) in the four-quadrant and duty-cycle plans, 60 s at 1 kHz. The default design's
+    gear losses are not in proportion to the mesh power (at light load they hold a part that
+    does not grow with it: a 10 % scale projected on the mesh loss leaves 13 % of itself, on
+    the mesh loss with the idle-loss scale 8 %; docs/explanation/calibration.md), so the mesh
+    loss is not the whole of it. What holds: the calibration effects are named with the sign
+    of the error, or what is left is reported as an unexplained loss of the operating point;
+    never a sensor fault or a drift in time."""
+    gen3 = _gen3()
+    case = gen3._case(f"ls_{plan}_{mode}_{factor}", plan, mode, 1000, "csv",
+                      [gen3.E("loss_scale", factor=factor)], [gen3.CAL], duration=60)
+    case["seed"] = seed
+    data, _, _ = gen3.build(case)
+    rec = SimpleNamespace(time=data["time_s"], speed_in=data["speed_in_rpm"] * np.pi / 30,
+                          torque_in=data["torque_in_Nm"],
+                          speed_out=data["speed_out_rpm"] * np.pi / 30,
+                          torque_out=data["torque_out_Nm"], temperature=None)
+    d = Diagnoser(None, mode).fit(rec).diagnosis_
+    named = {e["id"] for e in d.effects}
+    assert named <= {"mesh_loss", "idle_loss_scale", "friction_miscalibrated",
+                     "load_independent_loss"}, named
+    for e in d.effects:
+        if e["id"] == "mesh_loss":
+            assert np.sign(e["parameters"]["mesh_loss_k_change"]["value"]) == np.sign(factor - 1)
+    if "mesh_loss" not in named:
+        assert d.unexplained["present"] and "operating point" in d.unexplained["statement"]
+
+
+# -- look-alikes ----------------------------------------------------------------------------------
 def test_a_gain_error_is_told_apart_by_back_driven_runs():
     """k and a torque transducer gain both scale the input torque in one forward mode; with
     back-driven holds (four_quadrant plan) the gain is named and k is not."""
@@ -85,26 +176,52 @@ def test_a_gain_error_is_told_apart_by_back_driven_runs():
                    friction_error=0.0)
     d = diagnose(r, "S1")
     assert d.effect == "torque_sensor_gain"
-    assert "mesh_loss" not in {e["id"] for e in d.effects}
+    assert not {e["id"] for e in d.effects} & set(CALIBRATION_EFFECTS)
 
 
-def test_without_back_driven_runs_they_are_look_alikes_with_the_separating_run():
-    r = synthesize("torque_sensor_gain", 13, "S1", "small", plan="one_speed",
-                   friction_error=0.0)
+@pytest.mark.parametrize("effect, values, plan", [
+    ("torque_sensor_gain", {"gain_error": 0.02}, "one_speed"),
+    ("mesh_loss", {"mesh_loss_k_change": 0.004}, "one_speed"),
+    ("mesh_loss", {"mesh_loss_k_change": 0.004}, "full")])
+def test_without_back_driven_runs_they_are_look_alikes_with_the_separating_run(effect, values,
+                                                                                plan):
+    """Forward driving only (one speed, or both directions of rotation with the load always
+    braking): a transducer gain is the mesh loss with the idle-loss scale by physics; either
+    is named with the other as its look-alike and the separating run (S2 or back-driving at
+    the same points)."""
+    r = synthesize(effect, 13, "S1", "small", plan=plan, friction_error=0.0,
+                   effect_values=values)
     d = diagnose(r, "S1")
     named = {d.effect} | set(d.indistinguishable_from)
-    assert {"mesh_loss", "torque_sensor_gain"} <= named
+    assert {"mesh_loss", "torque_sensor_gain"} <= named, (d.effect, d.indistinguishable_from)
     assert "S2" in d.suggested_test and "back-driven" in d.suggested_test
 
 
-def test_a_plain_diagnosis_does_not_fit_them():
-    """Without ``calibrate`` the calibration effects are not candidates (they could stand in
-    for a mismatch outside the library)."""
-    r = synthesize("mesh_loss", 11, "S1", "tiny", friction_error=0.0)
-    d = diagnose(r, "S1", calibrate=False)
-    assert not {e["id"] for e in d.evidence} & set(CALIBRATION_EFFECTS)
+# -- a loss of another law -------------------------------------------------------------------------
+def _load_squared(s):
+    """A loss growing with the square of the load (30 mN*m at 10 N*m), outside the library."""
+    from model_core.discovered import T_REF
+    return 0.03 * (s["tau_out"] / T_REF) ** 2 * np.sign(s["w_in"])
 
 
+@pytest.mark.parametrize("plan, seed", [("four_quadrant", 4), ("full", 5)])
+def test_a_load_squared_loss_is_not_named_mesh_loss(plan, seed):
+    """A free loss scale takes up most of a load-squared loss (k |T| with the idle scale);
+    the diagnosis asks the recording whether the dictionary's closed form explains that part
+    better (BIC), withdraws the calibration effects, reports the mismatch as unexplained and
+    proposes the form (load squared, its coefficient near the truth)."""
+    r = synthesize("none", seed, "S1", "small", plan=plan, friction_error=0.0,
+                   added_torque=_load_squared)
+    d = diagnose(r, "S1")
+    assert not {e["id"] for e in d.effects} & set(CALIBRATION_EFFECTS), d.effects
+    assert d.unexplained["present"]
+    p = d.unexplained["proposed"]
+    assert p["formula"] and "^2" in p["formula"], p
+    c = [t for t in p["terms"] if "^2" in t["feature"]][0]
+    assert c["coefficient"] == pytest.approx(0.03, rel=0.15)
+
+
+# -- the preset from a recording -------------------------------------------------------------------
 def test_fit_calibration_recovers_the_preset_from_its_recording():
     """diagnose --calibrate's first step: the mackic-rig drive recorded (forward and reverse
     rotation, no back-driving), calibrated from the default design by nonlinear least squares
@@ -130,24 +247,41 @@ def test_fit_calibration_recovers_the_preset_from_its_recording():
 
 @pytest.mark.slow
 def test_end_to_end_the_preset_recorded_and_diagnosed_reproduces_the_paper(tmp_path):
-    """Issue 19 acceptance, end to end through the command line: the mackic-rig drive
-    recorded with a four-quadrant plan, ``cyclo-fmu diagnose --calibrate`` against the default
-    design; ``paper`` on its design_updated.toml within 0.015 of the experiment."""
+    """Issue 19 acceptance, end to end through the command line: the mackic-rig drive recorded
+    with a four-quadrant plan (the synthesiser's fast engine: the bench's components replayed
+    vectorised; the bench's brake FMU does not drive, so back-driven holds cannot go through
+    the FMUs; the bench engine is the next test), a plain ``cyclo-fmu diagnose`` against the
+    default design; ``paper`` on its design_updated.toml within 0.015 of the experiment; and
+    ``--no-calibrate`` leaves the calibration out."""
     import json
     import subprocess
     import sys
     from cyclo_fmu.synth import write_synth
-    from model_core.paper import PAPER_EXPERIMENT
     from model_core.presets import load_design
     rig = load_design("mackic-rig")
     r = synthesize("none", 5, "S1", "small", design=rig, plan="four_quadrant",
                    friction_error=0.0)
     write_synth(tmp_path / "rec.csv", r)
+    _paper_from_plain_diagnose(tmp_path)
     run = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "diagnose",
-                          str(tmp_path / "rec.csv"), "--mode", "S1", "--calibrate", "--out",
+                          str(tmp_path / "rec.csv"), "--mode", "S1", "--no-calibrate",
+                          "--json"], capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr
+    out = json.loads(run.stdout)
+    assert "calibration_fit" not in out
+    assert not {e["id"] for e in out["effects"]} & set(CALIBRATION_EFFECTS)
+
+
+def _paper_from_plain_diagnose(tmp_path):
+    import json
+    import subprocess
+    import sys
+    from model_core.paper import PAPER_EXPERIMENT
+    run = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "diagnose",
+                          str(tmp_path / "rec.csv"), "--mode", "S1", "--out",
                           str(tmp_path / "dg")], capture_output=True, text=True, timeout=900)
     assert run.returncode == 0, run.stderr
-    assert "CALIBRATED to this recording first" in run.stdout
+    assert "CALIBRATED to this recording" in run.stdout
     p = subprocess.run([sys.executable, "-m", "cyclo_fmu.cli", "paper", "--design",
                         str(tmp_path / "dg" / "design_updated.toml"), "--json", "--out",
                         str(tmp_path / "f")], capture_output=True, text=True, timeout=300)
@@ -155,3 +289,18 @@ def test_end_to_end_the_preset_recorded_and_diagnosed_reproduces_the_paper(tmp_p
     for m in ("S1", "S2"):
         for q in ("min", "mean", "max"):
             assert abs(st[m][q] - PAPER_EXPERIMENT[m][q]) <= 0.015, (m, q, st[m][q])
+
+
+@pytest.mark.slow
+def test_end_to_end_through_the_bench_fmus(tmp_path):
+    """The same through the bench's FMUs (``synth --engine bench``: motor, the reducer FMU
+    with the preset's parameters, brake, transducers co-simulated), both directions of
+    rotation (the brake does not back-drive): a plain diagnose against the default design and
+    ``paper`` on its design_updated.toml within 0.015 of the experiment (measured: 0.0096)."""
+    from cyclo_fmu.synth import write_synth
+    from model_core.presets import load_design
+    rig = load_design("mackic-rig")
+    r = synthesize("none", 5, "S1", "tiny", design=rig, plan="full", friction_error=0.0,
+                   engine="bench")
+    write_synth(tmp_path / "rec.csv", r)
+    _paper_from_plain_diagnose(tmp_path)

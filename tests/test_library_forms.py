@@ -124,16 +124,22 @@ def test_run_in_in_the_fmu_decays_with_the_distance_run(fmu):
 @pytest.mark.parametrize("seed, plan", [(61, "full"), (65, "one_speed")])
 def test_a_ripple_growing_with_the_load_is_named_as_such(seed, plan):
     """Ripple at 1x and the roller pass whose amplitude is in proportion to the load
-    (4.5 and 6 mN*m at 10 N*m): named ``load_ripple`` with its amplitudes (not "shaft orders
-    remain"), and the updated design closes the recording."""
+    (4.5 and 6 mN*m at 10 N*m): named ``mesh_ripple`` at its load law 1 (amplitude a + b |T|)
+    with its amplitudes (not "shaft orders remain"), and the updated design closes the
+    recording. ``load_ripple``, the id of the earlier separate entry, is an alias."""
     r = synthesize("load_ripple", seed, "S1", "small", plan=plan)
     d = Diagnoser(None, "S1").fit(as_recording(r)).diagnosis_
-    assert [e["id"] for e in d.effects] == ["load_ripple"] and not d.unexplained["present"]
+    assert [e["id"] for e in d.effects] == ["mesh_ripple"] and not d.unexplained["present"]
+    assert d.effects[0]["parameters"]["load_law"]["value"] == 1.0
     p = {k: v["value"] for k, v in d.effects[0]["parameters"].items()}
-    assert np.hypot(p["B1_sin"], p["B1_cos"]) == pytest.approx(np.hypot(0.004, 0.002), rel=0.15)
-    assert np.hypot(p["Bz_sin"], p["Bz_cos"]) == pytest.approx(0.006, rel=0.15)
+    # at one speed the three loads separate a from b poorly: the 1x amplitude b comes out 12-16 %
+    # low (0.0038 for 0.0045; the separate load_ripple entry of earlier versions: 12 % without
+    # a beside it), the roller-pass one 16 % high at an interval of +-50 % (0.0070 for 0.006)
+    tol = 0.15 if plan == "full" else 0.2
+    assert np.hypot(p["B1_sin"], p["B1_cos"]) == pytest.approx(np.hypot(0.004, 0.002), rel=tol)
+    assert np.hypot(p["Bz_sin"], p["Bz_cos"]) == pytest.approx(0.006, rel=tol)
     fixed, _ = updated_design(DriveDesign(), d)
-    assert fixed.extra.ripple_roller_load == pytest.approx(0.006, rel=0.15)
+    assert fixed.extra.ripple_roller_load == pytest.approx(0.006, rel=tol)
     again = Diagnoser(fixed, "S1").fit(as_recording(r)).diagnosis_
     assert again.effects == [] and not again.unexplained["present"]
 

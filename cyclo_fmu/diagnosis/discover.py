@@ -338,6 +338,10 @@ class SparseDiscovery:
         self.terms_ = list(stable)
         self.nuisance_change_ = (np.asarray(fit.of(forced[0])[0], float) if forced
                                  else np.zeros(0))
+        # their standard errors beside the form (wider than alone where the form and a
+        # library term share a direction)
+        self.nuisance_se_ = (np.asarray(fit.of(forced[0])[1], float) if forced
+                             else np.zeros(0))
         self.fit_ = fit
         self.heldout_rms_after_ = fit.cv_rmse
         self.problem_ = prob
@@ -370,6 +374,7 @@ class Discovery:
     n_folds: int = 5
     prediction: np.ndarray = field(default=None, repr=False)   # block level, N*m
     nuisance_change: list = field(default_factory=list)   # per nuisance column
+    nuisance_se: list = field(default_factory=list)       # their standard errors beside it
 
     def to_json(self) -> dict:
         return {"formula": self.formula, "terms": self.terms,
@@ -556,7 +561,8 @@ def discover(residual, t, w_in, T_out, *, samples_per_block=None, block=0.01,
                      "; ".join(dict.fromkeys(readings)),
                      design_terms=tuple(design_terms[:MAX_TERMS]), not_in_design=not_in,
                      candidates=cand, n_folds=n_folds, prediction=pred,
-                     nuisance_change=[float(x) for x in sd.nuisance_change_])
+                     nuisance_change=[float(x) for x in sd.nuisance_change_],
+                     nuisance_se=[float(x) for x in sd.nuisance_se_])
 
 
 # -- closure: the friction level and the discovered coefficients made consistent -------------------

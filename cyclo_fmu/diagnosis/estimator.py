@@ -15,17 +15,25 @@ typed result:
    bursts at events and spectral peaks, each judged against twins; effects the unknown could
    hold withdrawn;
 5. ``discover`` (``discover.discover``, when that module exists): a closed form for a
-   confirmed remainder, put in ``unexplained.proposed``;
+   confirmed remainder, put in ``unexplained.proposed``. Before it, a calibration effect
+   (``mesh_loss``, ``idle_loss_scale``: candidates unless ``calibrate=False``) that stands is
+   put against the dictionary's closed form for what it holds (``_calibration_against_forms``,
+   BIC): where the form wins, the calibration effects stood in for a loss of another law and
+   stages 2-5 run again without them; the calibration effects that stand and moved far are
+   then re-linearised (``_relinearise_calibration``: replay at the corrected calibration,
+   stages 2-5 again with them forced, Gauss-Newton);
 6. ``report`` (``result.report`` -> ``Diagnosis``).
 """
 from __future__ import annotations
 
 import math
+import re
+from dataclasses import replace
 
 import numpy as np
 
 from model_core import DriveDesign
-from model_core.effects import CALIBRATION_EFFECTS, DEFAULT_CANDIDATES
+from model_core.effects import CALIBRATION_EFFECTS, DEFAULT_CANDIDATES, EFFECTS
 from model_core.kinematics import parse_mode
 
 from . import residual as R
@@ -38,6 +46,20 @@ from .twins import FALSE_ALARM, N_TWINS, judge
 
 #: [1] re-linearise the friction level (replay again at the corrected mu) beyond this error
 FRICTION_RELINEARISE = 0.02
+#: [1] re-linearise a calibration effect (replay again at the corrected calibration, its
+#: sensitivities taken there) beyond these changes. The mesh loss enters the model as
+#: 1/(1 - k): a step dk taken from the slope at k misses by about dk^2 (4e-6 at 0.002, below
+#: the interval of k that a minute of recording gives, about 1e-5). The idle losses enter
+#: linearly but share their speed laws with the gear's flow direction: 0.1 of the scale
+CAL_RELINEARISE = {"mesh_loss": 0.002, "idle_loss_scale": 0.1}
+#: the dictionary's families (discover.Library) whose forms grow with the load: a form that a
+#: calibration effect may have stood in for must hold one of them (a form of speed alone is a
+#: drag, a library effect the selection weighs against the idle-loss scale itself)
+LOAD_FAMILIES = ("load", "speed*load")
+#: re-linearisation passes of the calibration at most (Gauss-Newton on the replay; the
+#: preset mackic-rig from the default design, k 0 -> 0.027 and the idle scale 1 -> 0.03,
+#: settles in two)
+CAL_PASSES = 3
 #: [s] at least this much moving recording (below it nothing can be separated)
 MIN_MOVING_S = 2.0
 #: [rad/s] a recording whose input never exceeds this speed (about 10 r/min) stands still
@@ -63,24 +85,25 @@ class Diagnoser:
     n_folds : int
         Time-ordered folds of the cross-validation.
     candidates : sequence of str, optional
-        Effect ids to consider (default: ``DEFAULT_CANDIDATES``, and with ``calibrate`` the
-        ``CALIBRATION_EFFECTS`` too).
+        Effect ids to consider (default: ``DEFAULT_CANDIDATES``, the whole registry; without
+        ``calibrate`` less the ``CALIBRATION_EFFECTS``).
     calibrate : bool
-        Also fit the calibration effects (mesh loss k, idle-loss scale: model_core.effects).
+        The calibration effects (mesh loss k, idle-loss scale: model_core.effects) are
+        candidates (default True; False leaves them out, ``diagnose --no-calibrate``).
     progress : bool
         A progress bar over the fit's stages on stderr (terminals only).
     """
 
     def __init__(self, design: DriveDesign = None, mode: str = "S1", bandwidth: float = 1000.0,
                  block: float = 0.01, n_folds: int = 5, candidates=None, progress=False,
-                 calibrate=False):
+                 calibrate=True):
         self.design = design or DriveDesign()
         self.mode = "".join(parse_mode(mode)[:2])
         self.bandwidth = bandwidth
         self.block = block
         self.n_folds = n_folds
-        self.candidates = tuple(c for c in (candidates or DEFAULT_CANDIDATES + (
-            CALIBRATION_EFFECTS if calibrate else ())) if c != "none")
+        self.candidates = tuple(c for c in (candidates or DEFAULT_CANDIDATES)
+                                if c != "none" and (calibrate or c not in CALIBRATION_EFFECTS))
         self.progress = progress
         self._bar = None
 
@@ -151,21 +174,188 @@ class Diagnoser:
             P0.sig = {k: P0.sig[k] for k in ("sens_mu", "sens_nu")}
             P0.rp = Replay(P0.rp.T_model, P0.sig)
             sel = select(P, self.n_folds, forced=("friction_miscalibrated",))
-        self._stage("twins")
-        J = judge(P, sel)
-        self._stage("remainder")
-        rem = remainder(P, sel, J, rec, self.design, self.mode)
-        self._stage("discover")
-        self._discover(rec, P, sel, rem, rel1)
+        self.calibration_offsets_ = {}
+        P, sel, J, rem = self._judge(rec, P, sel, rel1)
+        if self._relinearise_needed(rem):
+            # the claims are judged (twins, remainder, discovery) at the first linearisation;
+            # the calibration effects that stand there are re-linearised for their values and
+            # the stages run again around the corrected calibration
+            notes = self._notes
+            P, sel, self.calibration_offsets_ = self._relinearise_calibration(
+                rec, P, sel, rem, rel1)
+            P, sel, J, rem = self._judge(rec, P, sel, rel1, compete=False)
+            self._notes = notes + [n for n in self._notes if n not in notes]
         rem.unexplained["_rejected"] = J.rejected
         self._stage("report")
-        d = report(rec, first, sel, J, rem, P, rel1, P0)
+        d = report(rec, first, sel, J, rem, P, rel1, P0, self.calibration_offsets_)
+        d.notes += self._notes
         d.stages = {"replay": P, "select": sel, "twins": J, "remainder": rem}
         self.diagnosis_ = d
         self._bar.close()
         self._bar = None
         self._rec, self._P0, self._weights = rec, P0, first.weights
         return self
+
+    def _judge(self, rec, P, sel, rel1, compete=True):
+        """Stages ``twins``, ``remainder`` and ``discover`` on one selection (with
+        ``compete``, the calibration effects against the closed forms before the discovery);
+        returns ``(P, sel, J, rem)``."""
+        self._stage("twins")
+        J = judge(P, sel)
+        self._stage("remainder")
+        rem = remainder(P, sel, J, rec, self.design, self.mode)
+        self._stage("discover")
+        self._prob, self._notes = sel.prob, []
+        out = self._calibration_against_forms(rec, P, sel, rem) if compete else None
+        if out is not None:
+            # the calibration effects stood in for a form outside the library: the stages run
+            # again without them as candidates (what a diagnose --no-calibrate sees), and the
+            # discovery stage proposes the form
+            ids, note, text = out
+            P = replace(P, options={k: v for k, v in P.options.items()
+                                    if k not in CALIBRATION_EFFECTS})
+            sel = select(P, self.n_folds, forced=tuple(f for f in sel.forced
+                                                      if f not in CALIBRATION_EFFECTS))
+            P, sel, J, rem = self._judge(rec, P, sel, rel1, compete=False)
+            rem.withdrawn += [e for e in ids if e not in rem.withdrawn]
+            un = rem.unexplained
+            if un.get("present"):
+                un["statement"] = un["statement"].rstrip(".") + "; " + text + "."
+            self._notes.append(note)
+            return P, sel, J, rem
+        self._discover(rec, P, sel, rem, rel1)
+        return P, sel, J, rem
+
+    def _calibration_against_forms(self, rec, P, sel, rem):
+        """A calibration effect against the closed forms of the discovery's dictionary.
+
+        The calibration effects are free scales of the model's own losses; a loss outside
+        the library that grows with the load or the speed (a load-squared or speed-times-load
+        loss) is taken up by them in large part, and what is left may lie within the twins.
+        So the recording is asked which explains it better: the selection as it is (model A),
+        or the selection without its calibration effects and with the sparse closed form the
+        discovery stage fits to what they held (model B, its own effects refitted beside the
+        form). B replaces them only where its BIC is lower by ``selection.DELTA_BIC``
+        ("very strong" evidence; its parameters counted as two per coefficient, a value and a
+        shape chosen on a grid, so that a tie keeps the library's physical effect). The
+        calibration effects are then withdrawn, the remainder is reported as unexplained and
+        the discovery stage proposes the form."""
+        from dataclasses import replace as _replace
+        S = rem.S
+        cal = [t for t in S.terms if t.effect in CALIBRATION_EFFECTS]
+        if not cal or rem.residual_raw is None:
+            return
+        try:
+            from .discover import discover
+        except ImportError:
+            return
+        from .selection import DELTA_BIC, GramProblem, Term
+        other = [t for t in S.terms if t not in cal]
+        fr = sel.opts.get("friction_miscalibrated")
+        if fr and "friction_miscalibrated" not in S.ids:
+            # the model's own friction level beside both (a loss scale of the whole gear is
+            # in large part a friction level; it must not count for the form)
+            other = [fr[0]] + other
+        ocols = [c for t in other for c in t.cols]
+        back = np.zeros(len(rec.time))
+        for t in cal:
+            v, _ = S.of(t)
+            back += first_order(EFFECTS[t.effect].basis(P.sig, t.shape), P.dt,
+                                self.bandwidth) @ v
+        resid = rem.residual_raw + back
+        d = discover(resid, rec.time, rec.speed_in, rec.torque_out, samples_per_block=P.m,
+                     weights=sel.weights, temperature=getattr(rec, "temperature", None),
+                     mode=self.mode, z1=self.design.z1, bandwidth=self.bandwidth,
+                     n_folds=self.n_folds, min_explained=sel.min_expl,
+                     noise=P.noise_sample / math.sqrt(P.m),
+                     nuisance=P.X[:, ocols] if ocols else None,
+                     # without the feature in proportion to the model's input torque: it is a
+                     # library effect (torque_sensor_gain, the calibration's look-alike where
+                     # power flows one way: LOOKALIKE_GROUPS), not a form outside the library
+                     model_T_in=None)
+        if not d.proposed or d.prediction is None:
+            return
+        if not {t["family"] for t in d.terms} & set(LOAD_FAMILIES):
+            # a law of speed alone is the library's drag, which the selection already put
+            # against the idle-loss scale on the recording's BIC
+            return
+        n = min(len(P.y), len(d.prediction))
+        # model A holds the whole calibration family (the pair the design carries), B the form
+        for eid in CALIBRATION_EFFECTS:
+            if eid not in S.ids and sel.opts.get(eid):
+                cal = cal + [sel.opts[eid][0]]
+        ccols = [c for t in cal for c in t.cols]
+        X = np.column_stack([P.X[:n, ocols + ccols], d.prediction[:n]])
+        prob = GramProblem(X, P.y[:n], np.asarray(sel.weights, float)[:n], self.n_folds)
+        i, A = 0, []
+        for t in other + cal:
+            A.append(_replace(t, cols=tuple(range(i, i + len(t.cols)))))
+            i += len(t.cols)
+        k_form = 2 * len(d.terms)
+        form = Term("form", None, (X.shape[1] - 1,), ("form",), ("N*m",), (-np.inf,),
+                    (np.inf,), k_form - 1)
+        fit_a = prob.fit(tuple(A), cv=False)
+        fit_b = prob.fit(tuple(A[:len(other)]) + (form,), cv=False)
+        gap = fit_a.bic - fit_b.bic
+        if gap < DELTA_BIC:
+            return
+        ids = [t.effect for t in cal if t.effect in S.ids]
+        rms = float(np.sqrt(np.mean(block_means(back, P.m) ** 2)))
+        text = (f"{' and '.join(ids)} ({1e3 * rms:.2f} mN*m) stood in for it: the proposed "
+                f"closed form explains that part better (BIC lower by {gap:.0f})")
+        note = (f"{', '.join(ids)} withdrawn: the sparse closed form of the discovery's "
+                f"dictionary explains what {'it' if len(ids) == 1 else 'they'} held better (BIC "
+                f"{fit_b.bic:.1f} against {fit_a.bic:.1f}, at least {DELTA_BIC:g} lower "
+                "needed); a free loss scale stands in for a loss of another law")
+        return ids, note, text
+
+    @staticmethod
+    def _calibration_values(S):
+        return {t.effect: float(S.of(t)[0][0]) for t in S.terms
+                if t.effect in CALIBRATION_EFFECTS}
+
+    def _relinearise_needed(self, rem):
+        return any(abs(v) > CAL_RELINEARISE[e]
+                   for e, v in self._calibration_values(rem.S).items())
+
+    def _relinearise_calibration(self, rec, P, sel, rem, rel1):
+        """Gauss-Newton on the calibration: the calibration effects that stand after the
+        judged stages (``rem.S``) are applied to the design, the replay taken again there
+        (its sensitivities with it) and the selection run again with them forced (their claim
+        was judged at the first linearisation; here they carry the correction); repeated
+        while a change exceeds ``CAL_RELINEARISE`` (at most ``CAL_PASSES``). A calibration
+        effect the stages withdrew is no candidate any more. Returns ``(P, sel, offsets)``,
+        ``offsets`` {effect: change applied to the design}: the reported value is the offset
+        plus the last pass's change."""
+        from model_core.design import scale_friction_level
+        design = scale_friction_level(self.design, 1 + rel1) if rel1 else self.design
+        values = self._calibration_values(rem.S)
+        dropped = set(self._calibration_values(sel.S)) - set(values)
+        candidates = tuple(c for c in self.candidates if c not in dropped)
+        offsets = {}
+        for _ in range(CAL_PASSES):
+            moved = False
+            for eid, v in values.items():
+                name = ("mesh_loss_k" if eid == "mesh_loss" else "idle_loss_scale")
+                old = getattr(design.calibration, name)
+                design, _ = EFFECTS[eid].apply(design, {EFFECTS[eid].parameters[0].name: v})
+                applied = getattr(design.calibration, name) - old   # clipped at the bounds
+                if abs(applied) > 0:
+                    offsets[eid] = offsets.get(eid, 0.0) + applied
+                    moved = moved or abs(applied) > CAL_RELINEARISE[eid]
+            if not moved:
+                break
+            sens = (P.sig["sens_mu"], None) if P.sig.get("sens_mu") is not None else None
+            P.X, sel.prob.Xs = None, None
+            P = build_problem(rec, design, self.mode, candidates, self.bandwidth,
+                              self.block, sens)
+            forced = tuple(dict.fromkeys(tuple(sel.forced) + tuple(offsets)))
+            sel = select(P, self.n_folds, forced=forced)
+            values = {e: v for e, v in self._calibration_values(sel.S).items()
+                      if e in offsets}
+            if not any(abs(v) > CAL_RELINEARISE[e] for e, v in values.items()):
+                break
+        return P, sel, offsets
 
     def _discover(self, rec, P, sel, rem, rel1):
         """Stage ``discover``: a sparse closed form fitted to a confirmed smooth remainder by
@@ -188,6 +378,9 @@ class Diagnoser:
             noise=P.noise_sample / math.sqrt(P.m), nuisance=P.X[:, cols] if cols else None,
             model_T_in=P.T_model_f)
         out = d.to_json()
+        if d.proposed:
+            self._withdraw_stand_ins(P, rem, d, S)
+            S = rem.S
         change, i = {}, 0
         for t in S.terms:      # the selected effects' parameter changes next to the form
             k = len(t.cols)
@@ -198,6 +391,47 @@ class Diagnoser:
             i += k
         out["library_change"] = change
         rem.unexplained["proposed"] = out
+
+    def _withdraw_stand_ins(self, P, rem, d, S):
+        """A calibration effect refitted beside the proposed form (the discovery's nuisance
+        change) that falls within its 95 % interval of zero, its re-linearisation offset
+        included, stood in for the form (a free loss scale takes up part of any loss that
+        grows with the load): withdrawn, and its columns' change dropped from the form's
+        ``library_change``. The interval is the joint fit's of the form and the library
+        terms (noise only)."""
+        out, i, keep = [], 0, []
+        for t in S.terms:
+            k = len(t.cols)
+            v, _ = S.of(t)
+            if t.effect in CALIBRATION_EFFECTS and k == 1:
+                whole = self.calibration_offsets_.get(t.effect, 0.0) + float(v[0])
+                beside = whole + d.nuisance_change[i]
+                if abs(beside) <= 1.96 * d.nuisance_se[i]:
+                    out.append((t.effect, whole, beside))
+                    i += k
+                    continue
+            keep.append((t, i))
+            i += k
+        if not out:
+            return
+        idx = [j for t, i0 in keep for j in range(i0, i0 + len(t.cols))]
+        d.nuisance_change = [d.nuisance_change[j] for j in idx]
+        d.nuisance_se = [d.nuisance_se[j] for j in idx]
+        rem.S = self._prob.fit(tuple(t for t, _ in keep))
+        gone = {e for e, _, _ in out}
+        rem.dominant = [x for x in rem.dominant
+                        if (x if isinstance(x, str) else x[0]) not in gone]
+        un = rem.unexplained
+        un["statement"] = re.sub(r" \(beside [^)]*\)", "", un["statement"])
+        un["statement"] = un["statement"].rstrip(".") + "; " + ", ".join(sorted(gone)) + (
+            " stood in for it and is withdrawn (a form is proposed).")
+        for eid, whole, beside in out:
+            rem.withdrawn.append(eid)
+            self._notes.append(
+                f"{eid} withdrawn: it stood in for the proposed form (its change "
+                f"{whole:+.4g} falls to {beside:+.2g} beside the form, within its 95 % "
+                "interval of zero); a free loss scale takes up part of any loss that grows "
+                "with the load")
 
     def residual_rms(self, design: DriveDesign) -> float:
         """RMS (N*m) of the block-mean residual of the fitted recording under ``design`` (its

@@ -212,11 +212,10 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None):
             columns[(eid, shape)] = (keys, B)
             k0 = sum(c.shape[1] for c in cols)
             cols.append(B)
+            par = eff.parameters_for(shape)
             terms.append(Term(eid, shape, tuple(range(k0, k0 + B.shape[1])),
-                              tuple(p.name for p in eff.parameters),
-                              tuple(p.unit for p in eff.parameters),
-                              tuple(p.lower for p in eff.parameters),
-                              tuple(p.upper for p in eff.parameters),
+                              tuple(p.name for p in par), tuple(p.unit for p in par),
+                              tuple(p.lower for p in par), tuple(p.upper for p in par),
                               len(eff.shape_names) if (eff.shape and shape is not None)
                               else 0))
         options[eid] = terms

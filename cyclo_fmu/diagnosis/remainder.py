@@ -292,7 +292,7 @@ def _lines(P, S, r, design, mode, rng):
     outside = {n: a for n, a in standing.items() if n not in lib}
     inside = {n: a for n, a in standing.items() if n in lib}
     ex = design.extra
-    if ({"mesh_ripple", "load_ripple"} & set(S.ids) or ex.ripple_1x or ex.ripple_roller
+    if ({"mesh_ripple"} & set(S.ids) or ex.ripple_1x or ex.ripple_roller
             or ex.ripple_1x_load or ex.ripple_roller_load):
         inside = {}       # the library's orders, fitted: what is left is phase tracking
     parts = []

@@ -10,7 +10,7 @@ import textwrap
 import numpy as np
 
 from model_core import DriveDesign
-from model_core.effects import EFFECTS
+from model_core.effects import EFFECTS, resolve_effect
 
 from ..fmt import friction_level_fields, unit_suffix
 from .result import Diagnosis
@@ -28,12 +28,16 @@ def updated_design(design: DriveDesign, d: Diagnosis):
         if e["id"] in done or e["id"] == "none":
             continue
         done.add(e["id"])
-        eff = EFFECTS[e["id"]]
+        # an id of an earlier version (load_ripple, now the mesh ripple's load law 1)
+        eid, _, _ = resolve_effect(e["id"])
+        eff = EFFECTS[eid]
         # next to a discovered form the selected effects' values change (``library_change``)
         change = ((d.unexplained.get("proposed") or {}).get("library_change") or {}).get(
             e["id"], {})
         values = {k: v["value"] + change.get(k, 0.0) for k, v in e["parameters"].items()}
         shape = eff.shape_from(values) if eff.shape else None
+        if eid != e["id"]:
+            eid, values, shape = resolve_effect(e["id"], values, shape)
         form = e.get("form", "").startswith("per 10 K")
         fixed, more = eff.apply(fixed, values, shape, temperature=form)
         notes += more

@@ -6,12 +6,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from model_core.effects import EFFECTS, SENSOR_EFFECTS
+from model_core.effects import EFFECTS, LOOKALIKE_GROUPS, SENSOR_EFFECTS
 
 from . import residual as R
 from .replay import block_means, first_order
 from .problem import MIN_LOAD
 from .select_effects import fit_rms
+from .select_effects import backdriven
 from .selection import DELTA_BIC
 
 
@@ -71,7 +72,24 @@ def zeta_d(w_in, T_in, w_out, T_out, T_in_model, m):
 
 
 def lookalikes(prob, S, opts) -> dict:
+    """{selected effect: [look-alikes]}: an effect whose replacement by another candidate
+    (at its best shape) fits within ``DELTA_BIC`` of the selection; and, by physics
+    (``model_core.effects.LOOKALIKE_GROUPS``), a group of selected effects whose replacement
+    by the other side of its group does (a transducer gain against the mesh loss with the
+    idle-loss scale: alike where power flows one way only)."""
     out = {}
+    for a, b in LOOKALIKE_GROUPS:
+        for mine, other in ((a, b), (b, a)):
+            if any(e not in opts and e not in S.ids for e in other + mine):
+                continue
+            for t in [x for x in S.terms if x.effect in mine]:
+                # t replaced by the other side, the rest of its own side free beside it
+                add = tuple(min(opts[e], key=lambda o: prob.fit((o,), cv=False).rss)
+                            for e in other + mine if e != t.effect and e not in S.ids)
+                f = prob.fit(tuple(x for x in S.terms if x != t) + add, cv=False)
+                if f.admissible and f.bic - S.bic < DELTA_BIC:
+                    out.setdefault(t.effect, []).extend(
+                        e for e in other if e not in out.get(t.effect, []))
     for t in S.terms:
         rest = tuple(x for x in S.terms if x != t)
         for eid, terms in opts.items():
@@ -109,9 +127,11 @@ def evidence(prob, S, opts) -> list:
     return sorted(rows, key=lambda r: r["bic"])
 
 
-def _entry(t, S, prob, P, first, rel1, base_rss, stability, check):
+def _entry(t, S, prob, P, first, rel1, base_rss, stability, check, offset=0.0):
     """One selected effect's dict (drop-one explained RMS, its torque at sample level, its
-    parameters with 95 % intervals, its twin check)."""
+    parameters with 95 % intervals, its twin check). ``offset``: the change of a calibration
+    effect already applied to the design by the re-linearisation (estimator), added to the
+    value; what it explains and its torque are then the first analysis's."""
     v, s = S.of(t)
     eff = EFFECTS[t.effect]
     sig, dt, bw = P.sig, P.dt, P.bandwidth
@@ -130,8 +150,18 @@ def _entry(t, S, prob, P, first, rel1, base_rss, stability, check):
             share = (rest1.rss - S1.rss) / max(base_rss, 1e-300)
         whole = (1 + rel1) * (1 + float(v[0])) - 1
         torque = whole * first_order(eff.basis(P1.sig, None), dt, bw)[:, 0]
+    if offset and first is not None:
+        S1, prob1, P1 = first
+        c1 = [x for x in S1.terms if x.effect == t.effect]
+        if c1:
+            rest1 = prob1.fit(tuple(x for x in S1.terms if x not in c1), cv=False)
+            expl = fit_rms(prob1, rest1, S1)
+            share = (rest1.rss - S1.rss) / max(base_rss, 1e-300)
+        whole = offset + float(v[0])
+        torque = whole * first_order(eff.basis(P1.sig, None), dt, bw)[:, 0]
     params = {}
     for name, unit, val, se in zip(t.names, t.units, v, s):
+        val = val + offset
         if t.effect == "friction_miscalibrated" and rel1:
             val, se = (1 + rel1) * (1 + val) - 1, (1 + rel1) * se
         params[name] = {"value": float(val), "unit": unit,
@@ -193,16 +223,18 @@ def _notes(sel, rem, P, effects, close_first):
     return notes
 
 
-def report(rec, first, sel, J, rem, P, rel1, first_P) -> Diagnosis:
+def report(rec, first, sel, J, rem, P, rel1, first_P, cal_offsets=None) -> Diagnosis:
     """Stage ``report``: ``first`` is the first analysis's selection (at the design's own
-    friction level), ``sel``/``P`` the final one's."""
+    friction level and calibration), ``sel``/``P`` the final one's; ``cal_offsets`` the
+    calibration changes the re-linearisation applied ({effect: change})."""
+    cal_offsets = cal_offsets or {}
     prob, S = sel.prob, rem.S
     base0 = first.base
     effects, calibration, temp_form, cal_entry = [], {}, False, None
     for t in S.terms:
         entry, form = _entry(t, S, prob, P, (first.S, first.prob, first_P)
                              if first is not sel else None, rel1, base0.rss, sel.stability,
-                             J.checks.get(t.effect))
+                             J.checks.get(t.effect), cal_offsets.get(t.effect, 0.0))
         temp_form = temp_form or form
         if t.effect == "friction_miscalibrated":
             calibration, cal_entry = entry["parameters"], entry
@@ -217,7 +249,23 @@ def report(rec, first, sel, J, rem, P, rel1, first_P) -> Diagnosis:
     params = dict(best["parameters"]) if best else {}
     if calibration and eid != "friction_miscalibrated":
         params = {**calibration, **params}
-    close = lookalikes(prob, S, sel.opts)
+    # look-alikes where the claims were made: at the first linearisation when the calibration
+    # was re-linearised (there the forced calibration terms carry only the last correction)
+    close = (lookalikes(first.prob, first.S, first.opts) if cal_offsets and first is not sel
+             else lookalikes(prob, S, sel.opts))
+    close = {k: list(dict.fromkeys(e for e in v if e not in S.ids)) for k, v in close.items()}
+    if not backdriven(first_P.blocks):
+        # power flows one way only (select_effects.backdriven: too few back-driven blocks to
+        # tell a gain from losses): the look-alike groups are alike by physics, whatever the
+        # fit's BIC says (a difference there comes from transients and shapes, not from the
+        # flow reversal that separates them)
+        for a, b in LOOKALIKE_GROUPS:
+            for mine, other in ((a, b), (b, a)):
+                for t in S.terms:
+                    if t.effect in mine:
+                        close.setdefault(t.effect, []).extend(
+                            e for e in other if e in sel.opts and e not in S.ids
+                            and e not in close[t.effect])
     for e in effects:
         e["indistinguishable_from"] = close.get(e["id"], [])
     close_first = close.get(eid if effects else "friction_miscalibrated", [])

@@ -14,56 +14,59 @@ from pathlib import Path
 SUFFIXES = (".csv", ".mf4")
 
 
-#: [1] change of mesh_loss_k beyond which a diagnosis says to run it again with its
-#: design_updated.toml: the input torque is not linear in k (cyclo_fmu.diagnosis.replay,
-#: MESH_LOSS_STEP), so one step misjudges a change dk by about dk relative and leaves a
-#: remainder a transducer gain can take up (measured on the mackic-rig preset's k = 0.027
-#: from the default design: gain -1.1 % named beside k 0.0278; a second pass gives k 0.02705
-#: against 0.02704 and takes the gain back); at 0.005 the misjudgement is ~0.5 % of dk, below
-#: the intervals a recording of a few minutes gives
-RELINEARISE_K = 0.005
+def calibration_report(design, d) -> dict | None:
+    """The JSON key ``calibration_fit``: the calibration the diagnosis learned (effects
+    ``mesh_loss``, ``idle_loss_scale``; re-linearised until its changes settle,
+    ``diagnosis.estimator.CAL_RELINEARISE``), or None when it named neither. ``ci95``: the
+    95 % half-widths (noise only), ``rms_*``: the held-out RMS of the input torque before and
+    after the diagnosis, ``back_driven``: whether the recording has enough back-driven blocks
+    to tell k from a transducer gain (``select_effects.backdriven``), ``back_driven_share``:
+    the share of its moving blocks (above 1 rad/s, the calibration fit's rule) in which the
+    input shaft gives power back."""
+    cal = {e["id"]: e for e in d.effects if e["id"] in ("mesh_loss", "idle_loss_scale")}
+    if not cal:
+        return None
+    from cyclo_fmu.diagnosis.select_effects import backdriven
+    c = design.calibration
+    out = {"mesh_loss_k": c.mesh_loss_k, "idle_loss_scale": c.idle_loss_scale, "ci95": {},
+           "rms_before_Nm": d.rmse_before_Nm, "rms_after_Nm": d.rmse_after_Nm, "notes": []}
+    for eid, name in (("mesh_loss", "mesh_loss_k"), ("idle_loss_scale", "idle_loss_scale")):
+        if eid in cal:
+            p = cal[eid]["parameters"][f"{name}_change"]
+            out[name] = getattr(c, name) + p["value"]
+            out["ci95"][name] = 0.5 * (p["ci95"][1] - p["ci95"][0])
+            alike = cal[eid].get("indistinguishable_from") or []
+            if alike:
+                out["notes"].append(f"{eid} cannot be told from {', '.join(alike)} in this "
+                                    f"recording; to separate them: "
+                                    f"{cal[eid]['separating_run']}")
+    stages = getattr(d, "stages", None) or {}
+    P = stages.get("replay")
+    out["back_driven"] = bool(backdriven(P.blocks)) if P is not None else None
+    if P is not None:       # the share of moving blocks where the input shaft gives power back
+        import numpy as np
+        b = P.blocks
+        moving = np.abs(b["w_in"]) > 1.0
+        out["back_driven_share"] = float(np.mean((b["T_in"] * b["w_in"])[moving] < 0)) \
+            if moving.any() else 0.0
+    out["source"] = ("cyclo-fmu diagnose: the calibration effects of the diagnosis "
+                     "(model_core.effects), fitted on the recording's block means")
+    return out
 
 
-def _relinearise_note(d):
-    """A note when a calibration effect moved k by more than RELINEARISE_K."""
-    for e in d.effects:
-        p = e.get("parameters", {}).get("mesh_loss_k_change")
-        if e["id"] == "mesh_loss" and p and abs(p["value"]) > RELINEARISE_K:
-            d.notes.append(f"mesh_loss_k changed by {p['value']:+.4g} (more than "
-                           f"{RELINEARISE_K:g}): the fit is linearised at the design's k; run "
-                           "the diagnosis again on design_updated.toml (one more pass "
-                           "converges; effects named beside k, a transducer gain in "
-                           "particular, may be its remainder)")
-
-
-def diagnose_recording(rec, mode, checks, design, progress=False, calibrate=False):
+def diagnose_recording(rec, mode, checks, design, progress=False, calibrate=True):
     """Diagnose a loaded recording: ``(diagnosis, result dict)`` with the JSON contract's
-    keys (the diagnosis's own, ``mode``, ``checks``, ``read_notes``, ``excluded``)."""
+    keys (the diagnosis's own, ``mode``, ``checks``, ``read_notes``, ``excluded``, and
+    ``calibration_fit`` when a calibration effect is named). ``calibrate`` False leaves the
+    calibration effects out of the candidates (``diagnose --no-calibrate``)."""
     from cyclo_fmu.diagnosis import Diagnoser
-    fit = None
-    if calibrate:
-        # the calibration first, by nonlinear least squares on the replay (it can lie far from
-        # the design's values); the diagnosis then judges what remains around it
-        from cyclo_fmu.diagnosis.calibration_fit import fit_calibration
-        fit = fit_calibration(design, mode, rec,
-                              source=f"the recording {getattr(rec, 'source', '') or ''}".strip())
-        design = fit.design
     est = Diagnoser(design, mode, progress=progress, calibrate=calibrate).fit(rec)
     d = est.diagnosis_
     d.updated = est.updated_design()      # (design, notes), checked against the recording
-    if fit is not None:
-        c = fit.design.calibration
-        d.notes.insert(0, f"calibrated to the recording first (nonlinear least squares): "
-                       f"mesh_loss_k {c.mesh_loss_k:.5g} (+- {fit.ci95.get('mesh_loss_k', float('nan')):.2g}), "
-                       f"idle_loss_scale {c.idle_loss_scale:.4g} (+- "
-                       f"{fit.ci95.get('idle_loss_scale', float('nan')):.2g}), input-torque RMS "
-                       f"{1e3 * fit.rms_before_Nm:.2f} -> {1e3 * fit.rms_after_Nm:.2f} mN*m; the "
-                       "effects below are relative to the calibrated design")
-        d.notes[1:1] = fit.notes
-        _relinearise_note(d)
     result = d.to_json()
+    fit = calibration_report(design, d)
     if fit is not None:
-        result["calibration_fit"] = fit.report()
+        result["calibration_fit"] = fit
     result["mode"] = mode
     result["checks"] = list(checks)
     result["read_notes"] = list(rec.notes)
@@ -80,7 +83,7 @@ def diagnose_recording(rec, mode, checks, design, progress=False, calibrate=Fals
     return d, result
 
 
-def diagnose_one(path, design, mode, columns=None, units=None, calibrate=False):
+def diagnose_one(path, design, mode, columns=None, units=None, calibrate=True):
     """Read and diagnose one recording: ``(diagnosis, result dict)``; ``mode`` may be 'auto'
     (resolved per recording from its speed ratio)."""
     from cyclo_fmu.io import load_recording
@@ -109,7 +112,7 @@ SUMMARY_COLUMNS = ["recording", "folder", "mode", "effect", "rmse_before_mNm", "
 SECONDS_PER_RECORDING = 0.3
 
 
-def _task(design, mode, columns, out, item, units=None, calibrate=False):
+def _task(design, mode, columns, out, item, units=None, calibrate=True):
     path, name = item
     from cyclo_fmu.diagnosis import write_diagnosis
     row = {"recording": path.name, "folder": name, "mode": "", "effect": "", "error": ""}
@@ -141,7 +144,7 @@ def read_summary(path):
 
 
 def diagnose_batch(folder, out, design, mode, *, columns=None, units=None, scheduler=None,
-                   workers=None, serial=False, progress=True, calibrate=False, backend=None):
+                   workers=None, serial=False, progress=True, calibrate=True, backend=None):
     """Diagnose every recording of ``folder`` into ``out``; returns the summary DataFrame
     (read back from ``out/summary.csv``, which gets each row as its recording is done, in
     the order of the files: nothing but the rows in flight is held in memory)."""
