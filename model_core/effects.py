@@ -290,7 +290,10 @@ EFFECTS = {
                        "points: in one forward mode k and an input torque transducer gain "
                        "both scale the input torque (look-alikes); k enters S2 once more than "
                        "S1 (Kreines, eta_S2 = eta0 eta_S1) and changes side when back-driven, "
-                       "a gain does neither",
+                       "a gain does neither; against a scale of the gear's own losses "
+                       "(load_loss_scale): operating points where the model's efficiency "
+                       "changes (light and rated load at a low and a high speed), the only "
+                       "place the two differ",
         synth_default=({"mesh_loss_k_change": 0.003}, None), requires=("sens_k",)),
     "idle_loss_scale": Effect(
         "idle_loss_scale", "the load-independent losses (support bearings, seals, grease "

@@ -172,8 +172,11 @@ class Diagnoser:
                               (P0.sig["sens_mu"], None), reuse=P0)
             # of the first replay's sample-level signals only the friction and viscosity
             # sensitivities are read again (residual_rms, the report's friction torque): the
-            # others (~50 MB at 600 000 samples) are released before the later stages' peaks
-            P0.sig = {k: P0.sig[k] for k in ("sens_mu", "sens_nu")}
+            # others (~50 MB at 600 000 samples) are released before the later stages' peaks;
+            # the calibration's sensitivities stay (the report reads a re-linearised
+            # calibration effect's torque at the first analysis: result._entry)
+            P0.sig = {k: P0.sig.get(k) for k in ("sens_mu", "sens_nu", "sens_k", "sens_idle",
+                                                 "sens_load")}
             P0.rp = Replay(P0.rp.T_model, P0.sig)
             sel = select(P, self.n_folds, forced=("friction_miscalibrated",))
         self.calibration_offsets_ = {}
