@@ -155,13 +155,15 @@ def test_sweep_takes_the_calibration_as_fields(tmp_path):
     from cyclo_fmu.sweep import load_spec
     p = tmp_path / "spec.toml"
     p.write_text('[sweep]\nmethod = "grid"\nbase = "mackic-rig"\n[fields]\n'
-                 'mesh_loss_k = [0.0, 0.04, 3]\n"calibration.idle_loss_scale" = [0.5, 1.0, 2]\n')
+                 'mesh_loss_k = [0.0, 0.04, 3]\n"calibration.idle_loss_scale" = [0.5, 1.0, 2]\n'
+                 '"calibration.load_loss_scale" = [0.88, 1.12, 2]\n')
     spec = load_spec(p)
     designs = spec.designs()
-    assert len(designs) == 6
+    assert len(designs) == 12
     d = spec.build(designs[-1])
     assert d.calibration.mesh_loss_k == pytest.approx(0.04)
     assert d.calibration.idle_loss_scale == pytest.approx(1.0)
+    assert d.calibration.load_loss_scale == pytest.approx(1.12)
     assert "S1 61.50" in d.calibration.source       # the preset's, as the base's
 
 
