@@ -108,7 +108,10 @@ def spectral_noise(spec, n, k, rng) -> np.ndarray:
     (columns)."""
     z = rng.standard_normal((len(spec), k)) + 1j * rng.standard_normal((len(spec), k))
     z *= np.sqrt(np.asarray(spec) / 2.0)[:, None]
-    z[0] = 0.0
+    # the mean: a real normal of the spectrum's level at zero frequency (the multitaper
+    # estimate there is the level of the slowest frequencies: how far the noise's mean over
+    # the recording wanders, which a constant term such as a zero offset would take)
+    z[0] = z[0].real * math.sqrt(2.0)
     if n % 2 == 0:            # the Nyquist frequency is real
         z[-1] = z[-1].real * math.sqrt(2.0)
     return np.fft.irfft(z, n, axis=0)
@@ -180,6 +183,7 @@ class Judged:
     checks: dict
     rejected: list
     alpha_effect: float
+    mix: dict = field(default_factory=dict)
 
 
 def noise_residual(P, fit) -> np.ndarray:
@@ -188,12 +192,60 @@ def noise_residual(P, fit) -> np.ndarray:
     return P.y - (P.X[:, idx] @ fit.coef if idx else 0.0)
 
 
-def effect_check(tw, prob, S, t, alpha) -> Check:
+def _neighbours(options, t) -> list:
+    """The terms of ``t``'s effect at the shapes next to ``t``'s on its grid (one step along
+    each coordinate of the shape)."""
+    opts = [o for o in options.get(t.effect, ()) if o.shape is not None]
+    if t.shape is None or len(opts) < 2:
+        return []
+    vec = lambda s: s if isinstance(s, tuple) else (s,)
+    axes = [sorted({vec(o.shape)[i] for o in opts}) for i in range(len(vec(t.shape)))]
+    out = []
+    for o in opts:
+        d = [abs(axes[i].index(a) - axes[i].index(b))
+             for i, (a, b) in enumerate(zip(vec(o.shape), vec(t.shape)))]
+        if sorted(d)[-1] == 1 and sum(d) == 1:
+            out.append(o)
+    return out
+
+
+def mixes(prob, S, options) -> dict:
+    """{term of ``S``: terms of the same effect at the neighbouring shapes} where the effect
+    fits better as a mix of its own law at adjacent grid shapes with coefficients of the
+    same sign (a shape between the grid's values, or a sum of two such laws: a lip seal's
+    Coulomb drag plus a bearing's viscous drag, a warm-up of two time constants). Such a mix
+    is the named effect's own form, not physics outside the library: the claims are judged
+    beside it (``with_mixes``). Only effects of one linear parameter (the shaped ones)."""
+    out = {}
+    for t in S.terms:
+        if len(t.cols) != 1:
+            continue
+        nb = _neighbours(options, t)
+        best = None
+        for sub in [(o,) for o in nb] + ([tuple(nb)] if len(nb) > 1 else []):
+            f = prob.fit(S.terms + sub, cv=False)
+            a = f.of(t)[0][0]
+            if all(a * f.of(o)[0][0] > 0 for o in sub) and (best is None or f.rss < best[0]):
+                best = (f.rss, sub)
+        if best is not None:
+            out[t] = best[1]
+    return out
+
+
+def with_mixes(terms, mix) -> tuple:
+    """``terms`` with the neighbouring-shape term of each that ``mix`` holds."""
+    return tuple(terms) + tuple(o for t in terms if t in mix for o in mix[t])
+
+
+def effect_check(tw, prob, S, t, alpha, mix=None) -> Check:
     """Drop-one statistic of term ``t`` of the selection ``S`` (the RSS it removes beside the
-    others) against the same statistic of the twins."""
-    rest = tuple(x for x in S.terms if x != t)
-    stat = prob.fit(rest, cv=False).rss - S.rss
-    return tw.check(stat, tw.rss(rest) - tw.rss(S.terms), alpha)
+    others, each at the mix of adjacent shapes it fits best, ``mixes``) against the same
+    statistic of the twins."""
+    mix = mix or {}
+    rest = with_mixes(tuple(x for x in S.terms if x != t), mix)
+    full = with_mixes(S.terms, mix)
+    stat = prob.fit(rest, cv=False).rss - prob.fit(full, cv=False).rss
+    return tw.check(stat, tw.rss(rest) - tw.rss(full), alpha)
 
 
 def judge(P, sel) -> Judged:
@@ -207,7 +259,8 @@ def judge(P, sel) -> Judged:
     alpha = FALSE_ALARM / k
     rejected = []
     while True:
-        checks = {t.effect: effect_check(tw, prob, S, t, alpha) for t in S.terms}
+        mix = mixes(prob, S, sel.opts)
+        checks = {t.effect: effect_check(tw, prob, S, t, alpha, mix) for t in S.terms}
         weak = [t for t in S.terms if t.effect not in sel.forced
                 and not checks[t.effect].stands]
         if not weak:
@@ -215,4 +268,4 @@ def judge(P, sel) -> Judged:
         worst = max(weak, key=lambda t: checks[t.effect].p_value)
         rejected.append(worst.effect)
         S = prob.fit(tuple(x for x in S.terms if x != worst))
-    return Judged(tw, S, checks, rejected, alpha)
+    return Judged(tw, S, checks, rejected, alpha, mixes(prob, S, sel.opts))
