@@ -237,13 +237,15 @@ def with_mixes(terms, mix) -> tuple:
     return tuple(terms) + tuple(o for t in terms if t in mix for o in mix[t])
 
 
-def effect_check(tw, prob, S, t, alpha, mix=None) -> Check:
-    """Drop-one statistic of term ``t`` of the selection ``S`` (the RSS it removes beside the
-    others, each at the mix of adjacent shapes it fits best, ``mixes``) against the same
-    statistic of the twins."""
-    mix = mix or {}
-    rest = with_mixes(tuple(x for x in S.terms if x != t), mix)
-    full = with_mixes(S.terms, mix)
+def effect_check(tw, prob, S, t, alpha, options=None, mix=None, mix_t=None) -> Check:
+    """Drop-one statistic of term ``t`` of the selection ``S`` (the RSS it removes, with
+    ``mix_t`` its own neighbouring shapes, beside the others, each at the mix of adjacent
+    shapes it fits best without ``t``, ``mixes``) against the same statistic of the twins."""
+    others = tuple(x for x in S.terms if x != t)
+    if mix is None:        # the others' mixes as they fit without t
+        mix = mixes(prob, prob.fit(others, cv=False), options) if options else {}
+    rest = with_mixes(others, mix)
+    full = rest + (t,) + tuple(mix_t or ())
     stat = prob.fit(rest, cv=False).rss - prob.fit(full, cv=False).rss
     return tw.check(stat, tw.rss(rest) - tw.rss(full), alpha)
 
@@ -259,10 +261,14 @@ def judge(P, sel) -> Judged:
     alpha = FALSE_ALARM / k
     rejected = []
     while True:
-        mix = mixes(prob, S, sel.opts)
-        checks = {t.effect: effect_check(tw, prob, S, t, alpha, mix) for t in S.terms}
+        own = mixes(prob, S, sel.opts)
+        checks = {t.effect: effect_check(tw, prob, S, t, alpha, sel.opts, mix_t=own.get(t))
+                  for t in S.terms}
+        # an effect stands beyond its twins and explains, beside the others at their shape
+        # mixes, at least the physical limit every term must reach (sel.min_expl, N*m)
         weak = [t for t in S.terms if t.effect not in sel.forced
-                and not checks[t.effect].stands]
+                and not (checks[t.effect].stands and math.sqrt(
+                    max(checks[t.effect].statistic, 0.0) / prob.swt) >= sel.min_expl)]
         if not weak:
             break
         worst = max(weak, key=lambda t: checks[t.effect].p_value)
