@@ -209,3 +209,33 @@ def test_a_small_offset_in_flicker_noise_is_still_found():
     assert found["torque_sensor_offset"]["parameters"]["offset"]["value"] == pytest.approx(
         1.5e-3, abs=0.5e-3)
     assert not d.unexplained["present"], d.unexplained["statement"]
+
+
+def _drag_of_two_laws(s):
+    """A lip seal's Coulomb drag plus a bearing's drag growing as sqrt(speed), 6 mN*m each
+    at 300 rad/s, their sign smoothed over +-2 rad/s: no single exponent of the library's law."""
+    w = s["w_in"]
+    return 0.006 * np.tanh(w / 2.0) * (1.0 + np.sqrt(np.abs(w) / 300.0))
+
+
+@pytest.mark.parametrize("plan", ["four_quadrant", "full"])
+def test_a_drag_of_two_laws_is_named_as_one_drag(plan):
+    """The sum of two drag laws is the library's drag at a mix of two adjacent exponents: one
+    drag is named, explaining the hidden drag's RMS (within 10 %), no low-speed friction beside
+    it for what a single exponent misses, and nothing unexplained."""
+    r = synthesize("none", 3, "S1", "small", plan=plan, added_torque=_drag_of_two_laws)
+    rec = as_recording(r)
+    d = Diagnoser(mode="S1").fit(rec).diagnosis_
+    assert [e["id"] for e in d.effects] == ["load_independent_loss"], d.effects
+    sig = {"w_in": rec.speed_in}
+    hidden = float(np.sqrt(np.mean(_drag_of_two_laws(sig) ** 2)))
+    assert d.effects[0]["explained_rms_Nm"] == pytest.approx(hidden, rel=0.1)
+    assert not d.unexplained["present"], d.unexplained["statement"]
+
+
+def test_a_real_low_speed_friction_beside_a_drag_is_still_named():
+    """The shape mixes hold a drag's own law only (coefficients of one sign): a Stribeck
+    friction hidden beside the drag is still named next to it."""
+    r = synthesize(["load_independent_loss", "low_speed_friction"], 3, "S1", "small")
+    d = Diagnoser(mode="S1").fit(as_recording(r)).diagnosis_
+    assert {e["id"] for e in d.effects} == {"load_independent_loss", "low_speed_friction"}

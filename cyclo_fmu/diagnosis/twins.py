@@ -9,19 +9,24 @@ twin's noise alone. The twins therefore cost one matrix product ``X' W E`` for a
 a few small solves per claim, never a replay.
 
 Noise model (Gaussian noise with the residual's own spectrum): the spectrum of the block
-residual left by the selection is estimated by ``TAPERS`` sine-tapered periodograms averaged
-(Riedel & Sidorenko 1995), spike blocks set to zero; a twin's noise is a stationary Gaussian
-series of that spectrum (independent normal real and imaginary parts at every frequency, an
-inverse FFT). It holds the residual's whole spectrum, its lowest frequencies included: a 1/f
-(flicker) noise, whose power sits in the few slowest frequencies that the slow columns of the
-generic basis (time, operating point) also span, is kept. The residual is taken after the
-selection only, not after the generic basis too: the basis absorbs exactly those slow
-frequencies, and twins drawn from what it leaves pass a slowly wandering noise off as
-structure (measured on a clean four-quadrant recording with 4 mN*m of 1/f noise: the former
-AR(12) twins of the basis's residual put the structure statistic's mean at a quarter of what
-the true noise gives, p = 1e-6 for a clean recording; these twins: within a few percent, p =
-0.1 - 0.7). A remainder the basis would hold then also sits in the twins' noise: that makes
-the twins noisier, never quieter, so the false-alarm rate holds and only some power is lost.
+residual is estimated by ``TAPERS`` sine-tapered periodograms averaged (Riedel & Sidorenko
+1995), spike blocks set to zero; a twin's noise is a stationary Gaussian series of that
+spectrum (independent normal real and imaginary parts at every frequency, an inverse FFT). It
+holds the residual's whole spectrum, its lowest frequencies included: a 1/f (flicker) noise,
+whose power sits in the few slowest frequencies, is kept.
+
+The residual it is estimated on is *cross-fitted* (``cross_fitted_residual``): the selection
+and the operating-point part of the generic basis fitted on the other time folds, the
+residual taken on the fold left out. What repeats across the recording (a remainder that is a
+function of the operating point) is taken out, so it does not make the twins noisier; what
+does not repeat (noise of any colour, its slow wander included) is kept whole. The residual
+of an in-sample fit of the basis would lose exactly the noise's slowest part (the basis's
+time and operating-point columns absorb it), and twins drawn from it pass a slowly wandering
+noise off as structure. Measured on a clean four-quadrant recording with 4 mN*m of 1/f noise:
+the former AR(12) twins of the basis's residual put the structure statistic's mean at a
+quarter of what the true noise gives (p = 2e-6 for a clean recording); these twins: p = 0.1 -
+1. The prediction error of a fit on four fifths of the recording only adds to the noise: the
+twins are noisier, never quieter, and the false-alarm rate holds.
 
 Decision: a claim stands where the recording's statistic lies beyond the twins' at the stated
 false-alarm rate ``FALSE_ALARM`` (1 %). ``N_TWINS`` twins (64) cannot resolve a 1 % quantile
@@ -192,6 +197,24 @@ def noise_residual(P, fit) -> np.ndarray:
     return P.y - (P.X[:, idx] @ fit.coef if idx else 0.0)
 
 
+def cross_fitted_residual(prob, y, terms, group) -> np.ndarray:
+    """Block residual after ``terms`` (fitted on the whole recording) and ``group`` (the
+    operating-point part of the generic basis) fitted, with the terms, on the *other* time
+    folds: what repeats across the recording (a function of the operating point, a remainder
+    the basis holds) is taken out; what does not repeat (noise of any colour, its slow wander
+    included) is kept whole, plus the prediction error of a fit on four fifths of the
+    recording (which only makes the twins noisier)."""
+    idx_s = [i for t in terms for i in t.cols]
+    idx = np.array(idx_s + [i for i in group.cols if i not in idx_s], int)
+    r = np.asarray(y, float).copy()
+    for f, sl in enumerate(prob.fold_slices):
+        G = (prob.Gt - prob.G[f])[np.ix_(idx, idx)]
+        c = (prob.ct - prob.c[f])[idx]
+        b = np.linalg.lstsq(G, c, rcond=1e-12)[0]
+        r[sl] = y[sl] - prob.Xs[sl][:, idx] @ b
+    return r
+
+
 def _neighbours(options, t) -> list:
     """The terms of ``t``'s effect at the shapes next to ``t``'s on its grid (one step along
     each coordinate of the shape)."""
@@ -256,7 +279,8 @@ def judge(P, sel) -> Judged:
     ``FALSE_ALARM / K`` (K: the candidate terms the selection chose among); an effect whose
     statistic the twins reach is dropped (the weakest first) and the others judged again."""
     prob, S = sel.prob, sel.S
-    tw = make_twins(prob, noise_residual(P, S), sel.weights)
+    tw = make_twins(prob, cross_fitted_residual(prob, P.y, S.terms, P.steady[0]),
+                    sel.weights)
     k = max(1, sum(len(v) for v in sel.selectable.values()))
     alpha = FALSE_ALARM / k
     rejected = []
