@@ -191,12 +191,6 @@ class Judged:
     mix: dict = field(default_factory=dict)
 
 
-def noise_residual(P, fit) -> np.ndarray:
-    """Block residual of the problem ``P`` after ``fit`` (unscaled coefficients)."""
-    idx = [i for t in fit.terms for i in t.cols]
-    return P.y - (P.X[:, idx] @ fit.coef if idx else 0.0)
-
-
 def cross_fitted_residual(prob, y, terms, group) -> np.ndarray:
     """Block residual after ``terms`` (fitted on the whole recording) and ``group`` (the
     operating-point part of the generic basis) fitted, with the terms, on the *other* time
