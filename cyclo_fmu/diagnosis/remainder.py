@@ -37,7 +37,7 @@ from model_core.kinematics import speed_ratio
 from . import residual as R
 from .select_effects import MIN_EXPLAINED_NM, fit_rms
 from .selection import Term, explained
-from .twins import FALSE_ALARM, N_TWINS, Check, normal_tail
+from .twins import FALSE_ALARM, N_TWINS, Check, mixes, normal_tail, with_mixes
 
 #: [N*m] the smallest amplitude of a narrow spectral peak reported as unexplained: 1 mN*m (RMS
 #: 0.7 mN*m, above MIN_EXPLAINED_NM)
@@ -74,17 +74,23 @@ class Remainder:
     claims: dict = field(default_factory=dict)
 
 
-def structure(P, prob, S, tw):
+def structure(P, prob, S, tw, mix=None):
     """(present, best fit with a group of the generic basis, Check, RMS in the fit).
 
-    The statistic is the largest RSS drop any group makes (the twins take the same maximum);
-    the group reported (what the remainder is, its RMS) is the one with the smallest held-out
+    The statistic is the largest RSS drop any group makes beside the selection, each named
+    effect at the mix of adjacent shapes it fits best (``twins.mixes``: the effect's own
+    form between its grid's shapes is no remainder); the twins take the same maximum. The
+    group reported (what the remainder is, its RMS) is the one with the smallest held-out
     error (the whole basis always fits best in sample, and would report its overfit)."""
-    fits = [prob.fit(S.terms + (b,)) for b in P.structure]
-    stat = S.rss - min(f.rss for f in fits)
-    chk = tw.check(stat, tw.gain(S.terms, [(b,) for b in P.structure]), FALSE_ALARM)
+    base = with_mixes(S.terms, mix or {})
+    S0 = prob.fit(base, cv=False) if len(base) > len(S.terms) else S
+    fits = [prob.fit(base + (b,)) for b in P.structure]
+    stat = S0.rss - min(f.rss for f in fits)
+    chk = tw.check(stat, tw.gain(base, [(b,) for b in P.structure]), FALSE_ALARM)
     best = min(fits, key=lambda f: f.cv_mse)
-    rms = fit_rms(prob, S, best)
+    rms = fit_rms(prob, S0, best)
+    if len(base) > len(S.terms):    # the fit reported: the selection and the group alone
+        best = prob.fit(S.terms + (best.terms[-1],))
     return chk.stands and rms >= MIN_EXPLAINED_NM, best, chk, rms
 
 
@@ -311,7 +317,8 @@ def remainder(P, sel, J, rec, design, mode) -> Remainder:
     """Stage ``remainder`` on the problem ``P``, the selection ``sel`` and the twins ``J``."""
     prob, tw, S = sel.prob, J.twins, J.S
     rng = np.random.default_rng(20261127)
-    present, with_g, chk, rms = structure(P, prob, S, tw)
+    mix = mixes(prob, S, sel.opts)
+    present, with_g, chk, rms = structure(P, prob, S, tw, mix)
     withdrawn, dominant, doubted = [], [], False
     while present:     # withdrawn effects change what the others hold: judged again
         S, out, dom, doubt = withdraw(P, prob, S, with_g, tw, J.alpha_effect, sel.forced)
@@ -319,7 +326,8 @@ def remainder(P, sel, J, rec, design, mode) -> Remainder:
         dominant, doubted = dom, doubted or doubt
         if not out:
             break
-        present, with_g, chk, rms = structure(P, prob, S, tw)
+        mix = mixes(prob, S, sel.opts)
+        present, with_g, chk, rms = structure(P, prob, S, tw, mix)
     dominant = [e for e in dominant if e in S.ids]
     claims = {"structure": chk.to_json()}
     ga = gain_alone(P, sel, S, tw, J.alpha_effect)
@@ -330,8 +338,11 @@ def remainder(P, sel, J, rec, design, mode) -> Remainder:
     claims["orders"] = {n: c.to_json() for n, (a, c) in oc.items() if c is not None}
     present = present or bool(lparts)
     parts += lparts
-    y_after = P.y - (P.X[:, [i for t in S.terms for i in t.cols]] @ S.coef
-                     if S.terms else 0.0)
+    # the bursts are judged beside the named effects' shape mixes too (a named low-speed
+    # friction's shape between its grid's values leaves its misfit at the speed reversals)
+    Sx = prob.fit(with_mixes(S.terms, mix), cv=False)
+    y_after = P.y - (P.X[:, [i for t in Sx.terms for i in t.cols]] @ Sx.coef
+                     if Sx.terms else 0.0)
     b, bc = burst_claims(P, y_after, sel.spikes, rng)
     claims["bursts"] = b["checks"]
     bparts, step_transient, rev, burst_rms = _burst_parts(b, bc, P)
