@@ -47,6 +47,8 @@ from pathlib import Path
 os.environ.setdefault("CYCLO_INDEPENDENT_OUT", "out/independent3")
 HERE = Path(os.environ["CYCLO_INDEPENDENT_OUT"]).resolve()
 GEN = Path(__file__).resolve().parent / "gen3.py"
+#: the batch's files in OUT (run4.py reuses this runner with its own)
+CASES_JSON, RESULTS_JSON = "cases3.json", "results3.json"
 CLI = os.path.join(os.path.dirname(sys.executable), "cyclo-fmu")
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from score import (LOAD_LOSS, SPEED_LOAD_KINDS, found_as_calibration,  # noqa: E402
@@ -97,6 +99,10 @@ def verdict(case, d):
 
 
 def category(cid):
+    return CATEGORY(cid)
+
+
+def category3(cid):
     if cid.startswith("clean_"):
         return "clean"
     if cid.startswith(("4q_", "duty_")):
@@ -104,6 +110,10 @@ def category(cid):
     if cid.startswith(("lossscale", "runin", "rippleload", "windage")):
         return "forms"
     return "outside"
+
+
+CATEGORY = category3
+CATEGORIES = ("clean", "single", "pair", "forms", "outside")
 
 
 # ----------------------------------------------------------------------------- running
@@ -143,8 +153,8 @@ def run_one(case):
 
 
 def rescore():
-    cases = {c["id"]: c for c in json.loads((HERE / "cases3.json").read_text())}
-    rp = HERE / "results3.json"
+    cases = {c["id"]: c for c in json.loads((HERE / CASES_JSON).read_text())}
+    rp = HERE / RESULTS_JSON
     results = json.loads(rp.read_text())
     for cid, res in results.items():
         raw = HERE / "raw" / (cid + ".json")
@@ -165,7 +175,7 @@ def rescore():
 
 
 def totals(allr):
-    for cat in ("clean", "single", "pair", "forms", "outside"):
+    for cat in CATEGORIES:
         sub = [r for r in allr if r["category"] == cat]
         if sub:
             c = Counter(r["verdict"] for r in sub)
@@ -189,7 +199,7 @@ def main(argv):
     a = ap.parse_args(argv)
     if a.rescore:
         return rescore()
-    cj = HERE / "cases3.json"
+    cj = HERE / CASES_JSON
     if not cj.exists():
         subprocess.run([sys.executable, str(GEN)], check=True)
     cases = json.loads(cj.read_text())
@@ -199,7 +209,7 @@ def main(argv):
     if a.ids:
         cases = [c for c in cases if c["id"] in set(a.ids)]
     (HERE / "raw").mkdir(parents=True, exist_ok=True)
-    rp = HERE / "results3.json"
+    rp = HERE / RESULTS_JSON
     results = json.loads(rp.read_text()) if rp.exists() and a.ids else {}
     t0 = time.perf_counter()
     print(f"{'case':40s} {'verdict':19s} {'s':>5s}  named | unexplained | proposal")

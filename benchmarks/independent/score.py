@@ -138,7 +138,8 @@ def proposal_powers(p):
 
 def judge_proposal(want, unexplained):
     """("right" | "other form" | "weak" | "refused" | "absent", info) for a proposal against
-    want = {"speed": p, "torque": q} (missing keys are 0)."""
+    want = {"speed": p, "torque": q} (missing keys are 0), or {"temperature": True} (a term in
+    the temperature)."""
     p = (unexplained or {}).get("proposed")
     if not p:
         return "absent", None
@@ -147,7 +148,11 @@ def judge_proposal(want, unexplained):
     terms = p.get("terms") or []
     powers = proposal_powers(p)
     ws, wt = want.get("speed", 0), want.get("torque", 0)
-    hit = any(abs(a - ws) <= POWER_TOL and abs(b - wt) <= POWER_TOL for a, b in powers)
+    if want.get("temperature"):      # a term in the temperature (its family or its text)
+        hit = any(re.search(r"temp|theta|θ", f"{tm.get('family', '')} {tm.get('feature', '')}",
+                            re.I) for tm in terms)
+    else:
+        hit = any(abs(a - ws) <= POWER_TOL and abs(b - wt) <= POWER_TOL for a, b in powers)
     info = dict(formula=p.get("formula"), reading=p.get("reading"), refused=p.get("refused"),
                 features=[tm.get("feature") for tm in terms], powers=powers,
                 coefficients=[tm.get("coefficient") for tm in terms],
