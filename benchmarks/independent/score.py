@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import re
 
+import numpy as np
+
 #: [1] share of the held-out remainder a proposed form must remove (issue 18, acceptance)
 PROPOSAL_REMOVES = 0.70
 #: [1] tolerance on a proposed term's power of speed or torque
@@ -73,20 +75,26 @@ def in_calibration(cid, cal):
 def in_calibration_fit(cid, fit):
     """Whether `calibration_fit` (written by --calibrate: mesh_loss_k, idle_loss_scale and
     their 95 % half-widths under ci95) holds the effect cid beyond its interval and beyond
-    the named minimum size."""
+    the named minimum size (a NaN interval, seen when the other parameter sits on its bound,
+    is judged by the size alone)."""
     if not isinstance(fit, dict):
         return False
     ci = fit.get("ci95") or {}
 
     def num(x):
-        return float(x) if isinstance(x, (int, float)) else None
+        return float(x) if isinstance(x, (int, float)) and np.isfinite(x) else None
+
+    def half(key):   # a missing or non-finite half-width: judged by the size alone
+        h = num(ci.get(key))
+        return 0.0 if h is None else h
 
     if cid == "mesh_loss":
-        k, h = num(fit.get("mesh_loss_k")), num(ci.get("mesh_loss_k")) or 0.0
-        return k is not None and k - h > 0 and k >= CAL_FIT_MIN_MESH_K
+        k = num(fit.get("mesh_loss_k"))
+        return k is not None and k - half("mesh_loss_k") > 0 and k >= CAL_FIT_MIN_MESH_K
     if cid == "idle_loss_scale":
-        s, h = num(fit.get("idle_loss_scale")), num(ci.get("idle_loss_scale")) or 0.0
-        return s is not None and abs(s - 1) > h and abs(s - 1) >= CAL_FIT_MIN_IDLE_DEV
+        s = num(fit.get("idle_loss_scale"))
+        return s is not None and abs(s - 1) > half("idle_loss_scale") and \
+            abs(s - 1) >= CAL_FIT_MIN_IDLE_DEV
     return False
 
 
