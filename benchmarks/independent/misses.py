@@ -1,6 +1,7 @@
 """Print the score and one Markdown line per miss of an independent batch's last run.
 
     python benchmarks/independent/misses.py DIR [DIR ...]
+    python benchmarks/independent/misses.py --table DIR     # one table row per case
 
 DIR is a batch's output folder (CYCLO_INDEPENDENT_OUT of its run: results*.json, cases*.json
 and raw/<id>.json). Each miss line gives the case, its plan, mode, rate and dialect, the hidden
@@ -124,7 +125,31 @@ def report(d):
     return "\n".join(lines)
 
 
+def table(d):
+    """A Markdown table of every case: truth, expectation, names, remainder, proposal,
+    verdict."""
+    d = Path(d)
+    results, cases = _load(d)
+    rows = ["| case | truth (mN·m) | expected | named | unexplained (mN·m) | proposal | verdict |",
+            "|---|---|---|---|---|---|---|"]
+    for cid, r in results.items():
+        case = cases.get(cid, {})
+        raw = d / "raw" / (cid + ".json")
+        j = json.loads(raw.read_text()) if raw.exists() else {}
+        u = j.get("unexplained") or {}
+        un = f"{1e3 * (u.get('rms_Nm') or 0):.2f}" if u.get("present") else "no"
+        named = ", ".join(e["id"] for e in j.get("effects", [])) or "—"
+        rows.append(f"| `{cid}` | {truth_text(case)} | {expect_text(case)} | {named} | {un} | "
+                    f"{r.get('proposal', '')} | **{r['verdict']}** |")
+    return "\n".join(rows)
+
+
 if __name__ == "__main__":
-    for a in sys.argv[1:]:
-        print(report(a))
-        print()
+    args = sys.argv[1:]
+    if args and args[0] == "--table":
+        for a in args[1:]:
+            print(table(a))
+    else:
+        for a in args:
+            print(report(a))
+            print()
