@@ -277,6 +277,40 @@ def reference(d, workers):
           f"serial ({cluster.POOL_SAFETY:g} x start-up x w/(w-1))")
 
 
+def design_cost(d, workers):
+    """CPU time per design of the example sweep, split: the whole evaluation, the efficiency
+    maps alone (the reference: what a design cost before the stiffness columns and the static
+    rating were added, issue 19), and the stiffness columns with the static rating."""
+    from cyclo_fmu.slaves.heap import keep_temporaries_on_heap
+    from cyclo_fmu.sweep import load_spec
+    from cyclo_fmu.sweep.evaluate import evaluate_chunk, stiffness_columns
+    from model_core.maps import efficiency_map
+    from model_core.stiffness import static_torque_rating
+    keep_temporaries_on_heap()
+    spec = load_spec(ROOT / "examples/sweep.toml")
+    designs = list(enumerate(spec.designs()))[1:21]
+    built = [spec.build(v) for _, v in designs]
+    evaluate_chunk(spec, designs[:1])
+    env = spec.envelope
+
+    def cpu(fn):
+        t = time.process_time()
+        for x in range(len(built)):
+            fn(x)
+        return (time.process_time() - t) / len(built)
+
+    whole = cpu(lambda i: evaluate_chunk(spec, [designs[i]]))
+    maps = cpu(lambda i: [efficiency_map(built[i], m, env.speeds(), env.torques())
+                          for m in spec.modes])
+    # the rating uncached (ring_torque_rating caches it per design)
+    stiff = cpu(lambda i: (stiffness_columns(built[i]), static_torque_rating(built[i])))
+    print(f"per-design CPU (load {os.getloadavg()[0]:.2f}), {len(built)} designs of "
+          f"examples/sweep.toml: whole evaluation {1e3 * whole:.1f} ms; reference, the "
+          f"efficiency maps alone ({', '.join(spec.modes)}, 8 x 8) {1e3 * maps:.1f} ms; "
+          f"stiffness columns + static rating {1e3 * stiff:.1f} ms "
+          f"({whole / maps:.2f} x the maps)")
+
+
 def main(argv):
     parts = argv or ["reference", "speed", "memory", "batch"]
     workers = min(os.cpu_count() or 1, 8)
@@ -284,7 +318,7 @@ def main(argv):
     with tempfile.TemporaryDirectory() as d:
         d = Path(d)
         for part in parts:
-            {"reference": reference, "speed": speed, "example": example, "memory": memory,
+            {"reference": reference, "design": design_cost, "speed": speed, "example": example, "memory": memory,
              "batch": batch}[part](d, workers)
     print(f"load average at the end {os.getloadavg()}")
 

@@ -172,10 +172,10 @@ class Sensors:
 def drive_parameters(design: DriveDesign) -> dict:
     """The reducer FMU's design parameters ('drive.<name>') for a design, where they differ from
     the FMU's defaults (the paper's drive)."""
-    from .slaves.cycloid_drive import DESIGN_PARAMETERS
+    from .slaves.cycloid_drive import ALL_DESIGN_PARAMETERS
     default = DriveDesign()
     out = {}
-    for name, section, fld, unit, desc, kind in DESIGN_PARAMETERS:
+    for name, section, fld, unit, desc, kind in ALL_DESIGN_PARAMETERS:
         owner = design if section is None else getattr(design, section)
         base = default if section is None else getattr(default, section)
         v, v0 = getattr(owner, fld), getattr(base, fld)

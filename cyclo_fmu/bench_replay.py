@@ -7,7 +7,9 @@ input speed (``InductionMotor.speed_control``: a first-order speed loop whose se
 measured speed's +-2 ms mean, advanced by the loop's time constant) and the brake replaced
 by a load machine in torque control applying the measured output torque at the output shaft
 (``FeltBrake.torque_control``; the measured torque already holds the output side's inertia,
-so the reducer's ``J_out`` is 0). The lean master (``bench.run_fmus``) feeds the two measured
+so the reducer's ``J_out`` is 0). A recording's temperature column becomes the reducer's grease
+temperature (its input ``T_oil_in``); without one the reducer's heat balance runs from
+``T_oil_start``. The lean master (``bench.run_fmus``) feeds the two measured
 signals into the FMUs' inputs at every step; the simulated recording has the recording's time
 base (a recording sampled unevenly is run on its median step and interpolated back).
 
@@ -140,14 +142,37 @@ def replay_recording(rec, mode: str, fmu_dir, design: DriveDesign = None,
     if n < 1:
         raise RecordingError("time_s: the recording has fewer than two samples")
     params = replay_parameters(mode, n * step, sensors, design, fmus)
+    signals = {"motor.w_set": w_in, "brake.T_set": T_out}
+    notes = []
+    temperature = getattr(rec, "temperature", None)
+    if temperature is not None:
+        # the reducer's grease follows the recording's temperature column (its input T_oil_in;
+        # the diagnosis's temperature forms are per 10 K of the same column)
+        from model_core.design import KELVIN
+
+        from .slaves.cycloid_drive import T_OIL_RANGE
+        T_oil = np.interp(grid, t, np.asarray(temperature, float)) + KELVIN
+        bad = ~((T_oil > T_OIL_RANGE[0]) & (T_oil < T_OIL_RANGE[1]))
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise RecordingError(f"temperature_C: {float(T_oil[k] - KELVIN):.6g} degC at t = "
+                                 f"{grid[k]:.6g} s is not a grease temperature the reducer "
+                                 "takes (-100 to 200 degC); a column in K or F needs --units")
+        signals["drive.T_oil_in"] = T_oil
+        params["drive.use_T_oil_input"] = True
+        notes.append("the reducer's grease temperature follows the recording's temperature "
+                     "column (T_oil_in)")
+    else:
+        notes.append("no temperature column: the reducer's grease follows its heat balance "
+                     "from T_oil_start")
     res = run_fmus(fmu_dir, params, n * step, step, progress=progress, fmus=fmus,
-                   signals={"motor.w_set": w_in, "brake.T_set": T_out})
+                   signals=signals)
     sim = {"time_s": grid,
            "speed_in_rpm": np.asarray(res["n_in.y"]), "torque_in_Nm": np.asarray(res["t_in.y"]),
            "speed_out_rpm": np.asarray(res["n_out.y"]),
            "torque_out_Nm": np.asarray(res["t_out.y"])}
-    notes = [f"motor in speed control on the measured input speed, load machine in torque "
-             f"control on the measured output torque; step {1e3 * step:.6g} ms"]
+    notes.insert(0, f"motor in speed control on the measured input speed, load machine in "
+                    f"torque control on the measured output torque; step {1e3 * step:.6g} ms")
     if not even:
         sim = {k: (t if k == "time_s" else np.interp(t, grid, v)) for k, v in sim.items()}
         notes.append("the recording's sampling is uneven: run on its median step and "

@@ -680,13 +680,18 @@ def cmd_synth(args) -> int:
         if _same_path(truth, args.out):
             raise CycloidInputError("truth", truth, "is the recording's own file (--out): the "
                                     "truth would overwrite the recording; give another name")
-    if args.engine == "bench" and (len(effects) > 1 or rise is not None):
-        raise CycloidInputError("engine", args.engine, "hides exactly one effect and writes no "
-                                "temperature column; use --engine fast")
-    from .synth import BENCH_CANNOT_HIDE
-    if args.engine == "bench" and effects[0] in BENCH_CANNOT_HIDE:
-        raise CycloidInputError("effect", effects[0], "the bench's FMUs do not carry it (it acts "
-                                "through the replay only); use --engine fast")
+    if args.engine == "bench" and len(effects) > 1:
+        raise CycloidInputError("engine", args.engine, "hides exactly one effect; use --engine "
+                                "fast")
+    from .synth import BENCH_CANNOT_HIDE, BENCH_TEMPERATURE_EFFECTS
+    if args.engine == "bench" and rise is not None and effects[0] not in BENCH_TEMPERATURE_EFFECTS:
+        raise CycloidInputError("effect", effects[0], "with --temperature-rise the bench hides "
+                                f"only {', '.join(sorted(BENCH_TEMPERATURE_EFFECTS))} (the "
+                                "reducer's grease on the temperature); use --engine fast")
+    if args.engine == "bench" and rise is None and effects[0] in BENCH_CANNOT_HIDE:
+        raise CycloidInputError("effect", effects[0], "the bench's FMUs carry it only through "
+                                "a temperature (give --temperature-rise), not in time; or use "
+                                "--engine fast")
     design = _load_design(None, args.profile) if args.profile else None
     from tqdm import tqdm
     bar = tqdm(total=2, desc="synth", unit="stage", disable=not _progress_on(args), leave=False)

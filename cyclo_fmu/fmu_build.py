@@ -49,11 +49,11 @@ import importlib
 import sys
 import types
 
-from {bundle}.{module} import {name} as _Slave
-
-
-class {name}(_Slave):
-    pass
+# The slave class itself, imported: pythonfmu runs this script again at every
+# fmi2Instantiate and keeps a reference to each class it finds there (its findClass never
+# releases the list of the class's bases), so a class defined here would leak one class object
+# (about 8 kB) per instance; an imported one is the same object every time.
+from {bundle}.{module} import {name}
 
 
 class _ReloadableModule(types.ModuleType):
@@ -90,10 +90,10 @@ def build_fmu(name: str = "CycloidDrive", dest="dist", design=None) -> Path:
                 from model_core.design import design_to_toml
                 (pkg / DESIGN_FILE).write_text(design_to_toml(design), encoding="utf-8")
             write_shipped_maps(pkg / "_maps", design=design)
-        front = _have_compiler() and not os.environ.get("CYCLOFMU_NO_SHIM")
+        front = front_platforms()
         if front:   # the slaves report failures to the C front (slaves.base.STATUS_FRONT)
-            (pkg / "_status_front").write_text("linux64 binary: cyclo_fmu/native/"
-                                               "fmi2_status_shim.c\n")
+            (pkg / "_status_front").write_text("".join(
+                f"{plat}\n" for plat in front))
         script = stage / f"{BUNDLE}_{name}.py"
         script.write_text(SCRIPT_TEMPLATE.format(name=name, version=__version__, bundle=BUNDLE,
                                                  module=SLAVES[name]))
@@ -110,8 +110,19 @@ def build_fmu(name: str = "CycloidDrive", dest="dist", design=None) -> Path:
                 del sys.modules[mod]
     out = Path(out)
     if front:
-        _install_status_shim(out, name)
+        _install_status_shim(out, name, front)
     return out
+
+
+def front_platforms() -> tuple:
+    """The platforms whose binary in a Python FMU will be our C front (fmi2_status_shim.c):
+    linux64 with a C compiler, win64 too with the mingw-w64 cross compiler
+    (cyclo_fmu.native.cross); none with ``$CYCLOFMU_NO_SHIM``. Written into the FMU's
+    ``_status_front``, one a line, which the slaves read (slaves.base.STATUS_FRONT)."""
+    if os.environ.get("CYCLOFMU_NO_SHIM") or not _have_compiler():
+        return ()
+    from .native.cross import win64_compiler
+    return ("linux64", "win64") if win64_compiler() else ("linux64",)
 
 
 def _have_compiler() -> bool:
@@ -157,40 +168,52 @@ def shim_header(model_description: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _install_status_shim(fmu: Path, name: str) -> None:
-    """Put the status front (compiled here) in place of pythonfmu's linux64 binary, which goes
-    next to it as ``<name>.pythonfmu.so``. Without a C compiler the FMU keeps pythonfmu's
-    binary (and its fmi2Fatal), with a note on stderr."""
+def _install_status_shim(fmu: Path, name: str, platforms=("linux64",)) -> None:
+    """Put the status front (compiled here) in place of pythonfmu's binary of each platform
+    in ``platforms``, which goes next to it as ``<name>.pythonfmu.so`` (linux64) or
+    ``<name>.pythonfmu.dll`` (win64, cross-compiled with mingw-w64: cyclo_fmu.native.cross).
+    Without a C compiler the FMU keeps pythonfmu's binary (and its fmi2Fatal), with a note on
+    stderr; without the cross compiler its win64 binary stays pythonfmu's."""
+    import re
     import subprocess
     import zipfile
 
     from .native.build import find_compiler, fmi_header_dir
 
-    so = f"binaries/linux64/{name}.so"
-    cc = find_compiler()
     with zipfile.ZipFile(fmu) as z:
         md = z.read("modelDescription.xml").decode()
-    import re
     vr = re.search(r'name="_failed" valueReference="(\d+)"', md)
     if vr is None:
         raise RuntimeError(f"{fmu.name}: no variable _failed for the status front")
     with tempfile.TemporaryDirectory(prefix="cyclofmu_shim_") as tmp:
-        lib = Path(tmp) / "shim.so"
         header = Path(tmp) / "shim_vars.h"
         header.write_text(shim_header(md))
-        r = subprocess.run([cc, *shim_cflags(), f"-I{fmi_header_dir()}",
-                            f"-DFAILED_VR={vr.group(1)}", f'-DSHIM_VARS="{header}"', "-o", str(lib), str(SHIM_SOURCE), "-ldl", "-lpthread"],
-                           capture_output=True, text=True)
-        if r.returncode != 0:
-            raise RuntimeError(f"compiling {SHIM_SOURCE.name} failed: {r.stderr.strip()[:300]}")
+        common = [f"-I{fmi_header_dir()}", f"-DFAILED_VR={vr.group(1)}",
+                  f'-DSHIM_VARS="{header}"']
+        swap = {}     # path in the FMU -> (new path of pythonfmu's binary, the front)
+        if "linux64" in platforms:
+            lib = Path(tmp) / "shim.so"
+            r = subprocess.run([find_compiler(), *shim_cflags(), *common, "-o", str(lib),
+                                str(SHIM_SOURCE), "-ldl", "-lpthread"],
+                               capture_output=True, text=True)
+            if r.returncode != 0:
+                raise RuntimeError(f"compiling {SHIM_SOURCE.name} failed: "
+                                   f"{r.stderr.strip()[:300]}")
+            swap[f"binaries/linux64/{name}.so"] = (f"binaries/linux64/{name}.pythonfmu.so", lib)
+        if "win64" in platforms:
+            from .native.cross import compile_win64_front
+            dll = Path(tmp) / "shim.dll"
+            compile_win64_front(SHIM_SOURCE, common, dll)
+            swap[f"binaries/win64/{name}.dll"] = (f"binaries/win64/{name}.pythonfmu.dll", dll)
         tmp_fmu = Path(tmp) / fmu.name
         with zipfile.ZipFile(fmu) as zin, zipfile.ZipFile(tmp_fmu, "w",
                                                          zipfile.ZIP_DEFLATED) as zout:
             for item in zin.infolist():
                 data = zin.read(item.filename)
-                if item.filename == so:
-                    zout.writestr(f"binaries/linux64/{name}.pythonfmu.so", data)
-                    zout.write(lib, so)
+                if item.filename in swap:
+                    inner, front = swap[item.filename]
+                    zout.writestr(inner, data)
+                    zout.write(front, item.filename)
                 else:
                     zout.writestr(item, data)
         shutil.move(str(tmp_fmu), fmu)

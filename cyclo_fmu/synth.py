@@ -15,6 +15,8 @@ each speed, and (for sizes from "medium" on) long holds for a warm-up.
 from __future__ import annotations
 
 import math
+import shutil
+from pathlib import Path
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -30,8 +32,12 @@ from .bench import RECORDING_COLUMNS, write_recording
 SIZES = {"tiny": 42.0, "small": 120.0, "medium": 300.0, "large": 600.0}
 ENGINES = ("fast", "bench")
 #: effects the bench's FMUs cannot hide: they act through the replay only (the reducer FMU's
-#: map is built at the catalogue viscosity)
+#: map is built at the catalogue viscosity). With a temperature column (``temperature_rise``)
+#: the bench hides the viscosity drift as what it is in the FMUs: the lubricant's viscosity-
+#: temperature slope, the reducer's grease following the recording's temperature
 BENCH_CANNOT_HIDE = {"viscosity_drift"}
+#: effects the bench hides with a temperature column (``temperature_rise``)
+BENCH_TEMPERATURE_EFFECTS = {"viscosity_drift"}
 
 #: hidden-effect sizes (the registry's synth defaults): comparable with the transducer noise
 #: (0.003 N*m), invisible by eye
@@ -164,15 +170,21 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
         if eid in hidden:
             true_design, _ = EFFECTS[eid].apply(true_design, hidden[eid][0])
     if engine == "bench":
-        if len(hidden) != 1 or added_torque is not None or temperature_rise is not None:
+        if len(hidden) != 1 or added_torque is not None:
             raise ValueError("engine = 'bench' hides exactly one library effect")
-        if set(hidden) & BENCH_CANNOT_HIDE:
+        if temperature_rise is not None and not set(hidden) <= BENCH_TEMPERATURE_EFFECTS:
+            raise CycloidInputError("effect", next(iter(hidden)), "with a temperature column "
+                                    "the bench hides only " + ", ".join(
+                                        sorted(BENCH_TEMPERATURE_EFFECTS)) + "; use engine "
+                                    "'fast'")
+        if temperature_rise is None and set(hidden) & BENCH_CANNOT_HIDE:
             raise CycloidInputError("effect", next(iter(hidden)),
-                                    "the bench's FMUs do not carry it (replay only); use "
-                                    "engine 'fast'")
+                                    "the bench's FMUs do not carry it in time form (replay "
+                                    "only); give a temperature_rise, or use engine 'fast'")
         (eid, (values, eff_shape)), = hidden.items()
         return _through_the_bench(eid, values, eff_shape, true_design, plan, hold, mode,
-                                  duration, seed, settings, friction_error, fmu_dir, progress)
+                                  duration, seed, settings, friction_error, fmu_dir, progress,
+                                  temperature_rise)
     tau_in, loss_in = replay_input_torque(true_design, mode, w_in, tau_out)
     temperature = None
     if temperature_rise is not None:
@@ -270,10 +282,17 @@ def paper_like(mode: str = "S1", seed: int = 1, size: str = "small", **kw) -> di
 
 
 def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, duration, seed,
-                       settings, friction_error, fmu_dir, progress=False):
+                       settings, friction_error, fmu_dir, progress=False, temperature_rise=None):
     """The recording from the bench's FMUs (motor, reducer, brake, transducers): the hidden
     effect switched on in the reducer FMU's extra physics (or the transducer's zero offset),
-    the setpoints of the plan as the motor's and brake's schedules."""
+    the setpoints of the plan as the motor's and brake's schedules.
+
+    ``temperature_rise`` [K]: the reducer's grease follows a temperature from the design's
+    operating temperature, rising by this much with the time constant ``shape`` (its input
+    T_oil_in), and the recording carries it as its temperature column (noise 0.05 K). The
+    viscosity drift is then the true lubricant's: its Walther line with d ln(nu)/dT =
+    ln_viscosity_change / 10 K at the operating temperature (thermal.lubricant_with_slope, the
+    diagnosis's own mapping), in a reducer FMU built with it."""
     import tempfile
     from .bench import COMPONENTS, Scenario, Sensors, bench_parameters, recording_from_result, run_fmus
     from .fmu_build import build_fmu
@@ -288,7 +307,13 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
                       torque_in_zero_drift=values.get("offset_change", 0.0)
                       if effect == "torque_sensor_drift" else 0.0,
                       torque_in_zero_tau=shape if effect == "torque_sensor_drift" else 300.0)
-    if effect not in ("torque_sensor_offset", "torque_sensor_gain", "torque_sensor_drift"):
+    if effect == "viscosity_drift":      # the true lubricant (a temperature column only)
+        from model_core.effects import T_STEP
+        from model_core.thermal import lubricant_with_slope
+        true_design = replace(true_design, lubricant=lubricant_with_slope(
+            true_design.lubricant, true_design.operating_temperature,
+            values["ln_viscosity_change"] / T_STEP))
+    elif effect not in ("torque_sensor_offset", "torque_sensor_gain", "torque_sensor_drift"):
         ex = switch_on(ex, effect, values, shape)
     design = replace(true_design, extra=ex)
     pole_pairs = 1
@@ -305,14 +330,41 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
     # the reducer's inertia secants over the acceleration the regulator's ramp gives the
     # two-pole motor's shaft (r/min per s -> rad/s^2; CycloidDrive.alpha_ref)
     params["drive.alpha_ref"] = settings.ramp_rate * 2 * math.pi / 60.0
+    dt = 1.0 / settings.sample_rate
+    signals = temperature = None
+    if temperature_rise is not None:
+        from model_core.design import KELVIN
+        tau_T = shape or 300.0
+        grid = np.arange(int(round(duration / dt)) + 1) * dt
+
+        def temperature(t):     # degC
+            return (design.operating_temperature - KELVIN
+                    + temperature_rise * (1.0 - np.exp(-np.asarray(t) / tau_T)))
+        params["drive.use_T_oil_input"] = True
+        signals = {"drive.T_oil_in": temperature(grid) + KELVIN}
     with tempfile.TemporaryDirectory() as tmp:
         d = fmu_dir or tmp
         if fmu_dir is None:
             for name in sorted({f for f, _ in COMPONENTS.values()}):
                 build_fmu(name, d)
-        res = run_fmus(d, params, duration, 1.0 / settings.sample_rate, progress=progress,
-                       fmus="python")
-    rec = recording_from_result(res)
+        if effect == "viscosity_drift":   # the reducer built with the true lubricant
+            own = Path(tmp) / "true"
+            own.mkdir()
+            for name in sorted({f for f, _ in COMPONENTS.values()} - {"CycloidDrive"}):
+                shutil.copy(Path(d) / f"{name}.fmu", own)
+            build_fmu("CycloidDrive", own, design=design)
+            d = own
+        res = run_fmus(d, params, duration, dt, progress=progress, fmus="python",
+                       signals=signals)
+    if signals is not None:     # the first row holds the initial values (run_fmus)
+        res = res[1:]
+        rec = recording_from_result(res)
+        rec["time_s"] = rec["time_s"] - dt
+        rng = np.random.default_rng(seed + 7919)
+        rec["temperature_C"] = (temperature(rec["time_s"])
+                                + 0.05 * rng.standard_normal(len(rec["time_s"])))
+    else:
+        rec = recording_from_result(res)
     rec["truth"] = {"effect": effect, "values": values, "shape": shape,
                     "friction_error": friction_error, "mode": mode, "seed": seed,
                     "engine": "bench"}

@@ -187,7 +187,7 @@ class ExtraPhysics:
     ripple_roller_phase: float = _f(0.0, "rad", "phase of the roller-pass ripple")
     thermal_loss_change: float = _f(0.0, "1", "relative change of the losses when warm (dynamic)")
     thermal_tau: float = _f(300.0, "s", "warm-up time constant")
-    # -- replay only (the diagnosis's replay of a recording; the FMUs do not carry these) ----
+    # -- the diagnosis's replay only (REPLAY_ONLY) and the bench's transducers -------------
     thermal_loss_per_10K: float = _f(0.0, "1", "relative change of the losses per 10 K of the "
                                      "recording's temperature column (replay only)")
     viscosity_ln_change: float = _f(0.0, "1", "change of ln(viscosity) when warm, acting through "
@@ -196,13 +196,17 @@ class ExtraPhysics:
     viscosity_ln_per_10K: float = _f(0.0, "1", "change of ln(viscosity) per 10 K of the "
                                      "recording's temperature column (replay only)")
     torque_in_offset: float = _f(0.0, "N*m", "zero offset of the input torque transducer a "
-                                 "diagnosis found (the replay corrects the reading; not physics)")
+                                 "diagnosis found (not physics of the drive: the replay "
+                                 "corrects the reading, the bench's input torque transducer "
+                                 "FMU reads with it)")
     torque_in_gain_error: float = _f(0.0, "1", "gain error of the input torque transducer a "
-                                     "diagnosis found (the replay corrects the reading)")
+                                     "diagnosis found (the replay corrects the reading, the "
+                                     "bench's transducer FMU reads with it)")
     torque_in_zero_drift: float = _f(0.0, "N*m", "drift of the input torque transducer's zero "
                                      "when warm, first order in time, a diagnosis found (the "
-                                     "replay corrects the reading)")
-    torque_in_zero_tau: float = _f(300.0, "s", "time constant of the zero's drift (replay only)")
+                                     "replay corrects the reading, the bench's transducer FMU "
+                                     "reads with it)")
+    torque_in_zero_tau: float = _f(300.0, "s", "time constant of the zero's drift")
     torque_in_zero_per_10K: float = _f(0.0, "N*m", "drift of the input torque transducer's zero "
                                        "per 10 K of the recording's temperature column (replay "
                                        "only)")
@@ -230,10 +234,19 @@ class ExtraPhysics:
                                   "exp(-(|w|/w_s)^delta): 1 Tustin's exponential, 2 the Gaussian "
                                   "(1 to 2)")
 
-    #: fields the FMUs do not carry (a diagnosis's replay uses them)
-    REPLAY_ONLY = ("thermal_loss_per_10K", "viscosity_ln_change", "viscosity_ln_per_10K",
-                   "torque_in_offset", "torque_in_gain_error", "torque_in_zero_drift",
-                   "torque_in_zero_tau", "torque_in_zero_per_10K")
+    #: fields no FMU carries: the diagnosis's replay uses them. Where the same physics has a
+    #: form the FMUs carry, the diagnosis writes that too (model_core.effects): a viscosity
+    #: drift per 10 K as the lubricant's Walther line (nu_100), in time as the housing's heat
+    #: capacity (tau = R C); a warm-up in time is thermal_loss_change/thermal_tau (reducer
+    #: FMUs). The per-10 K loss change and zero drift need a temperature the bench's
+    #: transducers and a per-10 K loss law the reducer FMUs do not have
+    REPLAY_ONLY = ("thermal_loss_per_10K", "viscosity_ln_change", "viscosity_tau",
+                   "viscosity_ln_per_10K", "torque_in_zero_per_10K")
+    #: fields the bench's input torque transducer FMU carries (offset, gain_error, zero_drift,
+    #: zero_drift_tau; cyclo_fmu.bench.bench_parameters), not the reducer FMUs: they are not
+    #: physics of the drive
+    TRANSDUCER = ("torque_in_offset", "torque_in_gain_error", "torque_in_zero_drift",
+                  "torque_in_zero_tau")
 
     def steady_torque(self, w):
         """Drag and Stribeck torque at driving speed w (rad/s), N*m, signed with the motion:

@@ -506,7 +506,18 @@ def _apply_thermal(design, v, shape, temperature):
             "extra.thermal_loss_per_10K: losses change with the temperature column beyond the "
             "model's own temperature physics (replay only: not a parameter of the FMUs, whose "
             "losses follow their grease temperature through the lubricant)"]
-    return _with_extra(design, thermal_loss_change=v["loss_change"], thermal_tau=shape), []
+    # one warm-up (docs/explanation/thermal.md): the FMUs hold the losses at T_oil_start while
+    # a warm-up in time is in the design (it was fitted against the model held at one
+    # temperature), and their heat balance warms T_oil with the fitted time constant: it is
+    # the housing's, tau = R C, as for the viscosity drift
+    from . import thermal
+    C = shape / thermal.housing_resistance(design)
+    new = replace(_with_extra(design, thermal_loss_change=v["loss_change"], thermal_tau=shape),
+                  housing_heat_capacity=C)
+    return new, [f"housing_heat_capacity {C:.4g} J/K (was {design.housing_heat_capacity:.4g}): "
+                 f"the warm-up's time constant {shape:g} s diagnosed is the housing's R C; the "
+                 "FMUs' losses follow the fitted warm-up in time, held at T_oil_start (one "
+                 "warm-up, not also through the grease temperature)"]
 
 
 def _apply_viscosity(design, v, shape, temperature):

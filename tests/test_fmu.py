@@ -12,80 +12,19 @@ import pytest
 fmpy = pytest.importorskip("fmpy")
 from fmpy import read_model_description, simulate_fmu  # noqa: E402
 from fmpy.fmi1 import FMICallException  # noqa: E402
-from fmpy.fmi2 import FMU2Slave  # noqa: E402
 
+from fmu_helpers import Inst  # noqa: E402
 from model_core import DriveDesign, Friction, operating_point, rpm_to_rad_s  # noqa: E402
 
 IDX = {"1": 0, "2": 1, "S": 2}
 
 
-class Instance:
-    """A started FMU2Slave with name-based access and a log of its messages."""
+class Instance(Inst):
+    """The reducer FMU started with debug logging on (tests/fmu_helpers.py); ``messages``
+    holds (status, text) pairs."""
 
     def __init__(self, path, name="inst", **params):
-        self.md = read_model_description(path)
-        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.types = {v.name: v.type for v in self.md.modelVariables}
-        from fmpy import extract
-        self.dir = extract(path)
-        self.messages = []
-
-        def logger(component, instance, status, category, message):
-            self.messages.append(message.decode(errors="replace"))
-        from ctypes import byref
-        from fmpy import fmi2
-        from fmpy.logging import addLoggerProxy
-        self.callbacks = fmi2.fmi2CallbackFunctions()
-        self.callbacks.logger = fmi2.fmi2CallbackLoggerTYPE(logger)
-        self.callbacks.allocateMemory = fmi2.fmi2CallbackAllocateMemoryTYPE(fmi2.calloc)
-        self.callbacks.freeMemory = fmi2.fmi2CallbackFreeMemoryTYPE(fmi2.free)
-        addLoggerProxy(byref(self.callbacks))
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
-                             modelIdentifier=self.md.coSimulation.modelIdentifier,
-                             instanceName=name)
-        try:
-            self.fmu.instantiate(loggingOn=True, callbacks=self.callbacks)
-        except Exception as exc:
-            raise RuntimeError(f"instantiate failed: {self.messages}") from exc
-        self.start(**params)
-
-    def set(self, **values):
-        for k, v in values.items():
-            t = self.types[k]
-            if t == "Real":
-                self.fmu.setReal([self.vr[k]], [float(v)])
-            elif t == "Integer":
-                self.fmu.setInteger([self.vr[k]], [int(v)])
-            elif t == "Boolean":
-                self.fmu.setBoolean([self.vr[k]], [bool(v)])
-            else:
-                self.fmu.setString([self.vr[k]], [str(v)])
-
-    def get(self, *names):
-        out = []
-        for k in names:
-            t = self.types[k]
-            if t == "Boolean":
-                out.append(self.fmu.getBoolean([self.vr[k]])[0])
-            else:
-                out.append(self.fmu.getReal([self.vr[k]])[0])
-        return out
-
-    def start(self, **params):
-        self.fmu.setupExperiment(startTime=0.0)
-        self.fmu.enterInitializationMode()
-        self.set(**params)
-        self.fmu.exitInitializationMode()
-        self.t = 0.0
-
-    def step(self, dt=1e-3, **inputs):
-        self.set(**inputs)
-        self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=dt)
-        self.t += dt
-
-    def close(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
+        super().__init__(path, name, logging=True, **params)
 
 
 def test_validates_with_units_and_structure(fmu):
@@ -204,7 +143,7 @@ def test_nan_input_is_fmi2error_with_message(fmu):
     inst = Instance(fmu, mode="S1")
     with pytest.raises(FMICallException):
         inst.step(w_in=float("nan"), tau_out=-7.0)
-    assert any("w_in" in m and "finite" in m for m in inst.messages), inst.messages
+    assert any("w_in" in m and "finite" in m for _, m in inst.messages), inst.messages
 
 
 @pytest.mark.parametrize("params, word", [(dict(mode="S3"), "mode"), (dict(e=-0.002), "e"),
@@ -215,7 +154,7 @@ def test_invalid_parameter_fails_at_initialization(fmu, params, word):
     inst = Instance.__new__(Instance)
     with pytest.raises(FMICallException):
         Instance.__init__(inst, fmu, **params)
-    assert any(word in m and "invalid parameter" in m for m in inst.messages), inst.messages
+    assert any(word in m and "invalid parameter" in m for _, m in inst.messages), inst.messages
 
 
 def test_simulate_fmu_in_fresh_process(fmu, tmp_path):

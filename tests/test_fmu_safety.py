@@ -23,6 +23,7 @@ from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi2 import FMU2Slave  # noqa: E402
 
 from cyclo_fmu.native import build as nb  # noqa: E402
+from fmu_helpers import Inst  # noqa: E402,F401 (also imported from here)
 
 GCC = shutil.which("gcc") or shutil.which("cc")
 pytestmark = pytest.mark.skipif(GCC is None, reason="no C compiler (the FMUs' C parts)")
@@ -39,68 +40,6 @@ def run_py(code, timeout=120):
     env = dict(os.environ, PYTHONPATH=ROOT)
     return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
                           text=True, timeout=timeout, env=env)
-
-
-class Inst:
-    """An FMU2Slave with name-based access and the log of its messages (fmpy's logger proxy
-    formats the message as FMI Library does)."""
-
-    def __init__(self, path, name="inst", start=True, logging=False, **params):
-        from ctypes import byref
-
-        from fmpy import fmi2
-        from fmpy.logging import addLoggerProxy
-        self.md = read_model_description(path)
-        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.types = {v.name: v.type for v in self.md.modelVariables}
-        self.dir = extract(path)
-        self.messages = []
-
-        def logger(component, instance, status, category, message):
-            self.messages.append((status, message.decode(errors="replace")))
-        self.callbacks = fmi2.fmi2CallbackFunctions()
-        self.callbacks.logger = fmi2.fmi2CallbackLoggerTYPE(logger)
-        self.callbacks.allocateMemory = fmi2.fmi2CallbackAllocateMemoryTYPE(fmi2.calloc)
-        self.callbacks.freeMemory = fmi2.fmi2CallbackFreeMemoryTYPE(fmi2.free)
-        addLoggerProxy(byref(self.callbacks))
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
-                             modelIdentifier=self.md.coSimulation.modelIdentifier,
-                             instanceName=name)
-        self.fmu.instantiate(loggingOn=logging, callbacks=self.callbacks)
-        self.t = 0.0
-        if start:
-            self.fmu.setupExperiment(startTime=0.0)
-            self.fmu.enterInitializationMode()
-            self.set(**params)
-            self.fmu.exitInitializationMode()
-
-    def set(self, **values):
-        for k, v in values.items():
-            t = self.types[k]
-            if t == "Real":
-                self.fmu.setReal([self.vr[k]], [float(v)])
-            elif t == "Integer":
-                self.fmu.setInteger([self.vr[k]], [int(v)])
-            elif t == "Boolean":
-                self.fmu.setBoolean([self.vr[k]], [bool(v)])
-            else:
-                self.fmu.setString([self.vr[k]], [str(v)])
-
-    def get(self, *names):
-        return self.fmu.getReal([self.vr[n] for n in names])
-
-    def step(self, dt=1e-3, **inputs):
-        self.set(**inputs)
-        self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=dt)
-        self.t += dt
-
-    def close(self):
-        try:
-            self.fmu.terminate()
-        except Exception:   # noqa: BLE001 - a test may leave it in another state
-            pass
-        self.fmu.freeInstance()
-        shutil.rmtree(self.dir, ignore_errors=True)
 
 
 def errors(inst):

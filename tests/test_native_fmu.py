@@ -21,9 +21,9 @@ import pytest
 fmpy = pytest.importorskip("fmpy")
 from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi1 import FMICallException  # noqa: E402
-from fmpy.fmi2 import FMU2Slave  # noqa: E402
 
 from cyclo_fmu.native import build as nb  # noqa: E402
+from fmu_helpers import REDUCER_OUTPUTS, Inst  # noqa: E402,F401 (Inst: imported from here too)
 from model_core import DriveDesign, Friction, kinematics  # noqa: E402
 from model_core.design import ExtraPhysics, design_to_toml  # noqa: E402
 from model_core.lossmap import ModeMap  # noqa: E402
@@ -31,9 +31,7 @@ from model_core.lossmap import ModeMap  # noqa: E402
 GCC = shutil.which("gcc") or shutil.which("cc")
 pytestmark = pytest.mark.skipif(GCC is None, reason="no C compiler")
 
-OUT = ("w_out", "tau_in", "tau_housing", "P_loss", "PL1", "PL2", "PL3", "PL5", "PL6", "eta",
-       "eta0", "P_extra", "P_stored", "PL_support", "PL_seal", "PL_churn", "torque_out",
-       "tau_in_static", "J_load", "J_load_dec", "PL_mesh")
+OUT = REDUCER_OUTPUTS
 #: agreement required with the Python FMU (issue 7)
 RTOL = 1e-9
 #: absolute floor for values that are zero in one FMU and a rounding residue in the other [W,
@@ -49,65 +47,6 @@ def native(tmp_path_factory):
 @pytest.fixture(scope="module")
 def native_dir(native):
     return extract(native)
-
-
-class Inst:
-    """A started FMU2Slave with name-based access and a log of its messages."""
-
-    def __init__(self, path, name="inst", unzip=None, start=True, **params):
-        self.md = read_model_description(path)
-        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.types = {v.name: v.type for v in self.md.modelVariables}
-        self.dir = unzip or extract(path)
-        self.messages = []
-
-        def logger(component, instance, status, category, message):
-            self.messages.append((status, message.decode(errors="replace")))
-        from ctypes import byref
-        from fmpy import fmi2
-        from fmpy.logging import addLoggerProxy
-        self.callbacks = fmi2.fmi2CallbackFunctions()
-        self.callbacks.logger = fmi2.fmi2CallbackLoggerTYPE(logger)
-        self.callbacks.allocateMemory = fmi2.fmi2CallbackAllocateMemoryTYPE(fmi2.calloc)
-        self.callbacks.freeMemory = fmi2.fmi2CallbackFreeMemoryTYPE(fmi2.free)
-        addLoggerProxy(byref(self.callbacks))
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
-                             modelIdentifier=self.md.coSimulation.modelIdentifier,
-                             instanceName=name)
-        self.fmu.instantiate(loggingOn=False, callbacks=self.callbacks)
-        self.t = 0.0
-        if start:
-            self.fmu.setupExperiment(startTime=0.0)
-            self.fmu.enterInitializationMode()
-            self.set(**params)
-            self.fmu.exitInitializationMode()
-
-    def set(self, **values):
-        for k, v in values.items():
-            t = self.types[k]
-            if t == "Real":
-                self.fmu.setReal([self.vr[k]], [float(v)])
-            elif t == "Integer":
-                self.fmu.setInteger([self.vr[k]], [int(v)])
-            elif t == "Boolean":
-                self.fmu.setBoolean([self.vr[k]], [bool(v)])
-            else:
-                self.fmu.setString([self.vr[k]], [str(v)])
-
-    def outputs(self):
-        vals = dict(zip(OUT, self.fmu.getReal([self.vr[n] for n in OUT])))
-        vals["locked"] = bool(self.fmu.getBoolean([self.vr["locked"]])[0])
-        return vals
-
-    def step(self, w_in, tau_out, dt=1e-3):
-        self.set(w_in=w_in, tau_out=tau_out)
-        self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=dt)
-        self.t += dt
-        return self.outputs()
-
-    def close(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
 
 
 def assert_same(a, b, what=""):

@@ -166,6 +166,177 @@ def test_win64_dll_exports_fmi2_and_needs_only_windows(name, tmp_path):
         assert needed <= {"kernel32.dll", "msvcrt.dll", "advapi32.dll"}, needed
 
 
+def _dll_text(data: bytes, tmp_path) -> str:
+    objdump = shutil.which("x86_64-w64-mingw32-objdump")
+    if objdump is None:
+        pytest.skip("no x86_64-w64-mingw32-objdump")
+    (tmp_path / "f.dll").write_bytes(data)
+    return subprocess.run([objdump, "-p", str(tmp_path / "f.dll")], capture_output=True,
+                          text=True).stdout
+
+
+#: the FMI 2.0 co-simulation API, every function (FMI 2.0, sections 2.1 and 4.2)
+FMI2_CS_API = ("fmi2GetTypesPlatform", "fmi2GetVersion", "fmi2SetDebugLogging",
+               "fmi2Instantiate", "fmi2FreeInstance", "fmi2SetupExperiment",
+               "fmi2EnterInitializationMode", "fmi2ExitInitializationMode", "fmi2Terminate",
+               "fmi2Reset", "fmi2GetReal", "fmi2GetInteger", "fmi2GetBoolean", "fmi2GetString",
+               "fmi2SetReal", "fmi2SetInteger", "fmi2SetBoolean", "fmi2SetString",
+               "fmi2GetFMUstate", "fmi2SetFMUstate", "fmi2FreeFMUstate",
+               "fmi2SerializedFMUstateSize", "fmi2SerializeFMUstate", "fmi2DeSerializeFMUstate",
+               "fmi2GetDirectionalDerivative", "fmi2SetRealInputDerivatives",
+               "fmi2GetRealOutputDerivatives", "fmi2DoStep", "fmi2CancelStep", "fmi2GetStatus",
+               "fmi2GetRealStatus", "fmi2GetIntegerStatus", "fmi2GetBooleanStatus",
+               "fmi2GetStringStatus")
+
+
+def _exports(text: str) -> set:
+    names, on = set(), False
+    for ln in text.splitlines():
+        if "[Ordinal/Name Pointer] Table" in ln:
+            on = True
+        elif on and not ln.strip():
+            break
+        elif on:
+            names.add(ln.split()[-1])
+    return names
+
+
+@pytest.fixture(scope="module")
+def felt_brake(tmp_path_factory):
+    """The Python FeltBrake FMU, built with the win64 front when mingw-w64 is there."""
+    return build_any("FeltBrake", tmp_path_factory.mktemp("pyfmu"))
+
+
+@pytest.mark.skipif(win64_compiler() is None, reason=f"no mingw-w64 ({MINGW}): the Python "
+                    "FMUs keep pythonfmu's win64 binary")
+def test_python_fmu_win64_binary_is_the_front(felt_brake, tmp_path):
+    """win64/FeltBrake.dll is our front (the whole FMI 2.0 CS API, only Windows' own DLLs,
+    this build's GUID inside), pythonfmu's DLL beside it, and the slaves told so."""
+    with zipfile.ZipFile(felt_brake) as z:
+        names = z.namelist()
+        front = z.read("binaries/win64/FeltBrake.dll")
+        inner = z.read("binaries/win64/FeltBrake.pythonfmu.dll")
+        md = z.read("modelDescription.xml").decode()
+        marker = next(z.read(n).decode() for n in names if n.endswith("/_status_front"))
+    assert "binaries/linux64/FeltBrake.pythonfmu.so" in names
+    assert set(marker.split()) == {"linux64", "win64"}
+    text = _dll_text(front, tmp_path)
+    assert _exports(text) == set(FMI2_CS_API)
+    needed = {ln.split()[-1].lower() for ln in text.splitlines() if "DLL Name:" in ln}
+    assert needed <= {"kernel32.dll", "msvcrt.dll", "advapi32.dll"}, needed
+    import re
+    guid = re.search(r'guid="([^"]+)"', md).group(1)
+    assert guid.encode() in front
+    assert "python3.dll" in _dll_text(inner, tmp_path).lower()     # pythonfmu's own
+
+
+def test_python_fmu_without_a_cross_compiler_keeps_pythonfmus_win64_binary(tmp_path):
+    """No mingw-w64: linux64 gets the front, win64 keeps pythonfmu's DLL, and the marker
+    names linux64 only (so a slave on Windows raises, as pythonfmu expects)."""
+    import os
+    code = ("from cyclo_fmu.fmu_build import build_any; import sys; "
+            "print(build_any('FeltBrake', sys.argv[1]))")
+    r = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True,
+                       text=True, timeout=300, env=dict(os.environ, CYCLOFMU_MINGW="none"))
+    assert r.returncode == 0, r.stderr
+    with zipfile.ZipFile(tmp_path / "FeltBrake.fmu") as z:
+        names = z.namelist()
+        marker = next(z.read(n).decode() for n in names if n.endswith("/_status_front"))
+    assert "binaries/linux64/FeltBrake.pythonfmu.so" in names
+    assert "binaries/win64/FeltBrake.dll" in names
+    assert "binaries/win64/FeltBrake.pythonfmu.dll" not in names
+    assert marker.split() == ["linux64"]
+
+
+def _wine():
+    for name in ("wine64", "wine"):
+        if shutil.which(name):
+            return shutil.which(name)
+    return "/usr/lib/wine/wine64" if Path("/usr/lib/wine/wine64").is_file() else None
+
+
+needs_wine = pytest.mark.skipif(
+    win64_compiler() is None or _wine() is None,
+    reason="needs mingw-w64 and wine (apt-get install mingw-w64 wine64) to run a win64 DLL")
+
+
+@pytest.fixture(scope="module")
+def win_host(tmp_path_factory):
+    """The small Windows host (hostile/host_win64.c) and a run function under wine."""
+    from cyclo_fmu.native.build import fmi_header_dir
+    d = tmp_path_factory.mktemp("wine")
+    exe = d / "host.exe"
+    src = ROOT / "cyclo_fmu" / "native" / "hostile" / "host_win64.c"
+    subprocess.run([win64_compiler(), "-std=c99", "-O2", "-Wall", "-static",
+                    f"-I{fmi_header_dir()}", "-o", str(exe), str(src)], check=True)
+    import os
+    env = dict(os.environ, WINEPREFIX=str(d / "prefix"), WINEDEBUG="-all")
+
+    def run(fmu, *args):
+        import re
+        unz = d / fmu.stem
+        if not unz.exists():
+            zipfile.ZipFile(fmu).extractall(unz)
+        md = (unz / "modelDescription.xml").read_text()
+        guid = re.search(r'guid="([^"]+)"', md).group(1)
+        dll = "Z:" + str(unz / "binaries" / "win64" / f"{fmu.stem}.dll").replace("/", "\\")
+        r = subprocess.run([_wine(), str(exe), dll, guid, (unz / "resources").as_uri(),
+                            *map(str, args)], capture_output=True, text=True, env=env,
+                           timeout=600)
+        assert r.returncode == 0, r.stdout + r.stderr
+        return r.stdout.splitlines()
+    return run
+
+
+@pytest.mark.slow
+@needs_wine
+def test_python_fmu_win64_front_refuses_misuse_under_wine(felt_brake, win_host):
+    """The front's checks run on Windows: NULL handle, NULL name, another GUID, Model
+    Exchange are refused with fmi2Error and a reason; without a Windows Python (wine has
+    none) the front says that it cannot load pythonfmu's DLL and why, instead of crashing."""
+    out = win_host(felt_brake)
+    assert "call-DoStep-NULL 3" in out and "call-GetReal-NULL 3" in out
+    for case in ("nullname", "badguid", "me"):
+        assert f"instantiate-{case} NULL" in out, out
+    logs = [ln for ln in out if ln.startswith("log 3 ")]
+    assert any("instanceName" in ln for ln in logs)
+    assert any("does not match this binary" in ln for ln in logs)
+    assert any("Co-Simulation only" in ln for ln in logs)
+    assert any("FeltBrake.pythonfmu.dll" in ln and "python3.dll" in ln for ln in logs), logs
+    assert "instantiate-ok NULL" in out
+
+
+@pytest.mark.slow
+@needs_wine
+def test_native_reducer_win64_under_wine_equals_linux64_bit_for_bit(tmp_path, win_host):
+    """The win64 DLL (mingw-w64, no FMA contraction) steps the reducer 2 s at 1 ms with the
+    same numbers, to the last bit, as the linux64 binary in fmpy."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+    fmu = build_any("CycloidDriveNative", tmp_path)
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    outs = ["tau_in", "P_loss", "eta", "tau_housing"]
+    out = win_host(fmu, 2000, f"{vr['w_in']}=150", f"{vr['tau_out']}=-8",
+                   *[vr[n] for n in outs])
+    got = {int(ln.split()[1]): float(ln.split()[3]) for ln in out if ln.startswith("get ")}
+    assert all(ln.split()[2] == "0" for ln in out if ln.startswith("get "))
+    f = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(fmu), str(tmp_path / "x")),
+                  modelIdentifier="CycloidDriveNative", instanceName="x")
+    f.instantiate()
+    f.setReal([vr["w_in"], vr["tau_out"]], [150.0, -8.0])
+    f.setupExperiment(startTime=0.0)
+    f.enterInitializationMode()
+    f.exitInitializationMode()
+    for k in range(2000):
+        f.doStep(k * 1e-3, 1e-3)
+    ref = f.getReal([vr[n] for n in outs])
+    f.terminate()
+    f.freeInstance()
+    assert [got[vr[n]] for n in outs] == ref
+    assert 0.5 < ref[2] < 1.0          # eta: a loaded reducer, not a trivial zero
+
+
 def test_without_a_cross_compiler_the_build_notes_it_and_goes_on(tmp_path):
     code = ("from cyclo_fmu.fmu_build import build_any; import sys; "
             "print(build_any('FeltBrakeNative', sys.argv[1]))")

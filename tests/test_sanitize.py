@@ -33,3 +33,14 @@ def test_sanitized_full_run_is_clean():
     r = _run()
     assert r.returncode == 0, r.stdout[-6000:] + r.stderr[-2000:]
     assert r.stdout.count(": clean") == 3
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("part", ["tsan-native", "tsan-front"])
+def test_thread_sanitizer_finds_no_race(part):
+    """8 threads creating, stepping, saving and freeing instances at once (native FMU; the
+    Python FMUs' C front) under ThreadSanitizer: no data race report (any is fatal)."""
+    r = _run("--only", part)
+    assert r.returncode == 0, r.stdout[-6000:] + r.stderr[-2000:]
+    assert f"== {part}: clean" in r.stdout
+

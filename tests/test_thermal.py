@@ -237,9 +237,10 @@ def test_defaults_at_the_operating_temperature_give_the_one_temperature_map(fmu)
 
 
 def test_python_and_native_fmus_agree_for_the_calibrated_preset_while_warm(preset_fmus):
-    """mackic-rig (calibrated) warming up from 15 degC with 60 s steps across the map's
-    temperature nodes, and then driven at a measured-looking warm temperature: every output
-    equal to 1e-9."""
+    """mackic-rig (calibrated: mesh_loss_k, idle_loss_scale) warming up from 15 degC with 60 s
+    steps across the map's temperature nodes (the internal heat balance), then at a held warm
+    temperature, then along a temperature trajectory on the input T_oil_in in all four
+    quadrants: every output equal to 1e-9."""
     native, python = preset_fmus
     params = dict(T_oil_start=288.15, ambient_temperature=298.15, J_out=2e-3,
                   housing_heat_capacity=600.0)
@@ -261,8 +262,64 @@ def test_python_and_native_fmus_agree_for_the_calibrated_preset_while_warm(prese
         a, b = advance(n, 1e-3, w_in=w, tau_out=t), advance(p, 1e-3, w_in=w, tau_out=t)
         for key in OUT:
             assert a[key] == pytest.approx(b[key], rel=RTOL, abs=ATOL), (k, key)
+    # and a measured-looking temperature trajectory on the input: 12 to 85 degC and back,
+    # across every node of the map and between them, in all four quadrants
+    seen = set()
+    for k in range(200):
+        T_in = 321.65 + 36.5 * math.sin(0.037 * k) + 0.3 * math.sin(1.7 * k)
+        w = 240.0 * math.sin(0.09 * k + 0.3)
+        t = 7.0 * math.sin(0.061 * k)
+        a = advance(n, 0.05, w_in=w, tau_out=t, T_oil_in=T_in)
+        b = advance(p, 0.05, w_in=w, tau_out=t, T_oil_in=T_in)
+        assert a["T_oil"] == b["T_oil"] == T_in
+        for key in OUT:
+            assert a[key] == pytest.approx(b[key], rel=RTOL, abs=ATOL), (k, key)
+        seen.add((int(T_in // 10), w > 0, t * w < 0))
+    assert len({x[0] for x in seen}) >= 7 and len({x[1:] for x in seen}) == 4
     n.close()
     p.close()
+
+
+def test_a_warm_up_in_time_is_counted_once(preset_fmus):
+    """One warm-up (docs/explanation/thermal.md): a warm-up in time (thermal_loss_change c,
+    thermal_tau, what a diagnosis fits against the model held at one temperature) carries the
+    losses' change; the heat balance still warms T_oil from the losses, but the losses stay at
+    T_oil_start. So tau_in is the held model's plus c (1 - exp(-t/tau)) times its loss torque,
+    to the rounding, while T_oil rises by kelvins (it would otherwise be counted twice); the
+    heat balance's energy closes; Python and native FMU equal to 1e-9 (mackic-rig: calibrated,
+    idle losses, PL_mesh)."""
+    native, python = preset_fmus
+    c, tau, T0 = 0.12, 400.0, 300.0
+    params = dict(T_oil_start=T0, ambient_temperature=298.15, housing_heat_capacity=150.0,
+                  thermal_loss_change=c, thermal_tau=tau)
+    n, p = Inst(native, **params), Inst(python, **params)
+    held = Inst(python, use_T_oil_input=True, T_oil_in=T0)   # the model at T_oil_start
+    R = thermal.housing_resistance(DriveDesign())
+    h, t, loss, q, P_start, Q_prev = 10.0, 0.0, 0.0, 0.0, None, None
+    for k in range(120):
+        w, tau_out = 260.0 + 30.0 * math.sin(0.07 * k), -6.0 - 2.0 * math.sin(0.13 * k)
+        a, b = advance(n, h, w_in=w, tau_out=tau_out), advance(p, h, w_in=w, tau_out=tau_out)
+        t += h
+        for key in OUT:
+            assert a[key] == pytest.approx(b[key], rel=RTOL, abs=ATOL), (k, key)
+        m = advance(held, h, w_in=w, tau_out=tau_out)
+        ratio = p.fmu.getReal([p.vr["w_out"]])[0] / w
+        warm = c * (1 - math.exp(-t / tau)) * (m["tau_in"] + tau_out * ratio)
+        assert b["tau_in"] == pytest.approx(m["tau_in"] + warm, rel=1e-12, abs=1e-14), k
+        for key in ("PL1", "PL3", "PL6", "PL_support", "PL_churn", "PL_mesh"):
+            assert b[key] == m[key], (k, key)       # the gear's losses at T_oil_start
+        if P_start is not None:
+            loss += P_start * h
+            q += 0.5 * (Q_prev + b["Q_ambient"]) * h
+        else:
+            T_first = b["T_oil"]
+        P_start, Q_prev = b["P_loss"], b["Q_ambient"]
+        assert b["Q_ambient"] == pytest.approx((b["T_oil"] - 298.15) / R, rel=1e-12)
+    assert b["T_oil"] > T0 + 5                      # the heat balance warmed the grease
+    # energy: the loss over the steps = heat stored + heat to the ambient (trapezoid)
+    assert 150.0 * (b["T_oil"] - T_first) + q == pytest.approx(loss, rel=5e-3)
+    for x in (n, p, held):
+        x.close()
 
 
 @pytest.mark.parametrize("which", ["native", "python"])

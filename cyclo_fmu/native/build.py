@@ -40,7 +40,7 @@ HERE = Path(__file__).resolve().parent
 NAME = "CycloidDriveNative"
 #: The C sources written for this project, in this package.
 C_SOURCES = ("fmi2_cycloid.c", "cd_model.c")
-C_HEADERS = ("cd_model.h",)
+C_HEADERS = ("cd_model.h", "fmi2_front.h")
 #: FMI 2.0 headers (2-clause BSD, Modelica Association), taken from the installed fmpy.
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 GENERATED = "cd_map_data.c"
@@ -219,6 +219,11 @@ def design_constants(design: DriveDesign):
     values = discovered_values(design)
     out += [(name, "Real", values[name], unit, desc) for name, _k, _f, unit, desc, *_ in
             DISCOVERED_PARAMETERS]
+    # the Python FMU's newer design parameters, last (the older constants' value references
+    # stay)
+    from ..slaves.cycloid_drive import LATE_DESIGN_PARAMETERS
+    for name, section, field, unit, desc, kind in LATE_DESIGN_PARAMETERS:
+        out.append((name, kind.__name__, getattr(getattr(design, section), field), unit, desc))
     return out
 
 
@@ -406,8 +411,9 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
             sv("PL_mesh", 52, "output", "continuous", "partial loss PL_mesh: additional mesh "
                "loss, a fraction mesh_loss_k of the mesh power (calibrated; 0 uncalibrated)",
                f'<Real {_real_attrs("W", "Power")}/>', "calculated")
-            sv("T_oil", 53, "output", "continuous", "grease/housing temperature the losses are "
-               "evaluated at (T_oil_in, or the heat balance's)",
+            sv("T_oil", 53, "output", "continuous", "grease/housing temperature (T_oil_in, or "
+               "the heat balance's); the losses are evaluated at it, or at T_oil_start while "
+               "thermal_loss_change is not 0 (one warm-up)",
                f'<Real {_real_attrs("K", "ThermodynamicTemperature")}/>', "calculated")
             sv("Q_ambient", 54, "output", "continuous", "heat flow from the housing to the "
                "ambient (T_oil - ambient_temperature)/R", f'<Real {_real_attrs("W", "Power")}/>',

@@ -54,6 +54,17 @@ def compile_win64(src: Path, sources, out: Path) -> bool:
     return True
 
 
+def compile_win64_front(source: Path, flags, out: Path) -> None:
+    """Cross-compile the Python FMUs' C front (fmi2_status_shim.c) into the DLL ``out`` with
+    the model's ``flags`` (-I, -D); the caller checked that the cross compiler is there."""
+    cc = win64_compiler()
+    r = subprocess.run([cc, *WIN64_FLAGS, *flags, "-o", str(out), str(source)],
+                       capture_output=True, text=True)
+    if r.returncode != 0:
+        raise RuntimeError(f"cross-compiling {source.name} for win64 failed: "
+                           f"{r.stderr.strip()[:300]}")
+
+
 def cache_tag() -> str:
     """What the cross compiler adds to an FMU cache key (with or without win64)."""
     return win64_compiler() or "no-win64"

@@ -70,8 +70,6 @@ static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "thermal_tau", "drag_exponent", "stribeck_exponent", "run_in_change", "run_in_distance",
     "ripple_1x_load", "ripple_1x_load_phase", "ripple_roller_load", "ripple_roller_load_phase"};
 
-enum { PH_INSTANTIATED = 1, PH_INIT, PH_STEP, PH_TERMINATED };
-
 #define STATE_MAGIC 0x43444e53u   /* "CDNS" */
 #define STATE_VERSION 5u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
                               * load ripple, CDState.distance; 5: the oil temperature */
@@ -103,59 +101,16 @@ typedef struct {
     double key_w, key_tau, key_J_acc, key_J_dec;
 } CDState;
 
-typedef struct {
-    CDState s;
-    fmi2CallbackLogger logger;
-    fmi2CallbackAllocateMemory allocate;
-    fmi2CallbackFreeMemory release;
-    fmi2ComponentEnvironment env;
-    char name[128];
-    int logging_on;
-} Instance;
+/* the FMI 2.0 front shared with the bench components (instances, logging, phases, the
+ * model-independent calls): fmi2_front.h */
+#define FRONT_STATE CDState
+#define FRONT_GUID CD_GUID
+#define FRONT_GUID_BYTES 40
+#define FRONT_BOTH_ALLOCATORS
+#include "fmi2_front.h"
 
-/* -- helpers ------------------------------------------------------------------------------- */
-static void *mem_alloc(Instance *c, size_t n)
-{
-    return c->allocate ? c->allocate(1, n) : calloc(1, n);
-}
-
-static void mem_free(Instance *c, void *p)
-{
-    if (c->release) c->release(p); else free(p);
-}
-
-/* The message goes to the host's logger preformatted and without '%' (loggers differ: some
- * format it again, fmpy's prints it as it is). */
-static void logmsg(Instance *c, fmi2Status status, const char *fmt, ...)
-{
-    char buf[512];
-    const char *category;
-    size_t i;
-    va_list ap;
-    if (c == NULL || c->logger == NULL) return;
-    if (status == fmi2OK && !c->logging_on) return;
-    va_start(ap, fmt);
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    va_end(ap);
-    for (i = 0; buf[i]; i++)
-        if (buf[i] == '%') buf[i] = '?';
-    category = status == fmi2Error ? "logStatusError"
-             : status == fmi2Warning ? "logStatusWarning" : "logAll";
-    c->logger(c->env, c->name, status, category, buf);
-}
-
-/* A user's string, quoted for a log message: printable ASCII only, at most 40 characters. */
-static void quote(const char *s, char *out, size_t n)
-{
-    size_t i = 0, k = 0;
-    if (s == NULL) { snprintf(out, n, "NULL"); return; }
-    out[k++] = '\'';
-    for (; s[i] && k + 5 < n && i < 40; i++)
-        out[k++] = (s[i] >= 32 && s[i] < 127 && s[i] != '%') ? s[i] : '?';
-    if (s[i]) { out[k++] = '.'; out[k++] = '.'; out[k++] = '.'; }
-    out[k++] = '\'';
-    out[k] = '\0';
-}
+enum { PH_INSTANTIATED = FRONT_PH_INSTANTIATED, PH_INIT = FRONT_PH_INIT,
+       PH_STEP = FRONT_PH_STEP, PH_TERMINATED = FRONT_PH_TERMINATED };
 
 static void set_defaults(CDState *s)
 {
@@ -314,6 +269,9 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     s->out[O_T_OIL] = T;
     s->out[O_Q_AMBIENT] = (T - s->thermal[1]) / R;
     m = &CD_MAP.modes[mode];
+    /* CycloidDrive._loss_T: one warm-up. A warm-up in time (thermal_loss_change) was fitted
+     * against the model at one temperature: with it the losses stay at T_oil_start */
+    if (s->extra.thermal_loss_change != 0) T = s->thermal[0];
     cd_solve_thermal(&CD_THERMAL, mode, w_in, tau_out, T, &r);
     if (r.out_of_range && !s->warned_range
         && (fabs(tau_out) > CD_MAP_TORQUE_MAX || fabs(w_in) > CD_MAP_SPEED_MAX)) {
@@ -405,118 +363,6 @@ static fmi2Status nonfinite(Instance *c, const char *fn)
     return fmi2Error;
 }
 
-#define CHECK_INSTANCE(fn) \
-    Instance *c = (Instance *)comp; \
-    if (c == NULL) return fmi2Error
-
-static fmi2Status not_in_phase(Instance *c, const char *fn)
-{
-    static const char *const names[] = {"?", "Instantiated", "Initialization Mode",
-                                        "Step Mode", "Terminated"};
-    int p = c->s.phase >= PH_INSTANTIATED && c->s.phase <= PH_TERMINATED ? c->s.phase : 0;
-    logmsg(c, fmi2Error, "%s is not allowed in state %s", fn, names[p]);
-    return fmi2Error;
-}
-
-/* -- common functions ----------------------------------------------------------------------- */
-FMI2_Export const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
-FMI2_Export const char *fmi2GetVersion(void) { return fmi2Version; }
-
-FMI2_Export fmi2Status fmi2SetDebugLogging(fmi2Component comp, fmi2Boolean loggingOn,
-                                           size_t nCategories, const fmi2String categories[])
-{
-    size_t i;
-    CHECK_INSTANCE(fmi2SetDebugLogging);
-    for (i = 0; i < nCategories; i++) {
-        const char *k = categories ? categories[i] : NULL;
-        if (k == NULL || (strcmp(k, "logStatusError") && strcmp(k, "logStatusWarning")
-                          && strcmp(k, "logAll"))) {
-            char q[64];
-            quote(k, q, sizeof q);
-            logmsg(c, fmi2Error, "fmi2SetDebugLogging: unknown log category %s (known: "
-                   "logStatusError, logStatusWarning, logAll)", q);
-            return fmi2Error;
-        }
-    }
-    c->logging_on = loggingOn != fmi2False;
-    return fmi2OK;
-}
-
-FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType,
-                                          fmi2String fmuGUID, fmi2String fmuResourceLocation,
-                                          const fmi2CallbackFunctions *functions,
-                                          fmi2Boolean visible, fmi2Boolean loggingOn)
-{
-    Instance tmp, *c;
-    (void)fmuResourceLocation;
-    (void)visible;
-    memset(&tmp, 0, sizeof tmp);
-    if (functions) {
-        tmp.logger = functions->logger;
-        tmp.allocate = functions->allocateMemory;
-        tmp.release = functions->freeMemory;
-        tmp.env = functions->componentEnvironment;
-    }
-    snprintf(tmp.name, sizeof tmp.name, "%s", instanceName ? instanceName : "");
-    tmp.logging_on = loggingOn != fmi2False;
-    if (fmuType != fmi2CoSimulation) {
-        logmsg(&tmp, fmi2Error, "fmi2Instantiate: this FMU supports Co-Simulation only");
-        return NULL;
-    }
-    /* the host's allocator and ours never mix: a block from allocateMemory must go back
-     * through freeMemory, so both or neither */
-    if ((tmp.allocate == NULL) != (tmp.release == NULL)) {
-        logmsg(&tmp, fmi2Error, "fmi2Instantiate: the callbacks give %s but not %s (both or "
-               "neither)", tmp.allocate ? "allocateMemory" : "freeMemory",
-               tmp.allocate ? "freeMemory" : "allocateMemory");
-        return NULL;
-    }
-    if (fmuGUID == NULL || strcmp(fmuGUID, CD_GUID) != 0) {
-        char q[64];
-        quote(fmuGUID, q, sizeof q);
-        logmsg(&tmp, fmi2Error, "fmi2Instantiate: GUID %s does not match this binary's %s "
-               "(modelDescription.xml of another build?)", q, CD_GUID);
-        return NULL;
-    }
-    c = (Instance *)mem_alloc(&tmp, sizeof *c);
-    if (c == NULL) {
-        logmsg(&tmp, fmi2Error, "fmi2Instantiate: out of memory");
-        return NULL;
-    }
-    *c = tmp;
-    set_defaults(&c->s);
-    return c;
-}
-
-FMI2_Export void fmi2FreeInstance(fmi2Component comp)
-{
-    Instance *c = (Instance *)comp;
-    if (c) mem_free(c, c);
-}
-
-FMI2_Export fmi2Status fmi2SetupExperiment(fmi2Component comp, fmi2Boolean toleranceDefined,
-                                           fmi2Real tolerance, fmi2Real startTime,
-                                           fmi2Boolean stopTimeDefined, fmi2Real stopTime)
-{
-    CHECK_INSTANCE(fmi2SetupExperiment);
-    (void)toleranceDefined; (void)tolerance; (void)stopTimeDefined; (void)stopTime;
-    if (c->s.phase != PH_INSTANTIATED) return not_in_phase(c, "fmi2SetupExperiment");
-    if (!isfinite(startTime)) {
-        logmsg(c, fmi2Error, "fmi2SetupExperiment: startTime = %g must be finite", startTime);
-        return fmi2Error;
-    }
-    c->s.t_start = startTime;
-    return fmi2OK;
-}
-
-FMI2_Export fmi2Status fmi2EnterInitializationMode(fmi2Component comp)
-{
-    CHECK_INSTANCE(fmi2EnterInitializationMode);
-    if (c->s.phase != PH_INSTANTIATED) return not_in_phase(c, "fmi2EnterInitializationMode");
-    c->s.phase = PH_INIT;
-    return fmi2OK;
-}
-
 FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
 {
     CHECK_INSTANCE(fmi2ExitInitializationMode);
@@ -536,34 +382,12 @@ FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component comp)
     return fmi2OK;
 }
 
-FMI2_Export fmi2Status fmi2Terminate(fmi2Component comp)
-{
-    CHECK_INSTANCE(fmi2Terminate);
-    if (c->s.phase != PH_STEP && c->s.phase != PH_INIT)
-        return not_in_phase(c, "fmi2Terminate");
-    c->s.phase = PH_TERMINATED;
-    return fmi2OK;
-}
-
-FMI2_Export fmi2Status fmi2Reset(fmi2Component comp)
-{
-    CHECK_INSTANCE(fmi2Reset);
-    set_defaults(&c->s);
-    return fmi2OK;
-}
-
 /* -- get and set ---------------------------------------------------------------------------- */
 static int const_index_real(unsigned int vr)
 {
     int i;
     for (i = 0; i < CD_N_CONST_REAL; i++) if (CD_CONST_REAL[i].vr == vr) return i;
     return -1;
-}
-
-static fmi2Status bad_vr(Instance *c, const char *fn, unsigned int vr)
-{
-    logmsg(c, fmi2Error, "%s: no variable with value reference %u", fn, vr);
-    return fmi2Error;
 }
 
 /* Initialization Mode: the outputs follow the inputs and parameters set so far (f_init). */
@@ -884,21 +708,6 @@ static const char *state_problem(const CDState *s)
     return NULL;
 }
 
-FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *FMUstate)
-{
-    CDState *copy;
-    CHECK_INSTANCE(fmi2GetFMUstate);
-    if (FMUstate == NULL) return fmi2Error;
-    copy = (CDState *)(*FMUstate ? *FMUstate : mem_alloc(c, sizeof *copy));
-    if (copy == NULL) {
-        logmsg(c, fmi2Error, "fmi2GetFMUstate: out of memory");
-        return fmi2Error;
-    }
-    *copy = c->s;
-    *FMUstate = copy;
-    return fmi2OK;
-}
-
 FMI2_Export fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate FMUstate)
 {
     const CDState *s = (const CDState *)FMUstate;
@@ -913,67 +722,23 @@ FMI2_Export fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate FMUstate
     return fmi2OK;
 }
 
-FMI2_Export fmi2Status fmi2FreeFMUstate(fmi2Component comp, fmi2FMUstate *FMUstate)
-{
-    CHECK_INSTANCE(fmi2FreeFMUstate);
-    if (FMUstate == NULL) return fmi2OK;
-    if (*FMUstate) mem_free(c, *FMUstate);
-    *FMUstate = NULL;
-    return fmi2OK;
-}
-
-/* serialised: the GUID (fixed length, so a state of another design is refused), then CDState */
-#define GUID_BYTES 40
-
-static void guid_bytes(char out[GUID_BYTES])
-{
-    size_t n = strlen(CD_GUID);
-    memset(out, 0, GUID_BYTES);
-    memcpy(out, CD_GUID, n < GUID_BYTES ? n : GUID_BYTES);
-}
-
-FMI2_Export fmi2Status fmi2SerializedFMUstateSize(fmi2Component comp, fmi2FMUstate FMUstate,
-                                                  size_t *size)
-{
-    CHECK_INSTANCE(fmi2SerializedFMUstateSize);
-    (void)FMUstate;
-    if (size == NULL) return fmi2Error;
-    *size = GUID_BYTES + sizeof(CDState);
-    return fmi2OK;
-}
-
-FMI2_Export fmi2Status fmi2SerializeFMUstate(fmi2Component comp, fmi2FMUstate FMUstate,
-                                             fmi2Byte serializedState[], size_t size)
-{
-    char guid[GUID_BYTES];
-    CHECK_INSTANCE(fmi2SerializeFMUstate);
-    if (FMUstate == NULL || serializedState == NULL || size < GUID_BYTES + sizeof(CDState)) {
-        logmsg(c, fmi2Error, "fmi2SerializeFMUstate: no state or buffer of %lu bytes smaller "
-               "than %lu", (unsigned long)size, (unsigned long)(GUID_BYTES + sizeof(CDState)));
-        return fmi2Error;
-    }
-    guid_bytes(guid);
-    memcpy(serializedState, guid, GUID_BYTES);
-    memcpy(serializedState + GUID_BYTES, FMUstate, sizeof(CDState));
-    return fmi2OK;
-}
-
+/* serialised: the GUID (FRONT_GUID_BYTES, fmi2_front.h), then CDState */
 FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp,
                                                const fmi2Byte serializedState[], size_t size,
                                                fmi2FMUstate *FMUstate)
 {
-    char guid[GUID_BYTES];
+    char guid[FRONT_GUID_BYTES];
     const char *why;
     CDState s, *dst;
     CHECK_INSTANCE(fmi2DeSerializeFMUstate);
-    if (serializedState == NULL || FMUstate == NULL || size != GUID_BYTES + sizeof(CDState)) {
+    if (serializedState == NULL || FMUstate == NULL || size != FRONT_GUID_BYTES + sizeof(CDState)) {
         logmsg(c, fmi2Error, "fmi2DeSerializeFMUstate: %lu bytes, expected %lu",
-               (unsigned long)size, (unsigned long)(GUID_BYTES + sizeof(CDState)));
+               (unsigned long)size, (unsigned long)(FRONT_GUID_BYTES + sizeof(CDState)));
         return fmi2Error;
     }
     guid_bytes(guid);
-    memcpy(&s, serializedState + GUID_BYTES, sizeof s);
-    if (memcmp(serializedState, guid, GUID_BYTES) != 0) {
+    memcpy(&s, serializedState + FRONT_GUID_BYTES, sizeof s);
+    if (memcmp(serializedState, guid, FRONT_GUID_BYTES) != 0) {
         logmsg(c, fmi2Error, "fmi2DeSerializeFMUstate: not a state of this FMU (GUID %s)",
                CD_GUID);
         return fmi2Error;
@@ -993,41 +758,7 @@ FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp,
     return fmi2OK;
 }
 
-FMI2_Export fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp,
-        const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
-        const fmi2ValueReference vKnown_ref[], size_t nKnown, const fmi2Real dvKnown[],
-        fmi2Real dvUnknown[])
-{
-    CHECK_INSTANCE(fmi2GetDirectionalDerivative);
-    (void)vUnknown_ref; (void)nUnknown; (void)vKnown_ref; (void)nKnown; (void)dvKnown;
-    (void)dvUnknown;
-    logmsg(c, fmi2Error, "fmi2GetDirectionalDerivative: not provided "
-           "(providesDirectionalDerivative = false)");
-    return fmi2Error;
-}
-
 /* -- co-simulation -------------------------------------------------------------------------- */
-FMI2_Export fmi2Status fmi2SetRealInputDerivatives(fmi2Component comp,
-        const fmi2ValueReference vr[], size_t nvr, const fmi2Integer order[],
-        const fmi2Real value[])
-{
-    CHECK_INSTANCE(fmi2SetRealInputDerivatives);
-    (void)vr; (void)nvr; (void)order; (void)value;
-    logmsg(c, fmi2Error, "fmi2SetRealInputDerivatives: not supported "
-           "(canInterpolateInputs = false)");
-    return fmi2Error;
-}
-
-FMI2_Export fmi2Status fmi2GetRealOutputDerivatives(fmi2Component comp,
-        const fmi2ValueReference vr[], size_t nvr, const fmi2Integer order[], fmi2Real value[])
-{
-    CHECK_INSTANCE(fmi2GetRealOutputDerivatives);
-    (void)vr; (void)nvr; (void)order; (void)value;
-    logmsg(c, fmi2Error, "fmi2GetRealOutputDerivatives: not supported "
-           "(maxOutputDerivativeOrder = 0)");
-    return fmi2Error;
-}
-
 FMI2_Export fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicationPoint,
                                   fmi2Real communicationStepSize,
                                   fmi2Boolean noSetFMUStatePriorToCurrentPoint)
@@ -1035,13 +766,8 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicat
     CHECK_INSTANCE(fmi2DoStep);
     (void)noSetFMUStatePriorToCurrentPoint;
     if (c->s.phase != PH_STEP) return not_in_phase(c, "fmi2DoStep");
-    if (!isfinite(currentCommunicationPoint) || !isfinite(communicationStepSize)
-        || communicationStepSize < 0) {
-        logmsg(c, fmi2Error, "fmi2DoStep: currentCommunicationPoint = %g, "
-               "communicationStepSize = %g: need finite values and a step >= 0",
-               currentCommunicationPoint, communicationStepSize);
+    if (step_arguments(c, currentCommunicationPoint, communicationStepSize) != fmi2OK)
         return fmi2Error;
-    }
     {
         CDState before = c->s;
         evaluate(c, currentCommunicationPoint + communicationStepSize, communicationStepSize, 1);
@@ -1052,57 +778,4 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real currentCommunicat
         /* the step that first left the map (eta0 held at its edge) says so in its status */
         return c->s.warned_range && !before.warned_range ? fmi2Warning : fmi2OK;
     }
-}
-
-FMI2_Export fmi2Status fmi2CancelStep(fmi2Component comp)
-{
-    CHECK_INSTANCE(fmi2CancelStep);
-    logmsg(c, fmi2Error, "fmi2CancelStep: steps never run asynchronously");
-    return fmi2Error;
-}
-
-static fmi2Status no_status(Instance *c)
-{
-    logmsg(c, fmi2Error, "fmi2GetXXXStatus: steps never run asynchronously; nothing to ask");
-    return fmi2Discard;
-}
-
-FMI2_Export fmi2Status fmi2GetStatus(fmi2Component comp, const fmi2StatusKind s,
-                                     fmi2Status *value)
-{
-    CHECK_INSTANCE(fmi2GetStatus);
-    (void)s; (void)value;
-    return no_status(c);
-}
-
-FMI2_Export fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s,
-                                         fmi2Real *value)
-{
-    CHECK_INSTANCE(fmi2GetRealStatus);
-    (void)s; (void)value;
-    return no_status(c);
-}
-
-FMI2_Export fmi2Status fmi2GetIntegerStatus(fmi2Component comp, const fmi2StatusKind s,
-                                            fmi2Integer *value)
-{
-    CHECK_INSTANCE(fmi2GetIntegerStatus);
-    (void)s; (void)value;
-    return no_status(c);
-}
-
-FMI2_Export fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s,
-                                            fmi2Boolean *value)
-{
-    CHECK_INSTANCE(fmi2GetBooleanStatus);
-    (void)s; (void)value;
-    return no_status(c);
-}
-
-FMI2_Export fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s,
-                                           fmi2String *value)
-{
-    CHECK_INSTANCE(fmi2GetStringStatus);
-    (void)s; (void)value;
-    return no_status(c);
 }

@@ -28,10 +28,15 @@
  * Thread safety: the library handle and the resolved functions are published with atomic
  * stores (loaded once under a mutex); the list of live handles is guarded by a mutex. Calls on
  * one instance must not overlap (FMI 2.0); calls on different instances may. */
+#ifndef _WIN32
 #define _GNU_SOURCE
 #include <dlfcn.h>
-#include <math.h>
 #include <pthread.h>
+#else
+#define WIN32_LEAN_AND_MEAN
+#include <windows.h>
+#endif
+#include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -40,12 +45,36 @@
 
 #include "fmi2Functions.h"
 
+/* -- the platform: a statically initialised lock, pythonfmu's binary next to ours ----------
+ * Linux: <id>.so loads <id>.pythonfmu.so with dlopen; Windows (mingw-w64): <id>.dll loads
+ * <id>.pythonfmu.dll with LoadLibraryEx (its folder searched for its dependencies), a slim
+ * reader/writer lock in place of the pthread mutex. The library handle and the resolved
+ * functions are published with GCC's __atomic builtins on both. */
+#ifndef _WIN32
+typedef pthread_mutex_t Lock;
+#define LOCK_INIT PTHREAD_MUTEX_INITIALIZER
+#define lock(l) pthread_mutex_lock(l)
+#define unlock(l) pthread_mutex_unlock(l)
 #define SUFFIX ".pythonfmu.so"
+#define OWN_EXT ".so"
+#define NEEDS_PYTHON "a non-Python host needs libpython preloaded (LD_PRELOAD) and " \
+    "numpy/scipy on PYTHONPATH (README, Use it in your tool)"
+#else
+typedef SRWLOCK Lock;
+#define LOCK_INIT SRWLOCK_INIT
+#define lock(l) AcquireSRWLockExclusive(l)
+#define unlock(l) ReleaseSRWLockExclusive(l)
+#define SUFFIX L".pythonfmu.dll"
+#define OWN_EXT L".dll"
+#define NEEDS_PYTHON "pythonfmu's DLL needs python3.dll of a 64-bit Python with numpy and " \
+    "scipy on PATH (docs/how-to/hosts.md)"
+#endif
 
-static pthread_mutex_t lib_lock = PTHREAD_MUTEX_INITIALIZER;
+static Lock lib_lock = LOCK_INIT;
 static void *lib = NULL;
 static char load_error[768] = "";
 
+#ifndef _WIN32
 /* pythonfmu 0.7 keeps its interpreter state in a static std::shared_ptr and resets it again in
  * a library destructor. At process exit (library still loaded) the C++ exit handlers destroy
  * the shared_ptr first and the destructor then resets the destroyed object: a use-after-free
@@ -65,45 +94,38 @@ static void finalize_at_exit(void)
     if (fin) fin();
 }
 
-static void *load(void)
+/* pythonfmu's binary, loaded by the caller under lib_lock; NULL with load_error set */
+static void *open_pythonfmu(void)
 {
     Dl_info info;
     char path[4096];
     size_t n;
-    void *h = __atomic_load_n(&lib, __ATOMIC_ACQUIRE);
-    if (h) return h;
-    pthread_mutex_lock(&lib_lock);
-    h = lib;
-    if (h == NULL && dladdr((void *)&load, &info) && info.dli_fname != NULL) {
-        n = strlen(info.dli_fname);
-        if (n >= 3 && n + sizeof(SUFFIX) <= sizeof(path)) {
-            memcpy(path, info.dli_fname, n - 3);          /* strip ".so" */
-            memcpy(path + n - 3, SUFFIX, sizeof(SUFFIX));
-            h = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-            if (h) {
-                /* stay loaded as pythonfmu's binary does (its unique C++ symbols make glibc
-                 * keep it to the end): the exit handler below must outlive a host's dlclose */
-                dlopen(info.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
-                atexit(finalize_at_exit);
-            }
-            if (!h) {
-                const char *e = dlerror();
-                snprintf(load_error, sizeof load_error, "%s", e ? e : path);
-            }
-            __atomic_store_n(&lib, h, __ATOMIC_RELEASE);
-        }
+    void *h = NULL;
+    if (!dladdr((void *)&open_pythonfmu, &info) || info.dli_fname == NULL) {
+        snprintf(load_error, sizeof load_error, "cannot find the front's own file");
+        return NULL;
     }
-    pthread_mutex_unlock(&lib_lock);
+    n = strlen(info.dli_fname);
+    if (n < 3 || n + sizeof(SUFFIX) > sizeof(path)) {
+        snprintf(load_error, sizeof load_error, "path of %lu characters", (unsigned long)n);
+        return NULL;
+    }
+    memcpy(path, info.dli_fname, n - 3);          /* strip ".so" */
+    memcpy(path + n - 3, SUFFIX, sizeof(SUFFIX));
+    h = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (h) {
+        /* stay loaded as pythonfmu's binary does (its unique C++ symbols make glibc keep it
+         * to the end): the exit handler below must outlive a host's dlclose */
+        dlopen(info.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
+        atexit(finalize_at_exit);
+    } else {
+        const char *e = dlerror();
+        snprintf(load_error, sizeof load_error, "%.700s", e ? e : path);
+    }
     return h;
 }
 
-/* why the binary did not load, copied under the lock (another thread may be retrying) */
-static void why_not_loaded(char *out, size_t n)
-{
-    pthread_mutex_lock(&lib_lock);
-    snprintf(out, n, "%s", load_error[0] ? load_error : "not found");
-    pthread_mutex_unlock(&lib_lock);
-}
+static void *lib_sym(void *h, const char *name) { return dlsym(h, name); }
 
 /* at exit (this library pins itself once it has loaded pythonfmu's): drop our reference */
 __attribute__((destructor)) static void unload(void)
@@ -111,11 +133,83 @@ __attribute__((destructor)) static void unload(void)
     void *h = __atomic_exchange_n(&lib, NULL, __ATOMIC_ACQ_REL);
     if (h) dlclose(h);
 }
+#else
+/* Windows: pythonfmu's DLL (built with MSVC) needs no exit fix and is never freed here. On
+ * DLL_PROCESS_DETACH the MSVC runtime calls a DLL's DllMain first and runs its static
+ * destructors after it, so pythonfmu's DllMain (which resets the interpreter state) finds the
+ * shared_ptr alive, and if its DllMain is not the one linked (pythonfmu declares it in an
+ * anonymous namespace) the static destructor alone resets the state once: either way no reset
+ * of a destroyed object, the glibc order of the use-after-free above does not arise. Its
+ * interpreter thread, started through the C runtime, holds a reference to the DLL, so a
+ * FreeLibrary here would not unload it, and freeing a library from DllMain (under the loader
+ * lock) is forbidden. */
+static void *open_pythonfmu(void)
+{
+    HMODULE self = NULL, h;
+    wchar_t path[4096];
+    DWORD n;
+    size_t ext = wcslen(OWN_EXT), suf = wcslen(SUFFIX);
+    if (!GetModuleHandleExW(GET_MODULE_HANDLE_EX_FLAG_FROM_ADDRESS
+                            | GET_MODULE_HANDLE_EX_FLAG_UNCHANGED_REFCOUNT,
+                            (LPCWSTR)(void *)&open_pythonfmu, &self)) {
+        snprintf(load_error, sizeof load_error, "cannot find the front's own DLL (error %lu)",
+                 (unsigned long)GetLastError());
+        return NULL;
+    }
+    n = GetModuleFileNameW(self, path, sizeof path / sizeof path[0]);
+    if (n == 0 || n >= sizeof path / sizeof path[0] - suf || n < ext
+        || _wcsicmp(path + n - ext, OWN_EXT) != 0) {
+        snprintf(load_error, sizeof load_error, "cannot name the front's own DLL");
+        return NULL;
+    }
+    memcpy(path + n - ext, SUFFIX, (suf + 1) * sizeof(wchar_t));
+    /* the DLL's own folder is searched for its dependencies (python3.dll: the documented
+     * Python on PATH) */
+    h = LoadLibraryExW(path, NULL, LOAD_WITH_ALTERED_SEARCH_PATH);
+    if (h == NULL) {
+        DWORD e = GetLastError();
+        char msg[512] = "";
+        FormatMessageA(FORMAT_MESSAGE_FROM_SYSTEM | FORMAT_MESSAGE_IGNORE_INSERTS, NULL, e, 0,
+                       msg, sizeof msg, NULL);
+        msg[strcspn(msg, "\r\n")] = '\0';
+        snprintf(load_error, sizeof load_error, "%ls: error %lu %s", path, (unsigned long)e,
+                 msg);
+    }
+    return (void *)h;
+}
+
+static void *lib_sym(void *h, const char *name)
+{
+    return (void *)GetProcAddress((HMODULE)h, name);
+}
+#endif
+
+static void *load(void)
+{
+    void *h = __atomic_load_n(&lib, __ATOMIC_ACQUIRE);
+    if (h) return h;
+    lock(&lib_lock);
+    h = lib;
+    if (h == NULL) {
+        h = open_pythonfmu();
+        __atomic_store_n(&lib, h, __ATOMIC_RELEASE);
+    }
+    unlock(&lib_lock);
+    return h;
+}
+
+/* why the binary did not load, copied under the lock (another thread may be retrying) */
+static void why_not_loaded(char *out, size_t n)
+{
+    lock(&lib_lock);
+    snprintf(out, n, "%s", load_error[0] ? load_error : "not found");
+    unlock(&lib_lock);
+}
 
 static void *sym(const char *name)
 {
     void *h = load();
-    return h ? dlsym(h, name) : NULL;
+    return h ? lib_sym(h, name) : NULL;
 }
 
 /* a function of pythonfmu's binary, resolved once per process (atomic publication) */
@@ -150,7 +244,7 @@ typedef struct Wrap {
     struct Wrap *next;
 } Wrap;
 
-static pthread_mutex_t list_lock = PTHREAD_MUTEX_INITIALIZER;
+static Lock list_lock = LOCK_INIT;
 static Wrap *wraps = NULL;
 
 /* A message to the host: text with every '%' doubled, given as the message and no arguments.
@@ -336,9 +430,7 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     if (!f) {
         char why[768];
         why_not_loaded(why, sizeof why);
-        snprintf(buf, sizeof buf, "cannot load the pythonfmu binary (%s): a non-Python host needs "
-                 "libpython preloaded (LD_PRELOAD) and numpy/scipy on PYTHONPATH (README, Use it "
-                 "in your tool)", why);
+        snprintf(buf, sizeof buf, "cannot load the pythonfmu binary (%s): %s", why, NEEDS_PYTHON);
         host_log(functions, name, fmi2Error, buf);
         return NULL;
     }
@@ -361,10 +453,10 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
         free(w);
         return NULL;
     }
-    pthread_mutex_lock(&list_lock);
+    lock(&list_lock);
     w->next = wraps;
     wraps = w;
-    pthread_mutex_unlock(&list_lock);
+    unlock(&list_lock);
     return w;
 }
 
@@ -373,14 +465,14 @@ FMI2_Export void fmi2FreeInstance(fmi2Component c)
     fmi2FreeInstanceTYPE *f;
     Wrap **p, *w = NULL;
     if (c == NULL) return;
-    pthread_mutex_lock(&list_lock);
+    lock(&list_lock);
     for (p = &wraps; *p; p = &(*p)->next)
         if (*p == (Wrap *)c) {
             w = *p;
             *p = w->next;
             break;
         }
-    pthread_mutex_unlock(&list_lock);
+    unlock(&list_lock);
     if (w == NULL) return;                  /* not ours, or freed already */
     RESOLVE(f, fmi2FreeInstance);
     if (f) f(w->comp);
@@ -426,21 +518,28 @@ FMI2_Export fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDef, 
     return map(f(w->comp, tolDef, tol, start, stopDef, stop));
 }
 
-static fmi2EnterInitializationModeTYPE *cache_fmi2EnterInitializationMode = NULL;
+/* A call on the component alone, allowed while ``allowed`` holds: the instance goes to phase
+ * ``next`` when pythonfmu answers fmi2OK or fmi2Warning. (fmi2ExitInitializationMode, which
+ * also reads the slave's failure flag, is written out below.) */
+#define PHASE_FN(name, allowed, next)                                                  \
+    static name##TYPE *cache_##name = NULL;                                            \
+    FMI2_Export fmi2Status name(fmi2Component c)                                       \
+    {                                                                                  \
+        name##TYPE *f;                                                                 \
+        fmi2Status s;                                                                  \
+        Wrap *w = handle(c);                                                           \
+        if (w == NULL) return fmi2Error;                                               \
+        ALLOW(#name, allowed);                                                         \
+        RESOLVE(f, name);                                                              \
+        if (!f) return fmi2Error;                                                      \
+        s = map(f(w->comp));                                                           \
+        if (s <= fmi2Warning) w->phase = next;                                         \
+        return s;                                                                      \
+    }
 
-FMI2_Export fmi2Status fmi2EnterInitializationMode(fmi2Component c)
-{
-    fmi2EnterInitializationModeTYPE *f;
-    fmi2Status s;
-    Wrap *w = handle(c);
-    if (w == NULL) return fmi2Error;
-    ALLOW("fmi2EnterInitializationMode", w->phase == PH_INSTANTIATED);
-    RESOLVE(f, fmi2EnterInitializationMode);
-    if (!f) return fmi2Error;
-    s = map(f(w->comp));
-    if (s <= fmi2Warning) w->phase = PH_INIT;
-    return s;
-}
+PHASE_FN(fmi2EnterInitializationMode, w->phase == PH_INSTANTIATED, PH_INIT)
+PHASE_FN(fmi2Terminate, w->phase == PH_STEP || w->phase == PH_INIT, PH_TERMINATED)
+PHASE_FN(fmi2Reset, 1, PH_INSTANTIATED)      /* allowed in every phase (FMI 2.0) */
 
 static fmi2ExitInitializationModeTYPE *cache_fmi2ExitInitializationMode = NULL;
 
@@ -458,87 +557,61 @@ FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     return s;
 }
 
-static fmi2TerminateTYPE *cache_fmi2Terminate = NULL;
-
-FMI2_Export fmi2Status fmi2Terminate(fmi2Component c)
-{
-    fmi2TerminateTYPE *f;
-    fmi2Status s;
-    Wrap *w = handle(c);
-    if (w == NULL) return fmi2Error;
-    ALLOW("fmi2Terminate", w->phase == PH_STEP || w->phase == PH_INIT);
-    RESOLVE(f, fmi2Terminate);
-    if (!f) return fmi2Error;
-    s = map(f(w->comp));
-    if (s <= fmi2Warning) w->phase = PH_TERMINATED;
-    return s;
-}
-
-static fmi2ResetTYPE *cache_fmi2Reset = NULL;
-
-FMI2_Export fmi2Status fmi2Reset(fmi2Component c)
-{
-    fmi2ResetTYPE *f;
-    fmi2Status s;
-    Wrap *w = handle(c);
-    if (w == NULL) return fmi2Error;
-    RESOLVE(f, fmi2Reset);
-    if (!f) return fmi2Error;
-    s = map(f(w->comp));
-    if (s <= fmi2Warning) w->phase = PH_INSTANTIATED;
-    return s;
-}
-
 /* -- get and set ---------------------------------------------------------------------------- */
-#define GET_FN(name, T)                                                                \
+/* What fmi2Set<T> may set now: nothing once terminated or failed; a parameter only before
+ * fmi2ExitInitializationMode (``params``/``names``: the model's parameters of the type).
+ * fmi2Get<T> may read in every phase. */
+static fmi2Status set_allowed(Wrap *w, const char *fn, const fmi2ValueReference *vr, size_t n,
+                              const fmi2ValueReference *params, const char *const *names,
+                              size_t np)
+{
+    const char *p;
+    if (!(w->phase == PH_INSTANTIATED || w->phase == PH_INIT || w->phase == PH_STEP))
+        return not_in_phase(w, fn);
+    if (w->phase == PH_STEP && np && (p = fixed_parameter(vr, n, params, names, np)) != NULL)
+        return fail(w, "%s is a fixed parameter: set it before fmi2ExitInitializationMode", p);
+    return fmi2OK;
+}
+
+static fmi2Status get_allowed(Wrap *w, const char *fn, const fmi2ValueReference *vr, size_t n,
+                              const fmi2ValueReference *params, const char *const *names,
+                              size_t np)
+{
+    (void)w; (void)fn; (void)vr; (void)n; (void)params; (void)names; (void)np;
+    return fmi2OK;
+}
+
+#define get_QUAL
+#define set_QUAL const
+/* fmi2Get<K> (DIR get) and fmi2Set<K> (DIR set) of the C type T: the arrays checked, then
+ * DIR's rule, then pythonfmu's function */
+#define VALUE_FN(DIR, name, T, K)                                                      \
     static name##TYPE *cache_##name = NULL;                                            \
     FMI2_Export fmi2Status name(fmi2Component c, const fmi2ValueReference vr[], size_t n, \
-                                T v[])                                                 \
+                                DIR##_QUAL T v[])                                      \
     {                                                                                  \
         name##TYPE *f;                                                                 \
+        fmi2Status s;                                                                  \
         Wrap *w = handle(c);                                                           \
         if (w == NULL) return fmi2Error;                                               \
         if (n && (vr == NULL || v == NULL))                                            \
             return fail(w, #name ": %lu values but no array", (unsigned long)n);       \
+        s = DIR##_allowed(w, #name, vr, n, SHIM_PARAM_##K, SHIM_PARAM_##K##_NAME,      \
+                          SHIM_N_PARAM_##K);                                           \
+        if (s != fmi2OK) return s;                                                     \
         RESOLVE(f, name);                                                              \
         if (!f) return fmi2Error;                                                      \
         return map(f(w->comp, vr, n, v));                                              \
     }
 
-GET_FN(fmi2GetReal, fmi2Real)
-GET_FN(fmi2GetInteger, fmi2Integer)
-GET_FN(fmi2GetBoolean, fmi2Boolean)
-GET_FN(fmi2GetString, fmi2String)
-
-/* Set: parameters only before fmi2ExitInitializationMode; nothing once terminated or failed */
-#define SET_FN(name, T, K)                                                             \
-    static name##TYPE *cache_##name = NULL;                                            \
-    FMI2_Export fmi2Status name(fmi2Component c, const fmi2ValueReference vr[], size_t n, \
-                                const T v[])                                           \
-    {                                                                                  \
-        name##TYPE *f;                                                                 \
-        Wrap *w = handle(c);                                                           \
-        if (w == NULL) return fmi2Error;                                               \
-        if (n && (vr == NULL || v == NULL))                                            \
-            return fail(w, #name ": %lu values but no array", (unsigned long)n);       \
-        ALLOW(#name, w->phase == PH_INSTANTIATED || w->phase == PH_INIT                \
-                     || w->phase == PH_STEP);                                          \
-        if (w->phase == PH_STEP && SHIM_N_PARAM_##K) {                                 \
-            const char *p = fixed_parameter(vr, n, SHIM_PARAM_##K, SHIM_PARAM_##K##_NAME, \
-                                            SHIM_N_PARAM_##K);                         \
-            if (p)                                                                     \
-                return fail(w, "%s is a fixed parameter: set it before "               \
-                            "fmi2ExitInitializationMode", p);                          \
-        }                                                                              \
-        RESOLVE(f, name);                                                              \
-        if (!f) return fmi2Error;                                                      \
-        return map(f(w->comp, vr, n, v));                                              \
-    }
-
-SET_FN(fmi2SetReal, fmi2Real, Real)
-SET_FN(fmi2SetInteger, fmi2Integer, Integer)
-SET_FN(fmi2SetBoolean, fmi2Boolean, Boolean)
-SET_FN(fmi2SetString, fmi2String, String)
+VALUE_FN(get, fmi2GetReal, fmi2Real, Real)
+VALUE_FN(get, fmi2GetInteger, fmi2Integer, Integer)
+VALUE_FN(get, fmi2GetBoolean, fmi2Boolean, Boolean)
+VALUE_FN(get, fmi2GetString, fmi2String, String)
+VALUE_FN(set, fmi2SetReal, fmi2Real, Real)
+VALUE_FN(set, fmi2SetInteger, fmi2Integer, Integer)
+VALUE_FN(set, fmi2SetBoolean, fmi2Boolean, Boolean)
+VALUE_FN(set, fmi2SetString, fmi2String, String)
 
 /* -- FMU state ------------------------------------------------------------------------------
  * The front's own state around pythonfmu's: the phase of the instance (a state taken in Step
@@ -769,31 +842,16 @@ static fmi2Status no_status(fmi2Component c)
     return fmi2Discard;
 }
 
-FMI2_Export fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind k, fmi2Status *v)
-{
-    (void)k; (void)v;
-    return no_status(c);
-}
-FMI2_Export fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind k, fmi2Real *v)
-{
-    (void)k; (void)v;
-    return no_status(c);
-}
-FMI2_Export fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind k,
-                                            fmi2Integer *v)
-{
-    (void)k; (void)v;
-    return no_status(c);
-}
-FMI2_Export fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind k,
-                                            fmi2Boolean *v)
-{
-    (void)k; (void)v;
-    return no_status(c);
-}
-FMI2_Export fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind k,
-                                           fmi2String *v)
-{
-    (void)k; (void)v;
-    return no_status(c);
-}
+/* fmi2GetStatus and its typed kin: nothing to ask (no asynchronous steps) */
+#define STATUS_FN(name, T)                                                             \
+    FMI2_Export fmi2Status name(fmi2Component c, const fmi2StatusKind k, T *v)         \
+    {                                                                                  \
+        (void)k; (void)v;                                                              \
+        return no_status(c);                                                           \
+    }
+
+STATUS_FN(fmi2GetStatus, fmi2Status)
+STATUS_FN(fmi2GetRealStatus, fmi2Real)
+STATUS_FN(fmi2GetIntegerStatus, fmi2Integer)
+STATUS_FN(fmi2GetBooleanStatus, fmi2Boolean)
+STATUS_FN(fmi2GetStringStatus, fmi2String)

@@ -41,7 +41,7 @@ COMPONENTS = {
     "SpeedTransducerNative": ("SpeedTransducer", "rig_transducer.c"),
 }
 SHARED = ("rig_fmi2.c", "rig_common.c")
-HEADERS = ("rig_model.h",)
+HEADERS = ("rig_model.h", "fmi2_front.h")
 GENERATED = ("rig_vars.h", "rig_table.h")
 #: -fstack-protector-strong, _FORTIFY_SOURCE, full RELRO: hardening of a library that runs in
 #: someone else's process

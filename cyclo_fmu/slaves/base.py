@@ -18,6 +18,7 @@ import hashlib
 import json
 import math
 import operator
+import os
 import sys
 import uuid
 from pathlib import Path
@@ -27,14 +28,26 @@ from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability
 from pythonfmu.enums import Fmi2Status
 from pythonfmu.variables import Boolean, Integer, Real, String
 
-#: Inside an FMU whose linux64 binary is our C front (fmu_build._install_status_shim, which
-#: writes this marker): a failure is reported through the variable ``_failed`` (value
-#: reference 0), which the front reads after fmi2ExitInitializationMode and after a step that
-#: returned False (fmi2Discard from pythonfmu), and answers with fmi2Error. pythonfmu's own binary turns a raised exception into fmi2Fatal and its
-#: exception handling can corrupt the host's interpreter (a crash at a later point), so with
-#: the front no exception crosses into pythonfmu. Elsewhere (win64, source tree) we raise.
-STATUS_FRONT = (sys.platform.startswith("linux")
-                and (Path(__file__).resolve().parent / "_status_front").is_file())
+#: Inside an FMU whose binary for this platform is our C front (fmu_build._install_status_shim;
+#: ``_status_front`` lists the platforms: linux64, and win64 when the FMU was built with
+#: mingw-w64 there): a failure is reported through the variable ``_failed`` (value reference
+#: 0), which the front reads after fmi2ExitInitializationMode and after a step that returned
+#: False (fmi2Discard from pythonfmu), and answers with fmi2Error. pythonfmu's own binary turns
+#: a raised exception into fmi2Fatal and its exception handling can corrupt the host's
+#: interpreter (a crash at a later point), so with the front no exception crosses into
+#: pythonfmu. Elsewhere (a platform without the front, the source tree) we raise.
+def _front_here() -> bool:
+    """Is this platform's binary our C front? (``_status_front`` lists the platforms)"""
+    plat = ("linux64" if sys.platform.startswith("linux")
+            else "win64" if sys.platform == "win32" and sys.maxsize > 2**32 else None)
+    try:
+        marker = (Path(__file__).resolve().parent / "_status_front").read_text()
+    except OSError:
+        return False
+    return plat is not None and plat in marker.split()
+
+
+STATUS_FRONT = _front_here()
 
 #: Model metadata written into every Python FMU's modelDescription.xml (as the native FMU's)
 LICENSE = "MIT"
@@ -81,6 +94,20 @@ UNITS = {
 }
 
 
+def _drop_repeated_path(folder):
+    """pythonfmu 0.7 puts the FMU's resources folder in front of the host's ``sys.path`` at
+    every fmi2Instantiate and never takes it out: a host creating many instances got a
+    ``sys.path`` one entry longer each time (20 instances, 20 copies; every later import walks
+    them). The entry just put there is dropped when the same folder stands further down, so
+    ``sys.path`` holds it once, as after the first instance (same folder, same imports)."""
+    if not folder or len(sys.path) < 2 or not isinstance(sys.path[0], str):
+        return
+    head = os.path.normpath(sys.path[0])
+    if head == os.path.normpath(str(folder)) and any(
+            isinstance(p, str) and os.path.normpath(p) == head for p in sys.path[1:]):
+        del sys.path[0]
+
+
 class UnitSlave(Fmi2Slave):
     """Fmi2Slave with units, descriptions and declared output dependencies."""
 
@@ -91,6 +118,7 @@ class UnitSlave(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        _drop_repeated_path(getattr(self, "resources", None))
         self._failed = False
         self.register_variable(Boolean("_failed", causality=Fmi2Causality.local,
                                        variability=Fmi2Variability.discrete,

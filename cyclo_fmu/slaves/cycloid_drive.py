@@ -33,6 +33,8 @@ import dataclasses
 import math
 import pickle
 import sys
+import threading
+import weakref
 from pathlib import Path
 
 from . import core
@@ -127,6 +129,14 @@ DESIGN_PARAMETERS = [
     ("housing_area", None, "housing_area", "m2", "housing surface A_h giving heat to the "
      "ambient (R = 1/(k_h A_h))", Real),
 ]
+#: design parameters registered after every other variable (newer: the value references of the
+#: older ones stay); entries as DESIGN_PARAMETERS
+LATE_DESIGN_PARAMETERS = [
+    ("nu_100", "lubricant", "kinematic_viscosity_100", "m2/s", "lubricant kinematic viscosity "
+     "at 100 degC: with nu (at 40 degC) the Walther line by which the grease temperature sets "
+     "the viscosity (physical profile; a diagnosed viscosity-temperature slope rewrites both)",
+     Real)]
+ALL_DESIGN_PARAMETERS = DESIGN_PARAMETERS + LATE_DESIGN_PARAMETERS
 #: design parameters of the heat balance only (run-time in both FMUs; not in the loss map)
 THERMAL_PARAMETERS = ("ambient_temperature", "housing_heat_capacity", "housing_heat_transfer",
                       "housing_area")
@@ -162,6 +172,7 @@ def discovered_values(design) -> dict:
 #: fall below zero when warm (that also keeps P_loss >= 0).
 PARAMETER_LIMITS = dict(
     z1=(3, None), n_disc_rollers=(3, None), lam=(1.0, None),
+    nu_100=(0.0, None),
     **{n: (0.0, None) for n in ("e", "d_v1", "d_o1", "b1", "d_v2", "d_o2", "b2", "d_m2", "D_cz",
                                 "D_p", "d_p", "delta_z", "nu", "rho_oil", "pin_roughness",
                                 "drag_torque", "stribeck_torque", "input_inertia")},
@@ -272,6 +283,40 @@ def _shipped_map(key, temperature, folder=_MAP_DIR):
     return m
 
 
+class _MapTables:
+    """The solved tables of one loss map (a ``ModeMap``'s attributes but its ``out_of_range``
+    counter): read-only once solved, so every instance in this process that needs the map of
+    the same key (``_map_key``: design, mode, ranges) shares one copy. Each instance's
+    ``ModeMap`` holds a reference; when the last one is freed (fmi2FreeInstance) the tables go
+    with it (``_TABLES`` holds them weakly)."""
+    __slots__ = ("state", "__weakref__")
+
+    def __init__(self, state):
+        self.state = state
+
+
+_TABLES = weakref.WeakValueDictionary()      # map key -> _MapTables, while an instance uses it
+_TABLES_LOCK = threading.Lock()              # instances may initialise on different threads
+
+
+def _shared_map(key, build):
+    """A ``ModeMap`` with the tables of ``key``: the ones another live instance holds, else
+    ``build()``'s (a shipped map or a solve, outside the lock), shared from then on. Its own
+    ``out_of_range`` counter starts at 0."""
+    with _TABLES_LOCK:
+        tables = _TABLES.get(key)
+    if tables is None:
+        state = dict(build().__dict__)
+        state.pop("out_of_range", None)
+        with _TABLES_LOCK:      # another thread may have solved it meanwhile: take the first
+            tables = _TABLES.setdefault(key, _MapTables(state))
+    m = core.lossmap.ModeMap.__new__(core.lossmap.ModeMap)
+    m.__dict__.update(tables.state)
+    m.out_of_range = 0
+    m._tables_ref = tables            # keeps the shared tables alive while this map lives
+    return m
+
+
 class CycloidDrive(UnitSlave):
     author = "cyclo-fmu"
     description = ("Constrained cycloid drive: load-dependent losses and efficiency "
@@ -362,10 +407,15 @@ class CycloidDrive(UnitSlave):
         for name, _k, _field, unit, desc, lo, hi in DISCOVERED_PARAMETERS:
             self.parameter(name, 0.0, unit, desc, Real, min=lo, max=hi)
         self.output("T_oil", default.operating_temperature, "K", "grease/housing temperature "
-                    "the losses are evaluated at (T_oil_in, or the heat balance's)",
+                    "(T_oil_in, or the heat balance's); the losses are evaluated at it, or at "
+                    "T_oil_start while thermal_loss_change is not 0 (one warm-up)",
                     depends=("T_oil_in",))
         self.output("Q_ambient", 0.0, "W", "heat flow from the housing to the ambient "
                     "(T_oil - ambient_temperature)/R", depends=("T_oil_in",))
+        for name, section, field, unit, desc, kind in LATE_DESIGN_PARAMETERS:
+            lo, hi = PARAMETER_LIMITS.get(name, (None, None))
+            self.parameter(name, getattr(getattr(default, section), field), unit, desc, kind,
+                           min=lo, max=hi)
         self._T = default.operating_temperature
         self._theta = 0.0
         self._distance = 0.0
@@ -375,12 +425,13 @@ class CycloidDrive(UnitSlave):
         self._map_key = None
         self._last_inputs = None
         self._design = None
+        self._warm_in_time = False
         self._warned_range = False
 
     # -- life cycle ---------------------------------------------------------------------------
     def _build_design(self):
         changes, lub, fr, ex, cal = {}, {}, {}, {}, {}
-        for name, section, field, unit, desc, kind in DESIGN_PARAMETERS:
+        for name, section, field, unit, desc, kind in ALL_DESIGN_PARAMETERS:
             v = getattr(self, name)
             {None: changes, "lubricant": lub, "friction": fr, "extra": ex,
              "calibration": cal}[section][field] = v
@@ -461,13 +512,20 @@ class CycloidDrive(UnitSlave):
                     # needs them). No mallopt here: an FMU must not change the host's
                     # allocator (the map solves 10-20 % slower with glibc's default
                     # thresholds early in a process; docs/explanation/fmu-safety.md)
-                    m = _shipped_map(_map_key(design_T, mode, tmax, smax),
-                                     design_T.operating_temperature, folder)
-                    return m if m is not None else core.lossmap.ModeMap(design_T, mode, tmax,
-                                                                        smax)
+                    # The tables are shared with the other instances of this process that
+                    # use the same map (_shared_map).
+                    key = _map_key(design_T, mode, tmax, smax)
+
+                    def build():
+                        m = _shipped_map(key, design_T.operating_temperature, folder)
+                        return m if m is not None else core.lossmap.ModeMap(design_T, mode,
+                                                                            tmax, smax)
+                    return _shared_map(key, build)
                 self._map = core.lossmap.ThermalMap(self._design, mode, tmax, smax, node)
                 self._map_key = map_key
             self._dependent = core.thermal.temperature_dependent(self._design)
+            # one warm-up: a warm-up in time holds the losses at the start's temperature
+            self._warm_in_time = bool(self._design.extra.thermal_loss_change)
             self._R = core.thermal.housing_resistance(self._design)
             ex = self._design.extra
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
@@ -548,7 +606,7 @@ class CycloidDrive(UnitSlave):
             self.require_finite(w_in=w_in, tau_out=tau_ext, alpha_in=alpha)
         T = self._temperature(t, dt, w_in, tau_ext, alpha)
         # the temperature counts where the losses depend on it (physical profile)
-        inputs = (w_in, tau_ext, alpha, T if self._dependent else None)
+        inputs = (w_in, tau_ext, alpha, self._loss_T() if self._dependent else None)
         if inputs == self._last_inputs:
             # the same inputs as the last step, bit for bit (a steady state: 88 % of the
             # paper scenario's steps), and no time-dependent physics: the outputs stand
@@ -597,7 +655,7 @@ class CycloidDrive(UnitSlave):
     def _gear_torque(self, w_in, tau_out):
         """Driving-shaft torque of the gear alone (map or exact core) at a load torque."""
         if self._map is not None:
-            return self._map.solve(w_in, tau_out, self._T)[1][self._shaft_index[0]]
+            return self._map.solve(w_in, tau_out, self._loss_T())[1][self._shaft_index[0]]
         if w_in == 0:
             return 0.0
         op = core.operating_point(self._design_at_T(), self._mode, w_in, T_out=tau_out)
@@ -605,8 +663,8 @@ class CycloidDrive(UnitSlave):
 
     def _update_at(self, t, dt, w_in, tau_out):
         if self._map is not None:
-            speeds, torques, losses, eta, eta0, locked, forward = self._map.solve(w_in, tau_out,
-                                                                                  self._T)
+            speeds, torques, losses, eta, eta0, locked, forward = self._map.solve(
+                w_in, tau_out, self._loss_T())
             # below the grid (|w_in| < map_speed_max/1000: start-up, standstill) the edge values
             # are the physics' own limit, not a lack of range: warn only beyond the maxima
             if (not self._warned_range and (abs(tau_out) > self.map_torque_max
@@ -675,9 +733,19 @@ class CycloidDrive(UnitSlave):
 
     def _design_at_T(self):
         """The design with its grease at the present temperature (physical profile)."""
-        if not self._dependent or self._T == self._design.operating_temperature:
+        T = self._loss_T()
+        if not self._dependent or T == self._design.operating_temperature:
             return self._design
-        return core.thermal.at_temperature(self._design, self._T)
+        return core.thermal.at_temperature(self._design, T)
+
+    def _loss_T(self):
+        """The grease temperature the losses are evaluated at [K]: the present one, or, with a
+        warm-up in time in the design (``thermal_loss_change``), the start's ``T_oil_start``.
+        A warm-up in time was fitted against the model held at one temperature, so it holds the
+        model's own temperature physics already: the losses following the heat balance (or
+        the input) as well would count that warm-up twice. T_oil and Q_ambient still follow
+        the heat balance or the input (docs/explanation/thermal.md, "One warm-up")."""
+        return self.T_oil_start if self._warm_in_time else self._T
 
     def _exact(self, w_in, tau_out):
         a, b = self._mode[0], self._mode[1]

@@ -5,7 +5,8 @@
  * free instances at once. Any memory error or undefined behaviour aborts (the sanitizers);
  * a call that answers fmi2OK with a non-finite output is counted and fails the run.
  *
- * usage: host_native [iterations]   (exit 0: clean)
+ * usage: host_native [iterations [threads]]   (exit 0: clean; "threads": the 8 threads only,
+ *        for the ThreadSanitizer build)
  * cyclo-fmu, MIT license. */
 #include <math.h>
 #include <pthread.h>
@@ -307,6 +308,11 @@ int main(int argc, char **argv)
     int i;
     if (argc > 1) iterations = atoi(argv[1]);
     for (i = 0; i < 20; i++) OUT_VR[i] = 10 + (fmi2ValueReference)i;
+    if (argc > 2 && strcmp(argv[2], "threads") == 0) {   /* the ThreadSanitizer run */
+        threads();
+        fprintf(stderr, "host_native (threads only): %d problems\n", problems);
+        return problems ? 1 : 0;
+    }
     nulls();
     formats();
     edges();
