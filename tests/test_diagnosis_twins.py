@@ -298,11 +298,14 @@ def _drag_of_two_laws(s):
 def test_a_drag_of_two_laws_is_named_as_one_drag(plan):
     """The sum of two drag laws is the library's drag at a mix of two adjacent exponents: one
     drag is named, explaining the hidden drag's RMS (within 10 %), no low-speed friction beside
-    it for what a single exponent misses, and nothing unexplained."""
+    it for what a single exponent misses, and nothing unexplained. The drag may be named as the
+    library's drag or as the scale of the model's own load-independent losses (both are a
+    load-independent loss; the calibration family is tried first, docs/explanation/calibration.md)."""
     r = synthesize("none", 3, "S1", "small", plan=plan, added_torque=_drag_of_two_laws)
     rec = as_recording(r)
     d = Diagnoser(mode="S1").fit(rec).diagnosis_
-    assert [e["id"] for e in d.effects] == ["load_independent_loss"], d.effects
+    assert [e["id"] for e in d.effects] in (["load_independent_loss"], ["idle_loss_scale"]), \
+        d.effects
     sig = {"w_in": rec.speed_in}
     hidden = float(np.sqrt(np.mean(_drag_of_two_laws(sig) ** 2)))
     assert d.effects[0]["explained_rms_Nm"] == pytest.approx(hidden, rel=0.1)

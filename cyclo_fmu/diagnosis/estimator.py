@@ -62,6 +62,12 @@ LOAD_FAMILIES = ("load", "speed*load")
 #: preset mackic-rig from the default design, k 0 -> 0.027 and the idle scale 1 -> 0.03,
 #: settles in two)
 CAL_PASSES = 3
+#: pairs of effects that are two forms of one physics (the first as the selection may name
+#: it, the other tried in its place): the load-independent losses as the model's own laws
+#: scaled (idle_loss_scale, one parameter) or as a drag of free speed law
+#: (load_independent_loss); ``Diagnoser._other_form``
+SAME_PHYSICS = (("idle_loss_scale", "load_independent_loss"),
+                ("load_independent_loss", "idle_loss_scale"))
 #: [s] at least this much moving recording (below it nothing can be separated)
 MIN_MOVING_S = 2.0
 #: [rad/s] a recording whose input never exceeds this speed (about 10 r/min) stands still
@@ -170,13 +176,11 @@ class Diagnoser:
                               # is a nuisance there); the viscosity's is taken again at the
                               # corrected level (a drift acting through it changes with it)
                               (P0.sig["sens_mu"], None), reuse=P0)
-            # of the first replay's sample-level signals only the friction and viscosity
-            # sensitivities are read again (residual_rms, the report's friction torque): the
-            # others (~50 MB at 600 000 samples) are released before the later stages' peaks;
-            # the calibration's sensitivities stay (the report reads a re-linearised
-            # calibration effect's torque at the first analysis: result._entry)
-            P0.sig = {k: P0.sig.get(k) for k in ("sens_mu", "sens_nu", "sens_k", "sens_idle",
-                                                 "sens_load")}
+            # of the first replay's sample-level signals only the sensitivities are read again
+            # (residual_rms, the report's friction and calibration torques): the
+            # others (~50 MB at 600 000 samples) are released before the later stages' peaks
+            P0.sig = {k: P0.sig[k] for k in ("sens_mu", "sens_nu", "sens_k", "sens_idle",
+                                             "sens_load") if k in P0.sig}
             P0.rp = Replay(P0.rp.T_model, P0.sig)
             sel = select(P, self.n_folds, forced=("friction_miscalibrated",))
         self.calibration_offsets_ = {}
@@ -209,6 +213,9 @@ class Diagnoser:
         J = judge(P, sel)
         self._stage("remainder")
         rem = remainder(P, sel, J, rec, self.design, self.mode)
+        alt = self._other_form(rec, P, sel, rem)
+        if alt is not None:
+            P, sel, J, rem = alt
         self._stage("discover")
         self._prob, self._notes = sel.prob, []
         out = self._calibration_against_forms(rec, P, sel, rem) if compete else None
@@ -230,6 +237,28 @@ class Diagnoser:
             return P, sel, J, rem
         self._discover(rec, P, sel, rem, rel1)
         return P, sel, J, rem
+
+    def _other_form(self, rec, P, sel, rem):
+        """Two forms of one physics (``SAME_PHYSICS``): where the selection's form of it leaves
+        a remainder beyond the twins, the other form is tried in its place (the selection run
+        again without the first as a candidate); it is taken where the recording then lies
+        within its twins. The selection's BIC chooses between forms that both (or neither)
+        leave the recording within its twins. Returns ``(P, sel, J, rem)`` or None."""
+        if not rem.unexplained.get("present"):
+            return None
+        ids = set(rem.S.ids)
+        for first, other in SAME_PHYSICS:
+            if first not in ids or other in ids or not P.options.get(other):
+                continue
+            P2 = replace(P, options={k: v for k, v in P.options.items() if k != first})
+            sel2 = select(P2, self.n_folds, forced=tuple(f for f in sel.forced if f != first))
+            if other not in sel2.S.ids:
+                continue
+            J2 = judge(P2, sel2)
+            rem2 = remainder(P2, sel2, J2, rec, self.design, self.mode)
+            if not rem2.unexplained.get("present"):
+                return P2, sel2, J2, rem2
+        return None
 
     def _calibration_against_forms(self, rec, P, sel, rem):
         """A calibration effect against the closed forms of the discovery's dictionary.

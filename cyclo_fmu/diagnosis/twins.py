@@ -201,12 +201,33 @@ def cross_fitted_residual(prob, y, terms, group) -> np.ndarray:
     idx_s = [i for t in terms for i in t.cols]
     idx = np.array(idx_s + [i for i in group.cols if i not in idx_s], int)
     r = np.asarray(y, float).copy()
+    plain = selection_residual(prob, y, terms)
+    w = np.asarray(prob.w, float)
     for f, sl in enumerate(prob.fold_slices):
         G = (prob.Gt - prob.G[f])[np.ix_(idx, idx)]
         c = (prob.ct - prob.c[f])[idx]
         b = np.linalg.lstsq(G, c, rcond=1e-12)[0]
         r[sl] = y[sl] - prob.Xs[sl][:, idx] @ b
+        # a fold at operating points the other folds did not visit: the basis fitted there
+        # extrapolates and predicts it worse than leaving it out (the selection's residual
+        # in sample); the fold then keeps that residual, an upper bound of its noise
+        if np.sum(w[sl] * r[sl] ** 2) > np.sum(w[sl] * plain[sl] ** 2):
+            r[sl] = plain[sl]
     return r
+
+
+def selection_residual(prob, y, terms) -> np.ndarray:
+    """Block residual after ``terms`` fitted on the whole recording: the noise plus whatever
+    remainder the selection leaves. ``cross_fitted_residual`` falls back to it on a fold
+    where the basis fitted on the other folds extrapolates (a plan that visits a region of
+    its envelope in one fold only: a four-quadrant plan of 60 s gave a cross-fitted residual
+    of 134 mN*m against 1.1 mN*m in sample, and twins that hid a 15 % loss error)."""
+    idx = np.array([i for t in terms for i in t.cols], int)
+    y = np.asarray(y, float)
+    if not idx.size:
+        return y.copy()
+    b = np.linalg.lstsq(prob.Gt[np.ix_(idx, idx)], prob.ct[idx], rcond=1e-12)[0]
+    return y - prob.Xs[:, idx] @ b
 
 
 def _neighbours(options, t) -> list:
