@@ -293,3 +293,19 @@ def test_load_loss_scale_one_is_the_uncalibrated_model_and_bounds():
     for bad in (-0.1, 10.5, float("nan")):
         with pytest.raises(CycloidInputError, match="calibration.load_loss_scale"):
             with_calibration(d0, load_loss_scale=bad)
+
+
+def test_a_load_loss_scale_is_reported_as_calibrated_by_the_cli(tmp_path):
+    """`efficiency --design` with only load_loss_scale set: printed as CALIBRATED with the
+    value and its source, in the JSON's calibration, and the losses are the core's."""
+    f = tmp_path / "s.toml"
+    f.write_text('[calibration]\nload_loss_scale = 1.12\nsource = "test: x1.12"\n')
+    args = [sys.executable, "-m", "cyclo_fmu.cli", "efficiency", "--mode", "S1", "--speed",
+            "1500", "--torque", "0.5", "--design", str(f)]
+    r = subprocess.run(args, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "CALIBRATED" in r.stdout and "load_loss_scale = 1.12" in r.stdout
+    assert "test: x1.12" in r.stdout
+    j = json.loads(subprocess.run(args + ["--json"], capture_output=True, text=True,
+                                  timeout=120).stdout)
+    assert j["calibration"]["load_loss_scale"] == 1.12 and j["calibration"]["calibrated"]
