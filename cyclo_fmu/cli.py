@@ -371,7 +371,8 @@ def cmd_efficiency(args) -> int:
     if "calibration" in result:
         c = result["calibration"]
         print(f"  CALIBRATED: mesh_loss_k = {c['mesh_loss_k']:.4g}, idle_loss_scale = "
-              f"{c['idle_loss_scale']:.4g}, load_loss_scale = {c['load_loss_scale']:.4g} (fitted to: {c['source'] or 'not stated'})")
+              f"{c['idle_loss_scale']:.4g}, load_loss_scale = {c['load_loss_scale']:.4g} "
+              f"(fitted to: {c['source'] or 'not stated'})")
     if "rollers" in result:
         print(f"  grease at {result['grease_temperature_C']:.1f} degC, "
               f"{result['grease_viscosity_mm2_s']:.1f} mm^2/s")
@@ -552,7 +553,8 @@ def cmd_bench(args) -> int:
     if not design.calibration.is_default:
         c = design.calibration
         print(f"  reducer CALIBRATED: mesh_loss_k = {c.mesh_loss_k:.4g}, idle_loss_scale = "
-              f"{c.idle_loss_scale:.4g}, load_loss_scale = {c.load_loss_scale:.4g} (fitted to: {c.source or 'not stated'})")
+              f"{c.idle_loss_scale:.4g}, load_loss_scale = {c.load_loss_scale:.4g} "
+              f"(fitted to: {c.source or 'not stated'})")
     if run.windows:
         print(f"  {'n_in r/min':>10} {'T_in N*m':>9} {'eta bench %':>11} {'eta core %':>10}")
         for w in run.windows:

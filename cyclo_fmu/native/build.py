@@ -210,8 +210,8 @@ def design_constants(design: DriveDesign):
              "rolling-resistance coefficient of the disc rollers (mu_rolling: the ring rollers)"),
             ("seals", "String", design.seals, None, "shaft seals: lip or none"),
             ("calibration_source", "String", design.calibration.source, None,
-             "what the calibration (mesh_loss_k, idle_loss_scale, load_loss_scale) was fitted to; empty: not "
-             "calibrated"))
+             "what the calibration (mesh_loss_k, idle_loss_scale, load_loss_scale) was fitted "
+             "to; empty: not calibrated"))
     names = {o[0] for o in out}
     out += [m for m in more if m[0] not in names]
     # the discovered loss terms (design [[extra.discovered]]): built in, shown as constants

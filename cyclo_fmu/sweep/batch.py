@@ -16,8 +16,8 @@ SUFFIXES = (".csv", ".mf4")
 
 def calibration_report(design, d) -> dict | None:
     """The JSON key ``calibration_fit``: the calibration the diagnosis learned (effects
-    ``mesh_loss``, ``idle_loss_scale``, ``load_loss_scale``; re-linearised until its changes settle,
-    ``diagnosis.estimator.CAL_RELINEARISE``), or None when it named neither. ``ci95``: the
+    ``mesh_loss``, ``idle_loss_scale``, ``load_loss_scale``; re-linearised until its changes
+    settle, ``diagnosis.estimator.CAL_RELINEARISE``), or None when it named none. ``ci95``: the
     95 % half-widths (noise only), ``rms_*``: the held-out RMS of the input torque before and
     after the diagnosis, ``back_driven``: whether the recording has enough back-driven blocks
     to tell k from a transducer gain (``select_effects.backdriven``), ``back_driven_share``:
