@@ -371,7 +371,8 @@ def cmd_efficiency(args) -> int:
     if "calibration" in result:
         c = result["calibration"]
         print(f"  CALIBRATED: mesh_loss_k = {c['mesh_loss_k']:.4g}, idle_loss_scale = "
-              f"{c['idle_loss_scale']:.4g} (fitted to: {c['source'] or 'not stated'})")
+              f"{c['idle_loss_scale']:.4g}, load_loss_scale = {c['load_loss_scale']:.4g} "
+              f"(fitted to: {c['source'] or 'not stated'})")
     if "rollers" in result:
         print(f"  grease at {result['grease_temperature_C']:.1f} degC, "
               f"{result['grease_viscosity_mm2_s']:.1f} mm^2/s")
@@ -552,7 +553,8 @@ def cmd_bench(args) -> int:
     if not design.calibration.is_default:
         c = design.calibration
         print(f"  reducer CALIBRATED: mesh_loss_k = {c.mesh_loss_k:.4g}, idle_loss_scale = "
-              f"{c.idle_loss_scale:.4g} (fitted to: {c.source or 'not stated'})")
+              f"{c.idle_loss_scale:.4g}, load_loss_scale = {c.load_loss_scale:.4g} "
+              f"(fitted to: {c.source or 'not stated'})")
     if run.windows:
         print(f"  {'n_in r/min':>10} {'T_in N*m':>9} {'eta bench %':>11} {'eta core %':>10}")
         for w in run.windows:
@@ -748,7 +750,8 @@ def cmd_diagnose(args) -> int:
                     else f"{v} (as the design: not named)")
         print(f"CALIBRATED to this recording (diagnosed): mesh_loss_k = "
               f"{_val('mesh_loss_k', '.5g')}, idle_loss_scale = "
-              f"{_val('idle_loss_scale', '.4g')} (95 %, noise only); written to "
+              f"{_val('idle_loss_scale', '.4g')}, load_loss_scale = "
+              f"{_val('load_loss_scale', '.4g')} (95 %, noise only); written to "
               "design_updated.toml [calibration]")
         for n in c["notes"]:
             print(f"  note: {n}")
@@ -909,7 +912,8 @@ def _calibrate_options(p):
     g = p.add_mutually_exclusive_group()
     g.add_argument("--no-calibrate", dest="calibrate", action="store_false",
                    help="leave the calibration effects (mesh_loss: a loss proportional to the "
-                   "mesh power, idle_loss_scale: a scale on the load-independent losses) out "
+                   "mesh power, idle_loss_scale: a scale on the load-independent losses, "
+                   "load_loss_scale: a scale on the gear's load-dependent losses) out "
                    "of the candidates; by default they are fitted with the other effects, "
                    "checked against the closed forms of the discovery (a free loss scale "
                    "must not stand in for a loss of another law) and written to "

@@ -423,7 +423,8 @@ def export_modelica(mode: str, out_dir, design: DriveDesign | None = None,
     if not cal.is_default:   # a calibrated value is reported as calibrated, with its source
         from html import escape
         label += (f"; CALIBRATED: mesh_loss_k = {cal.mesh_loss_k:.6g}, idle_loss_scale = "
-                  f"{cal.idle_loss_scale:.6g}, fitted to: "
+                  f"{cal.idle_loss_scale:.6g}, load_loss_scale = {cal.load_loss_scale:.6g}, "
+                  "fitted to: "
                   f"{escape(cal.source or 'not stated').replace(chr(92), '/')}")
     name, src = modelica_package(fit, label)
     out_dir = Path(out_dir)

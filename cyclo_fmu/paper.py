@@ -189,7 +189,8 @@ def run_paper_comparison(design, out, as_json: bool, band: bool = False) -> int:
     if "calibration" in stats:
         c = stats["calibration"]
         print(f"  physical profile CALIBRATED: mesh_loss_k = {c['mesh_loss_k']:.4g}, "
-              f"idle_loss_scale = {c['idle_loss_scale']:.4g} (fitted to: "
+              f"idle_loss_scale = {c['idle_loss_scale']:.4g}, load_loss_scale = "
+              f"{c.get('load_loss_scale', 1.0):.4g} (fitted to: "
               f"{c['source'] or 'not stated'}); the paper profile is not calibrated")
     g = stats["experiment_gap"]
     print("  What the physical profile lacks to predict the experiment (an inference: two numbers "

@@ -172,7 +172,7 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
     true_design = scale_friction_level(design, 1 + friction_error)
     # effects that act through the design's calibration (mesh loss k, idle-loss scale): the
     # true reducer has them, as it has the friction error
-    for eid in ("mesh_loss", "idle_loss_scale"):
+    for eid in ("mesh_loss", "idle_loss_scale", "load_loss_scale"):
         if eid in hidden:
             true_design, _ = EFFECTS[eid].apply(true_design, hidden[eid][0])
     if engine == "bench":

@@ -86,11 +86,13 @@ class CalibrationResult:
 
 
 def with_calibration(design: DriveDesign, mesh_loss_k=None, idle_loss_scale=None,
-                     source=None) -> DriveDesign:
-    """``design`` with its calibration changed (validated, bounds included)."""
+                     source=None, load_loss_scale=None) -> DriveDesign:
+    """``design`` with its calibration changed (validated, bounds included); None keeps a
+    value."""
     cal = design.calibration
     changes = {k: v for k, v in (("mesh_loss_k", mesh_loss_k),
                                  ("idle_loss_scale", idle_loss_scale),
+                                 ("load_loss_scale", load_loss_scale),
                                  ("source", source)) if v is not None}
     return replace(design, calibration=replace(cal, **changes))
 

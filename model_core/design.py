@@ -314,16 +314,22 @@ MESH_LOSS_K_BOUNDS = (0.0, 0.5)
 #: above the catalogue estimates of model_core.drag (a cold start with stiff grease and new lip
 #: seals reaches about 3-5 times them), beyond which the drag model itself is wrong.
 IDLE_LOSS_SCALE_BOUNDS = (0.0, 10.0)
+#: load_loss_scale [1]: the same bounds as idle_loss_scale, for the same reason: 0 is a
+#: frictionless mechanism; 10 times the modelled sliding and rolling losses is beyond any
+#: lubricated contact (boundary friction of steel on steel is about 0.1-0.15, the model's
+#: mixed-film coefficients are a few thousandths to a few hundredths), so such a fit names a
+#: different defect than a friction level.
+LOAD_LOSS_SCALE_BOUNDS = (0.0, 10.0)
 
 
 @dataclass(frozen=True)
 class Calibration:
-    """What the model learned from a measurement: two loss parameters and where they came from.
+    """What the model learned from a measurement: three loss parameters and where they came from.
 
-    Defaults (k = 0, scale = 1) are the model as derived, with bit-identical results. A value
+    Defaults (k = 0, scales = 1) are the model as derived, with bit-identical results. A value
     other than the default is always reported as **calibrated**, with ``source``, what it was
-    fitted to (model_core.calibration, the diagnosis effects ``mesh_loss`` and
-    ``idle_loss_scale``).
+    fitted to (model_core.calibration, the diagnosis effects ``mesh_loss``, ``idle_loss_scale``
+    and ``load_loss_scale``).
     """
 
     mesh_loss_k: float = _f(0.0, "1",
@@ -340,17 +346,29 @@ class Calibration:
                                 "(support bearings, seals, grease drag; physical profile with "
                                 "losses = 'all'; no effect otherwise). Bounds 0 to 10 "
                                 "(IDLE_LOSS_SCALE_BOUNDS). **Calibrated** where not 1.")
+    load_loss_scale: float = _f(1.0, "1",
+                                "Multiplies the gear's load-dependent friction losses PL1..PL6 "
+                                "(all sliding and rolling contacts of the mechanism): the "
+                                "friction level of the whole gear, the most common real mismatch "
+                                "(issue 18). Applied in the fixed point of "
+                                "model_core.efficiency.operating_point, so the force balance, "
+                                "self-locking and back-driving see it. It does not scale the "
+                                "mesh_loss_k extra (k stays an additive loss of mesh power) nor "
+                                "the load-independent losses (idle_loss_scale). Bounds 0 to 10 "
+                                "(LOAD_LOSS_SCALE_BOUNDS). **Calibrated** where not 1.")
     source: str = _f("", "-", "What the values were fitted to, and how (free text, echoed by "
                      "every output). Empty for the uncalibrated defaults.")
 
     @property
     def is_default(self) -> bool:
-        """Whether the model is as derived (k = 0, scale = 1)."""
-        return self.mesh_loss_k == 0.0 and self.idle_loss_scale == 1.0
+        """Whether the model is as derived (k = 0, scales = 1)."""
+        return (self.mesh_loss_k == 0.0 and self.idle_loss_scale == 1.0
+                and self.load_loss_scale == 1.0)
 
     def report(self) -> dict:
         """The calibration as outputs echo it: the values, ``calibrated`` (bool) and ``source``."""
         return {"mesh_loss_k": self.mesh_loss_k, "idle_loss_scale": self.idle_loss_scale,
+                "load_loss_scale": self.load_loss_scale,
                 "calibrated": not self.is_default, "source": self.source}
 
 
@@ -567,7 +585,8 @@ def validate_design(d: DriveDesign) -> None:
                                 "must be text without control characters (line breaks and tabs "
                                 "are allowed)")
     for name, (lo, hi) in (("mesh_loss_k", MESH_LOSS_K_BOUNDS),
-                           ("idle_loss_scale", IDLE_LOSS_SCALE_BOUNDS)):
+                           ("idle_loss_scale", IDLE_LOSS_SCALE_BOUNDS),
+                           ("load_loss_scale", LOAD_LOSS_SCALE_BOUNDS)):
         v = getattr(d.calibration, name)
         if not lo <= v <= hi:
             raise CycloidInputError("calibration." + name, v, f"must lie between {lo:g} and "

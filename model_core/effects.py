@@ -23,9 +23,9 @@ Signals ``s`` (numpy arrays over samples, SI), built by :func:`effect_signals`: 
 (the model's loss torque referred to the input, N*m), ``T_in_model`` (the model's input
 torque, N*m), ``order_roller`` (roller-pass order of the input speed), ``temperature`` (degC
 or None), ``sens_mu`` and ``sens_nu`` (d T_in_model / d ln mu_boundary and / d ln nu, N*m),
-``sens_k`` and ``sens_idle`` (d T_in_model / d mesh_loss_k and / d idle_loss_scale, N*m; the
-latter only where the design has load-independent losses); the sensitivities only where a
-model replay provides them.
+``sens_k``, ``sens_idle`` and ``sens_load`` (d T_in_model / d mesh_loss_k, / d idle_loss_scale
+and / d load_loss_scale, N*m; ``sens_idle`` only where the design has load-independent losses);
+the sensitivities only where a model replay provides them.
 """
 from __future__ import annotations
 
@@ -210,6 +210,10 @@ def _idle_scale(s, shape):
     return s["sens_idle"][:, None]
 
 
+def _load_scale(s, shape):
+    return s["sens_load"][:, None]
+
+
 def _none(s, shape):
     return np.zeros((len(s["t"]), 0))
 
@@ -219,7 +223,8 @@ _BASIS = {"load_independent_loss": _drag, "thermal_drift": _thermal,
           "low_speed_friction": _stribeck, "torque_sensor_offset": _offset,
           "torque_sensor_gain": _gain, "torque_sensor_drift": _zero_drift,
           "friction_miscalibrated": _friction, "mesh_loss": _mesh_loss,
-          "idle_loss_scale": _idle_scale, "run_in": _run_in, "none": _none}
+          "idle_loss_scale": _idle_scale, "load_loss_scale": _load_scale, "run_in": _run_in,
+          "none": _none}
 
 TAU_GRID = (60.0, 150.0, 300.0, 600.0, 1200.0)    # s, warm-up time constants scanned
 #: [rad] run-in distances scanned (angle of the driving shaft over which the excess decays by
@@ -285,7 +290,10 @@ EFFECTS = {
                        "points: in one forward mode k and an input torque transducer gain "
                        "both scale the input torque (look-alikes); k enters S2 once more than "
                        "S1 (Kreines, eta_S2 = eta0 eta_S1) and changes side when back-driven, "
-                       "a gain does neither",
+                       "a gain does neither; against a scale of the gear's own losses "
+                       "(load_loss_scale): operating points where the model's efficiency "
+                       "changes (light and rated load at a low and a high speed), the only "
+                       "place the two differ",
         synth_default=({"mesh_loss_k_change": 0.003}, None), requires=("sens_k",)),
     "idle_loss_scale": Effect(
         "idle_loss_scale", "the load-independent losses (support bearings, seals, grease "
@@ -300,6 +308,23 @@ EFFECTS = {
                        "load_independent_loss), and a load sweep at one speed (a mesh loss "
                        "grows with the load, idle losses do not)",
         synth_default=({"idle_loss_scale_change": -0.6}, None), requires=("sens_idle",)),
+    "load_loss_scale": Effect(
+        "load_loss_scale", "the gear's load-dependent friction losses PL1..PL6 (every sliding "
+        "and rolling contact of the mechanism) are off by a factor: the friction level of the "
+        "whole gear, the most common real mismatch; the full model's sensitivity to the "
+        "design's load_loss_scale (the losses keep the model's variation over speed, load and "
+        "film regime, unlike mesh_loss's fixed fraction of the mesh power)",
+        # bounds: the change of the scale; the design keeps it in LOAD_LOSS_SCALE_BOUNDS
+        # (0 to 10): -1 removes the gear's friction, +9 is ten times the modelled losses
+        (Parameter("load_loss_scale_change", "1", -1.0, 9.0, "change of the scale on the "
+                   "gear's load-dependent losses PL1..PL6"),),
+        separating_run="operating points where the model's efficiency changes: a load sweep "
+                       "from light to rated load at a low and a high speed (the gear's losses "
+                       "follow the model's load and film laws, a mesh loss k is a fixed "
+                       "fraction of the mesh power, a pin friction level acts on the pins' "
+                       "share alone); S2 or back-driven runs at the same points against a "
+                       "transducer gain",
+        synth_default=({"load_loss_scale_change": 0.12}, None), requires=("sens_load",)),
     "load_independent_loss": Effect(
         "load_independent_loss",
         "no-load drag (grease churning, seals, bearing drag, windage): a torque that grows with "
@@ -426,7 +451,8 @@ def resolve_effect(eid: str, values: dict = None, shape=None):
 
 #: effects that act through the model's own parameters (the friction level, the calibration),
 #: not through ``[extra]``: a synthesiser hides them in the true design
-MODEL_PARAMETER_EFFECTS = ("none", "friction_miscalibrated", "mesh_loss", "idle_loss_scale")
+MODEL_PARAMETER_EFFECTS = ("none", "friction_miscalibrated", "mesh_loss", "idle_loss_scale",
+                           "load_loss_scale")
 
 #: effects that calibrate the model's own loss scales (design [calibration]). Candidates of
 #: every diagnosis (``cyclo-fmu diagnose --no-calibrate``, ``Diagnoser(..., calibrate=False)``
@@ -436,7 +462,19 @@ MODEL_PARAMETER_EFFECTS = ("none", "friction_miscalibrated", "mesh_loss", "idle_
 #: left beside a calibration effect, a closed form is fitted to it with the calibration
 #: refitted next to it, and a calibration effect that falls within its interval of zero there
 #: is withdrawn (it stood in for the form; ``Diagnoser._discover``)
-CALIBRATION_EFFECTS = ("mesh_loss", "idle_loss_scale")
+CALIBRATION_EFFECTS = ("mesh_loss", "idle_loss_scale", "load_loss_scale")
+#: the design field each calibration effect changes (design [calibration])
+CALIBRATION_FIELDS = {"mesh_loss": "mesh_loss_k", "idle_loss_scale": "idle_loss_scale",
+                      "load_loss_scale": "load_loss_scale"}
+#: the loss-level family: effects that each raise or lower the gear's load-dependent losses
+#: as a whole (a fraction k of the mesh power, a scale on PL1..PL6, the pins' boundary
+#: coefficient). Their columns differ only by how the model's efficiency varies over the
+#: operating points, so one recording separates them only where it spans points of different
+#: efficiency (light and rated load, low and high speed). Principle: the selection names the
+#: one the recording's BIC prefers (the stepwise pass enters the best and the others then add
+#: too little); the others are listed as its look-alikes wherever their replacement fits
+#: within selection.DELTA_BIC (result.lookalikes), with the separating run
+LOSS_LEVEL_FAMILY = ("load_loss_scale", "mesh_loss", "friction_miscalibrated")
 #: the candidates of a diagnosis (and "none"): every effect of the registry
 DEFAULT_CANDIDATES = tuple(EFFECTS)
 #: look-alikes by physics, not by the data at hand: in a recording where power flows from the
@@ -447,6 +485,8 @@ DEFAULT_CANDIDATES = tuple(EFFECTS)
 #: eta_back = eta0 (1 - k) against the reading's (1 + g)), as does S2 at the same input points
 #: (eta_S2 = eta0 eta_S1: k enters once more). ``result.lookalikes`` tests each side's
 #: replacement by the other on the recording (BIC within selection.DELTA_BIC)
+#: (load_loss_scale is not in a group: a scale of losses that vary over the operating points
+#: is no exact gain; where it looks like one, the recording's BIC lists it, result.lookalikes)
 LOOKALIKE_GROUPS = ((("torque_sensor_gain",), ("mesh_loss", "idle_loss_scale")),)
 
 
@@ -465,7 +505,7 @@ def roller_pass_order(mode: str, z1: int) -> float:
 
 def effect_signals(t, w_in, loss_in, mode, z1, temperature=None, T_in_model=None,
                    sens_mu=None, sens_nu=None, sens_k=None, sens_idle=None,
-                   tau_out=None) -> dict:
+                   tau_out=None, sens_load=None) -> dict:
     """The signal dict the effects' terms read (see the module docstring); ``tau_out``
     [N*m], the load torque on the driven shaft, feeds a design's discovered terms."""
     t = np.asarray(t, float)
@@ -478,7 +518,7 @@ def effect_signals(t, w_in, loss_in, mode, z1, temperature=None, T_in_model=None
             "distance_in": distance,
             "order_roller": roller_pass_order(mode, z1), "temperature": temperature,
             "T_in_model": T_in_model, "sens_mu": sens_mu, "sens_nu": sens_nu,
-            "sens_k": sens_k, "sens_idle": sens_idle,
+            "sens_k": sens_k, "sens_idle": sens_idle, "sens_load": sens_load,
             "tau_out": None if tau_out is None else np.asarray(tau_out, float)}
 
 
@@ -689,8 +729,9 @@ def _apply_gain(design, v, shape, temperature):
 def _apply_calibration(name, design, change, effect):
     """``design`` with its calibration ``name`` changed by ``change``, clipped to the design's
     bounds, and the source naming the diagnosis."""
-    from .design import IDLE_LOSS_SCALE_BOUNDS, MESH_LOSS_K_BOUNDS
-    lo, hi = MESH_LOSS_K_BOUNDS if name == "mesh_loss_k" else IDLE_LOSS_SCALE_BOUNDS
+    from .design import IDLE_LOSS_SCALE_BOUNDS, LOAD_LOSS_SCALE_BOUNDS, MESH_LOSS_K_BOUNDS
+    lo, hi = {"mesh_loss_k": MESH_LOSS_K_BOUNDS, "idle_loss_scale": IDLE_LOSS_SCALE_BOUNDS,
+              "load_loss_scale": LOAD_LOSS_SCALE_BOUNDS}[name]
     cal = design.calibration
     old = getattr(cal, name)
     new = min(max(old + change, lo), hi)
@@ -711,6 +752,8 @@ _APPLY = {
                                                         v["mesh_loss_k_change"], "mesh_loss"),
     "idle_loss_scale": lambda d, v, sh, T: _apply_calibration(
         "idle_loss_scale", d, v["idle_loss_scale_change"], "idle_loss_scale"),
+    "load_loss_scale": lambda d, v, sh, T: _apply_calibration(
+        "load_loss_scale", d, v["load_loss_scale_change"], "load_loss_scale"),
     "friction_miscalibrated": _apply_friction,
     "load_independent_loss": _apply_drag,
     "low_speed_friction": lambda d, v, sh, T: (_with_extra(

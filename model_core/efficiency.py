@@ -384,6 +384,38 @@ def mesh_loss(eta0_model, x, wdir, mesh_power, k, losses=None):
     return eta0, (P if losses is None else _replace(losses, PL_mesh=P))
 
 
+def scale_load_losses(losses, scale):
+    r"""The calibrated friction level of the whole gear: the load-dependent partial losses
+    PL1..PL6 (every sliding and rolling contact of the mechanism) times ``scale`` (design
+    ``[calibration] load_loss_scale``).
+
+    .. math:: P_{Li}' = s \, P_{Li}, \quad i = 1, 2, 3, 5, 6
+
+    Applied inside the fixed point of :func:`operating_point` (the losses enter Kreines' rule
+    through eta0 = 1 - sum P_Li / P_mesh, or 1 / (1 + ...) when the ring is driven), so the
+    contact forces, the torques, self-locking and back-driving follow the scaled losses and the
+    energy balance P_in = P_out + P_loss holds exactly. Not scaled: the calibrated mesh-power
+    loss PL_mesh (``mesh_loss_k``, applied after, an additive fraction of the mesh power) and
+    the load-independent losses (``idle_loss_scale``). Unlike ``mesh_loss_k``, a scale keeps
+    the model's own variation of the losses over the operating points (speed, load, film
+    regime), so the two separate where the efficiency changes across the recording.
+
+    Parameters
+    ----------
+    losses : PartialLosses
+        The modelled partial losses, W.
+    scale : float
+        The scale s, 1 (0 to 10, ``design.LOAD_LOSS_SCALE_BOUNDS``).
+
+    Returns
+    -------
+    PartialLosses
+        ``losses`` with PL1..PL6 times ``scale`` (the other fields unchanged).
+    """
+    from dataclasses import replace as _replace
+    return _replace(losses, **{n: scale * np.asarray(getattr(losses, n)) for n in LOSS_NAMES})
+
+
 def shaft_drag(design, speeds, shape=()):
     """The load-independent drag at the shafts (physical profile, losses = "all").
 
@@ -479,6 +511,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
 
     state = {}   # warm start of the contact solutions between iterations
     k_mesh = design.calibration.mesh_loss_k   # calibrated additional mesh loss (0: none)
+    s_load = design.calibration.load_loss_scale   # calibrated friction level (1: as derived)
 
     def eta0_from(eta0, sel=None):
         """f(eta0): the basic efficiency the losses give at the ring torque that eta0 implies,
@@ -504,6 +537,8 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
                            ring_flow=wd if physical else None, dedup=dedup)
         if not full:
             _state_update(state, sub, sel, T_flat.size)
+        if s_load != 1.0:   # calibrated friction level of the whole gear (load_loss_scale)
+            L = scale_load_losses(L, s_load)
         num = L.total
         x = np.divide(num, np.abs(T1) * pick(base), out=np.zeros_like(num), where=T1 != 0)
         f = np.where(wd > 0, 1.0 - x, 1.0 / (1.0 + x))

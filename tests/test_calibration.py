@@ -155,13 +155,15 @@ def test_sweep_takes_the_calibration_as_fields(tmp_path):
     from cyclo_fmu.sweep import load_spec
     p = tmp_path / "spec.toml"
     p.write_text('[sweep]\nmethod = "grid"\nbase = "mackic-rig"\n[fields]\n'
-                 'mesh_loss_k = [0.0, 0.04, 3]\n"calibration.idle_loss_scale" = [0.5, 1.0, 2]\n')
+                 'mesh_loss_k = [0.0, 0.04, 3]\n"calibration.idle_loss_scale" = [0.5, 1.0, 2]\n'
+                 '"calibration.load_loss_scale" = [0.88, 1.12, 2]\n')
     spec = load_spec(p)
     designs = spec.designs()
-    assert len(designs) == 6
+    assert len(designs) == 12
     d = spec.build(designs[-1])
     assert d.calibration.mesh_loss_k == pytest.approx(0.04)
     assert d.calibration.idle_loss_scale == pytest.approx(1.0)
+    assert d.calibration.load_loss_scale == pytest.approx(1.12)
     assert "S1 61.50" in d.calibration.source       # the preset's, as the base's
 
 
@@ -232,3 +234,78 @@ def test_seals_field_removes_only_the_seal_loss():
     assert float(b.losses.PL_support) == float(a.losses.PL_support)
     with pytest.raises(CycloidInputError, match="seals"):
         DriveDesign(seals="felt")
+
+
+@pytest.mark.parametrize("mode, w, t", [("S1", 150.0, -20.0), ("S2", 80.0, 6.0),
+                                        ("2S", 100.0, 2.0), ("S1", -200.0, 9.0)])
+def test_load_loss_scale_multiplies_the_load_dependent_losses(mode, w, t):
+    """load_loss_scale = s: at the operating point the scaled design finds, PL1..PL6 are s
+    times the model's own losses at the same gear torques (the force balance sees them), the
+    load-independent losses and PL_mesh are untouched, Kreines' rule holds with the eta0 the
+    scaled losses give, and the shafts' power is the sum of the losses (energy balance)."""
+    from model_core.losses import LOSS_NAMES, partial_losses
+    s = 1.12
+    d0 = DriveDesign(profile="physical", losses="all")
+    d1 = with_calibration(d0, load_loss_scale=s)
+    op = operating_point(d1, mode, w, T_out=t)
+    assert np.isfinite(op.eta0) and not bool(op.locked)
+    T1 = op.torques["1"] - op.drag_torques["1"]      # the gear's own torques (drag outside)
+    T2 = op.torques["2"] - op.drag_torques["2"]
+    w1p, w2p = op.speeds["1"] - op.speeds["S"], op.speeds["2"] - op.speeds["S"]
+    wd = np.sign(T1 * w1p)
+    L = partial_losses(d0, np.abs(T1), w2p, disc_torque=np.abs(T2), ring_flow=wd)
+    for n in LOSS_NAMES:
+        assert float(getattr(op.losses, n)) == pytest.approx(s * float(getattr(L, n)),
+                                                             rel=1e-9)
+    # eta0 is the basic efficiency of the scaled losses (Kreines: T2 = -i0 eta0^w T1)
+    x = s * float(L.total) / abs(float(T1 * w1p))
+    assert float(op.eta0) == pytest.approx(1 - x if wd > 0 else 1 / (1 + x), rel=1e-9)
+    e = op.eta0 if wd > 0 else 1 / op.eta0
+    assert float(T2) == pytest.approx(float(-d1.i0 * e * T1), rel=1e-9)
+    # energy balance: the power the shafts put in is the sum of all losses
+    p = sum(op.torques[x] * op.speeds[x] for x in "12S")
+    assert float(p) == pytest.approx(float(op.losses.total), rel=1e-9)
+    assert float(op.input_power - op.output_power) == pytest.approx(float(op.losses.total),
+                                                                    rel=1e-9)
+    # untouched: the load-independent losses at the same speeds, and no PL_mesh
+    op0 = operating_point(d0, mode, w, T_out=t)
+    for n in ("PL_support", "PL_seal", "PL_churn"):
+        assert float(getattr(op.losses, n)) == pytest.approx(float(getattr(op0.losses, n)),
+                                                             rel=1e-12)
+    assert not np.any(op.losses.PL_mesh)
+    # and the scaled gear loses more (or less) in proportion, to first order
+    assert float(op.losses.total) > float(op0.losses.total)
+
+
+def test_load_loss_scale_one_is_the_uncalibrated_model_and_bounds():
+    d0 = DriveDesign(profile="physical")
+    d1 = design_from_toml(design_to_toml(d0).replace("load_loss_scale = 1.0",
+                                                     "load_loss_scale = 1"))
+    assert "load_loss_scale = 1.0" in design_to_toml(d0) and d1.calibration.is_default
+    w, t = _points("S1")
+    for mode in ("S1", "S2", "2S"):
+        a, b = operating_point(d0, mode, w, t), operating_point(d1, mode, w, t)
+        np.testing.assert_allclose(b.losses.total, a.losses.total, rtol=1e-12, atol=0)
+        np.testing.assert_allclose(b.eta0, a.eta0, rtol=1e-12, atol=0)
+    d2 = with_calibration(d0, load_loss_scale=0.88, source="test")
+    assert design_from_toml(design_to_toml(d2)) == d2
+    assert not d2.calibration.is_default and d2.calibration.report()["load_loss_scale"] == 0.88
+    for bad in (-0.1, 10.5, float("nan")):
+        with pytest.raises(CycloidInputError, match="calibration.load_loss_scale"):
+            with_calibration(d0, load_loss_scale=bad)
+
+
+def test_a_load_loss_scale_is_reported_as_calibrated_by_the_cli(tmp_path):
+    """`efficiency --design` with only load_loss_scale set: printed as CALIBRATED with the
+    value and its source, in the JSON's calibration, and the losses are the core's."""
+    f = tmp_path / "s.toml"
+    f.write_text('[calibration]\nload_loss_scale = 1.12\nsource = "test: x1.12"\n')
+    args = [sys.executable, "-m", "cyclo_fmu.cli", "efficiency", "--mode", "S1", "--speed",
+            "1500", "--torque", "0.5", "--design", str(f)]
+    r = subprocess.run(args, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "CALIBRATED" in r.stdout and "load_loss_scale = 1.12" in r.stdout
+    assert "test: x1.12" in r.stdout
+    j = json.loads(subprocess.run(args + ["--json"], capture_output=True, text=True,
+                                  timeout=120).stdout)
+    assert j["calibration"]["load_loss_scale"] == 1.12 and j["calibration"]["calibrated"]

@@ -477,6 +477,7 @@ profile = "physical"
 [calibration]
 mesh_loss_k = 0.04
 idle_loss_scale = 0.3
+load_loss_scale = 1.12
 source = "test: made-up values"
 """
 
@@ -525,7 +526,9 @@ def test_calibrated_design_python_and_native_fmus_agree(calibrated_fmus, mode):
     md = read_model_description(native)
     consts = {v.name: v.start for v in md.modelVariables}
     assert float(consts["mesh_loss_k"]) == 0.04 and float(consts["idle_loss_scale"]) == 0.3
+    assert float(consts["load_loss_scale"]) == 1.12
     assert consts["calibration_source"] == "test: made-up values"
+    assert "load_loss_scale = 1.12" in md.description
     assert "CALIBRATED" in md.description
 
 
@@ -556,6 +559,11 @@ def test_build_design_changes_every_reducer_fmu(calibrated_fmus, native, fmu):
     md = read_model_description(cal_python)
     start = {v.name: v.start for v in md.modelVariables}
     assert float(start["mesh_loss_k"]) == 0.04 and float(start["idle_loss_scale"]) == 0.3
+    assert float(start["load_loss_scale"]) == 1.12
+    # the existing variables keep their value references; the new parameter comes last
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    assert vr["load_loss_scale"] == max(vr.values())
+    assert vr["nu_100"] < vr["load_loss_scale"]
 
 
 def test_bad_input_gives_fmi2error_with_a_message(native):

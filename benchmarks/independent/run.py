@@ -28,7 +28,7 @@ from pathlib import Path
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from score import (LOAD_LOSS, SPEED_LOAD_KINDS, found_as_calibration,  # noqa: E402
-                   judge_proposal, substitutes, unexplained_claims)
+                   judge_proposal, substitutes, unexplained_claims, with_loss_level)
 
 HERE = Path(os.environ.get("CYCLO_INDEPENDENT_OUT", "out/independent")).resolve()
 GEN = Path(__file__).resolve().parent / "gen.py"
@@ -37,7 +37,9 @@ OUT_DIR_CASES = {"l05_warmup_2tau_500", "o04_backlash_1k"}   # also run with --o
 
 
 #: ids newer than batches 1 and 2 that stand for an expected id (batch 3's groups)
-EQUIVALENT = {"mesh_loss": "friction_miscalibrated", "idle_loss_scale": "load_independent_loss"}
+EQUIVALENT = {"mesh_loss": "friction_miscalibrated", "idle_loss_scale": "load_independent_loss",
+              # the loss level of the whole gear (score.py, with_loss_level)
+              "load_loss_scale": "friction_miscalibrated"}
 #: out-of-library losses of batches 1 and 2 -> the law a proposal should carry (judged apart)
 PROPOSAL_LAW = {"load2": dict(torque=2), "speed_load": dict(speed=1, torque=1),
                 "load15": dict(torque=1.5), "speed2": dict(speed=2)}
@@ -79,8 +81,9 @@ def verdict(case, res, d=None):
         return "right (alt)" if alt_read else "right"
     raw = [e["id"] for e in d.get("effects", [])]
     if any(k in SPEED_LOAD_KINDS for k in _kinds(case)) and not exp and (
-            (raw and set(raw) <= set(LOAD_LOSS) and not un)
-            or (not raw and not un and any(found_as_calibration(a, d) for a in LOAD_LOSS))):
+            (raw and set(raw) <= set(with_loss_level(LOAD_LOSS)) and not un)
+            or (not raw and not un and any(found_as_calibration(a, d)
+                                           for a in with_loss_level(LOAD_LOSS)))):
         return "right (alt)"   # in one mode a loss prop. to speed x |load| is a mesh loss
     extra = set(named) - set().union(*alts)
     if extra:

@@ -52,7 +52,8 @@ CASES_JSON, RESULTS_JSON = "cases3.json", "results3.json"
 CLI = os.path.join(os.path.dirname(sys.executable), "cyclo-fmu")
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from score import (LOAD_LOSS, SPEED_LOAD_KINDS, found_as_calibration,  # noqa: E402
-                   judge_proposal, match as _match, substitutes, unexplained_claims)
+                   judge_proposal, match as _match, substitutes, unexplained_claims,
+                   with_loss_level)
 
 
 # ----------------------------------------------------------------------------- verdict
@@ -65,6 +66,8 @@ def verdict(case, d):
     speed_load = any(k in SPEED_LOAD_KINDS for k in kinds)
     if speed_load:
         tol += [a for a in LOAD_LOSS if a not in tol]
+    # the loss level of the whole gear wherever a loss-level id is accepted (score.py)
+    groups, tol = [with_loss_level(g) for g in groups], with_loss_level(tol)
     allowed = [a for g in groups for a in g] + tol
     wrong = [n for n in named if not any(_match(a, n) for a in allowed)]
     if wrong:
@@ -89,8 +92,9 @@ def verdict(case, d):
     want = case.get("unexplained")
     if want is True and not un:
         # a loss proportional to speed x |load| is, in one mode, a share of the mesh power
-        if speed_load and (any(n in LOAD_LOSS for n in named)
-                           or any(found_as_calibration(a, d) for a in LOAD_LOSS)):
+        if speed_load and (any(n in with_loss_level(LOAD_LOSS) for n in named)
+                           or any(found_as_calibration(a, d)
+                                  for a in with_loss_level(LOAD_LOSS))):
             return "right (alt)", {}
         return "missed unexplained", {}
     if want is False and un:

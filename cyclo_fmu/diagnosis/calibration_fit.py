@@ -78,7 +78,7 @@ def fit_calibration(design, mode, rec, bandwidth: float = 1000.0, block: float =
 
     def model(p):
         d = with_calibration(design, float(p[0]), float(p[1]) if idle_on else None)
-        rp = replay(d, mode, rec, bandwidth, sensitivities=(zero, zero, zero, zero))
+        rp = replay(d, mode, rec, bandwidth, sensitivities=(zero,) * 5)
         return block_means(first_order(rp.T_model, dt, bandwidth), m)[moving]
 
     x0 = [cal0.mesh_loss_k] + ([cal0.idle_loss_scale] if idle_on else [])

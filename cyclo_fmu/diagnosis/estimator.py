@@ -33,7 +33,8 @@ from dataclasses import replace
 import numpy as np
 
 from model_core import DriveDesign
-from model_core.effects import CALIBRATION_EFFECTS, DEFAULT_CANDIDATES, EFFECTS
+from model_core.effects import (CALIBRATION_EFFECTS, CALIBRATION_FIELDS, DEFAULT_CANDIDATES,
+                                EFFECTS)
 from model_core.kinematics import parse_mode
 
 from . import residual as R
@@ -50,8 +51,9 @@ FRICTION_RELINEARISE = 0.02
 #: sensitivities taken there) beyond these changes. The mesh loss enters the model as
 #: 1/(1 - k): a step dk taken from the slope at k misses by about dk^2 (4e-6 at 0.002, below
 #: the interval of k that a minute of recording gives, about 1e-5). The idle losses enter
-#: linearly but share their speed laws with the gear's flow direction: 0.1 of the scale
-CAL_RELINEARISE = {"mesh_loss": 0.002, "idle_loss_scale": 0.1}
+#: linearly but share their speed laws with the gear's flow direction: 0.1 of the scale; the
+#: load-loss scale enters through the fixed point (nearly linear, replay.LOAD_SCALE_STEP): 0.05
+CAL_RELINEARISE = {"mesh_loss": 0.002, "idle_loss_scale": 0.1, "load_loss_scale": 0.05}
 #: the dictionary's families (discover.Library) whose forms grow with the load: a form that a
 #: calibration effect may have stood in for must hold one of them (a form of speed alone is a
 #: drag, a library effect the selection weighs against the idle-loss scale itself)
@@ -177,8 +179,8 @@ class Diagnoser:
             # of the first replay's sample-level signals only the sensitivities are read again
             # (residual_rms, the report's friction and calibration torques): the
             # others (~50 MB at 600 000 samples) are released before the later stages' peaks
-            P0.sig = {k: P0.sig[k] for k in ("sens_mu", "sens_nu", "sens_k", "sens_idle")
-                      if k in P0.sig}
+            P0.sig = {k: P0.sig[k] for k in ("sens_mu", "sens_nu", "sens_k", "sens_idle",
+                                             "sens_load") if k in P0.sig}
             P0.rp = Replay(P0.rp.T_model, P0.sig)
             sel = select(P, self.n_folds, forced=("friction_miscalibrated",))
         self.calibration_offsets_ = {}
@@ -368,7 +370,7 @@ class Diagnoser:
         for _ in range(CAL_PASSES):
             moved = False
             for eid, v in values.items():
-                name = ("mesh_loss_k" if eid == "mesh_loss" else "idle_loss_scale")
+                name = CALIBRATION_FIELDS[eid]
                 old = getattr(design.calibration, name)
                 design, _ = EFFECTS[eid].apply(design, {EFFECTS[eid].parameters[0].name: v})
                 applied = getattr(design.calibration, name) - old   # clipped at the bounds

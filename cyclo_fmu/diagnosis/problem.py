@@ -248,7 +248,7 @@ def build_problem(rec, design, mode, candidates, bandwidth, block,
     t = rec.time
     dt = float(np.median(np.diff(t)))
     # the calibration's sensitivities only where a candidate reads them (four replays)
-    calibration = any(r in ("sens_k", "sens_idle") for c in candidates
+    calibration = any(r in ("sens_k", "sens_idle", "sens_load") for c in candidates
                       for r in EFFECTS[c].requires)
     rp = replay(design, mode, rec, bandwidth, sensitivities, calibration)
     sig = rp.signals

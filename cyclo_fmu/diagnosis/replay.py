@@ -37,6 +37,11 @@ SENSITIVITY_GRID = (18, 14)
 #: losses respond through the driven shaft's drag, smoothly)
 MESH_LOSS_STEP = 0.002
 IDLE_SCALE_STEP = 0.5
+#: [1] step of the load-loss scale (central, on SENSITIVITY_GRID): the gear's losses are
+#: proportional to it at fixed forces and respond through the force balance smoothly (eta0
+#: shifts by a few thousandths per 0.1), so the input torque is linear in it to ~1e-4 over
+#: the +-15 % a recording asks for
+LOAD_SCALE_STEP = 0.1
 #: [s] window of the moving mean of the measured speed before it is differentiated (20 ms:
 #: the transducer noise of a 0.1 r/min encoder differentiated at 1 kHz would swamp J dw/dt)
 SPEED_SMOOTHING = 0.02
@@ -74,11 +79,12 @@ def _block_sum(xb, item):
 
 
 def calibration_sensitivities(design, mode, w_in, tau_out):
-    """d T_in_model / d mesh_loss_k and / d idle_loss_scale along a recording [N*m], finite
-    differences on SENSITIVITY_GRID (k forward, backward at its upper bound; the scale central,
-    one-sided at its bounds); the second None where the
+    """d T_in_model / d mesh_loss_k, / d idle_loss_scale and / d load_loss_scale along a
+    recording [N*m], finite differences on SENSITIVITY_GRID (k forward, backward at its upper
+    bound; the scales central, one-sided at their bounds); the second None where the
     design has no load-independent losses (paper profile, losses = "load_dependent")."""
-    from model_core.design import IDLE_LOSS_SCALE_BOUNDS, MESH_LOSS_K_BOUNDS
+    from model_core.design import (IDLE_LOSS_SCALE_BOUNDS, LOAD_LOSS_SCALE_BOUNDS,
+                                   MESH_LOSS_K_BOUNDS)
     from dataclasses import replace as _replace
     g = SENSITIVITY_GRID
     cal = design.calibration
@@ -101,7 +107,11 @@ def calibration_sensitivities(design, mode, w_in, tau_out):
         T_up = T(None, idle_loss_scale=up)
         T_dn = T(None, idle_loss_scale=dn)
         sens_idle = (T_up - T_dn) / (up - dn)
-    return sens_k, sens_idle
+    s0, h = cal.load_loss_scale, LOAD_SCALE_STEP
+    lo, hi = LOAD_LOSS_SCALE_BOUNDS
+    up, dn = min(s0 + h, hi), max(s0 - h, lo)
+    sens_load = (T(load_loss_scale=up) - T(load_loss_scale=dn)) / (up - dn)
+    return sens_k, sens_idle, sens_load
 
 
 def _scaled(design, mu=1.0, nu=1.0):
@@ -129,7 +139,7 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
     ``bandwidth`` [Hz]: the speed transducer's first-order bandwidth; the shaft angle is
     advanced by its group delay 1/(2 pi f_c) (at the roller-pass order of 2800 r/min the
     0.16 ms of a 1 kHz transducer are 0.65 rad of phase). ``sensitivities``: (sens_mu,
-    sens_nu) or (sens_mu, sens_nu, sens_k, sens_idle) of an earlier replay to reuse (a
+    sens_nu) or (sens_mu, sens_nu, sens_k, sens_idle[, sens_load]) of an earlier replay to reuse (a
     re-linearised replay at a nearby design); one given as None, or the calibration's when
     only two are given, is computed at ``design``. ``calibration=False``: the calibration's
     sensitivities (four replays; read only by the calibration effects' columns, never by the
@@ -147,18 +157,18 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
         return (replay_input_torque(_scaled(design, **up), mode, w_in, tau_out, g)[0]
                 - replay_input_torque(_scaled(design, **dn), mode, w_in, tau_out, g)[0]) / dln
     given = tuple(sensitivities) if sensitivities is not None else ()
-    sens_mu, sens_nu, sens_k, sens_idle = given + (None,) * (4 - len(given))
+    sens_mu, sens_nu, sens_k, sens_idle, sens_load = given + (None,) * (5 - len(given))
     # (a sensitivity passed as None is computed at this design)
     sens_mu = diff(mu=1) if sens_mu is None else sens_mu
     sens_nu = diff(nu=1) if sens_nu is None else sens_nu
-    if calibration and (sens_k is None or sens_idle is None):
-        sens_k, sens_idle = calibration_sensitivities(design, mode, w_in, tau_out)
+    if calibration and (sens_k is None or sens_idle is None or sens_load is None):
+        sens_k, sens_idle, sens_load = calibration_sensitivities(design, mode, w_in, tau_out)
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
     from scipy.ndimage import uniform_filter1d
     w_s = uniform_filter1d(w_in, max(1, int(round(SPEED_SMOOTHING / dt))), mode="nearest")
     sig = effect_signals(t, w_s, loss, mode, design.z1, getattr(rec, "temperature", None),
                          T_in_model=T_in, sens_mu=sens_mu, sens_nu=sens_nu, sens_k=sens_k,
-                         sens_idle=sens_idle, tau_out=tau_out)
+                         sens_idle=sens_idle, tau_out=tau_out, sens_load=sens_load)
     if bandwidth > 0:
         sig["theta_in"] = sig["theta_in"] + w_s / (2 * math.pi * bandwidth)
     T_true = T_in + extra_torque(design.extra, sig)

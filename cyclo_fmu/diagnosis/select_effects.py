@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from model_core.effects import EFFECTS
+from model_core.effects import CALIBRATION_EFFECTS, EFFECTS, LOSS_LEVEL_FAMILY
 
 from . import residual as R
 from .selection import DELTA_BIC, Fit, GramProblem, explained, stepwise
@@ -123,12 +123,17 @@ def select(P, n_folds: int, forced=()) -> Selected:
     selectable = {k: v for k, v in opts.items() if back or k != "torque_sensor_gain"}
     forced_terms = tuple(best_shape(prob, (), opts[f]) for f in forced if f in opts)
     sel = run_stepwise(prob, selectable, min_expl, forced_terms)
+    family_out = one_loss_level(prob, sel.fit, forced)
+    if family_out:
+        sel = run_stepwise(prob, selectable, min_expl, forced_terms, exclude=family_out)
     S = sel.fit
     stability, unstable = _stability(prob, selectable, min_expl, forced_terms, S, forced,
                                      n_folds)
+    unstable = unstable + [e for e in family_out if e not in unstable]
     if unstable:
         sel = run_stepwise(prob, selectable, min_expl, forced_terms, exclude=unstable)
         S = sel.fit
+        unstable = [e for e in unstable if e not in family_out]
     # a time drift (warm-up) must explain what no steady function of the operating point
     # explains: a plan that visits its operating points in time order makes any smooth
     # function of the operating point correlate with time, and a drift term would absorb it
@@ -141,12 +146,30 @@ def select(P, n_folds: int, forced=()) -> Selected:
             break
         confounded += drop
         sel = run_stepwise(prob, selectable, min_expl, forced_terms,
-                           exclude=tuple(unstable) + tuple(confounded))
+                           exclude=tuple(unstable) + tuple(confounded) + tuple(family_out))
         S = sel.fit
     return Selected(prob=prob, S=S, opts=opts, selectable=selectable, weights=w,
                     n_spikes=n_spikes, sigma=sigma, min_expl=min_expl, backdriven=back,
                     stability=stability, unstable=unstable, confounded=confounded,
                     forced=tuple(forced), path=sel.path, base=prob.fit(()), spikes=spikes)
+
+
+def one_loss_level(prob, S, forced=()) -> list:
+    """The calibration effects of the loss-level family (``model_core.effects.
+    LOSS_LEVEL_FAMILY``: mesh_loss, load_loss_scale) that a selection must leave out: the gear
+    has one level of its load-dependent losses, and two free scales of it at once (a fraction
+    of the mesh power and a scale of the model's own losses) would reshape the model's loss law
+    rather than set its level, standing in for a loss of another law. The one the recording
+    prefers stays (the fit without it has the higher BIC; a forced one always stays); the
+    others are left out and listed as its look-alikes where their replacement fits within
+    DELTA_BIC (result.lookalikes)."""
+    fam = [t for t in S.terms if t.effect in LOSS_LEVEL_FAMILY
+           and t.effect in CALIBRATION_EFFECTS]
+    if len(fam) < 2:
+        return []
+    keep = [t for t in fam if t.effect in forced] or [max(
+        fam, key=lambda t: prob.fit(tuple(x for x in S.terms if x != t), cv=False).bic)]
+    return [t.effect for t in fam if t not in keep]
 
 
 def fit_rms(prob, before, after) -> float:

@@ -210,8 +210,8 @@ def design_constants(design: DriveDesign):
              "rolling-resistance coefficient of the disc rollers (mu_rolling: the ring rollers)"),
             ("seals", "String", design.seals, None, "shaft seals: lip or none"),
             ("calibration_source", "String", design.calibration.source, None,
-             "what the calibration (mesh_loss_k, idle_loss_scale) was fitted to; empty: not "
-             "calibrated"))
+             "what the calibration (mesh_loss_k, idle_loss_scale, load_loss_scale) was fitted "
+             "to; empty: not calibrated"))
     names = {o[0] for o in out}
     out += [m for m in more if m[0] not in names]
     # the discovered loss terms (design [[extra.discovered]]): built in, shown as constants
@@ -628,7 +628,8 @@ def build_native_fmu(design: DriveDesign | None = None, dest="dist", *,
     data_c = body.replace(placeholder, guid)
     cal = design.calibration
     calibrated = ("" if cal.is_default else f", CALIBRATED mesh_loss_k = {cal.mesh_loss_k:.4g}, "
-                  f"idle_loss_scale = {cal.idle_loss_scale:.4g}")
+                  f"idle_loss_scale = {cal.idle_loss_scale:.4g}, "
+                  f"load_loss_scale = {cal.load_loss_scale:.4g}")
     desc = (f"Constrained cycloid drive (z1 = {design.z1}, mu_boundary = "
             f"{design.friction.mu_boundary:g}{calibrated}): load-dependent losses and efficiency "
             "(Mackic et al.), quasi-static, all six modes and four quadrants; native C, the "

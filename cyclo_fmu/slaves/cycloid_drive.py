@@ -135,7 +135,10 @@ LATE_DESIGN_PARAMETERS = [
     ("nu_100", "lubricant", "kinematic_viscosity_100", "m2/s", "lubricant kinematic viscosity "
      "at 100 degC: with nu (at 40 degC) the Walther line by which the grease temperature sets "
      "the viscosity (physical profile; a diagnosed viscosity-temperature slope rewrites both)",
-     Real)]
+     Real),
+    ("load_loss_scale", "calibration", "load_loss_scale", "1", "calibrated scale on the "
+     "gear's load-dependent friction losses PL1..PL6 (the friction level of the whole gear; "
+     "1: as derived; 0 to 10)", Real)]
 ALL_DESIGN_PARAMETERS = DESIGN_PARAMETERS + LATE_DESIGN_PARAMETERS
 #: design parameters of the heat balance only (run-time in both FMUs; not in the loss map)
 THERMAL_PARAMETERS = ("ambient_temperature", "housing_heat_capacity", "housing_heat_transfer",
@@ -184,6 +187,7 @@ PARAMETER_LIMITS = dict(
     stribeck_exponent=(1.0, 2.0), run_in_change=(-1.0, None),
     run_in_distance=(sys.float_info.min, None),
     operating_temperature=(0.0, None), mesh_loss_k=(0.0, 0.5), idle_loss_scale=(0.0, 10.0),
+    load_loss_scale=(0.0, 10.0),
     # temperatures: the design's valid range, -100 to 200 degC
     ambient_temperature=(173.15, 473.15), T_oil_start=(173.15, 473.15),
     **{n: (sys.float_info.min, None) for n in ("housing_heat_capacity",

@@ -16,21 +16,23 @@ SUFFIXES = (".csv", ".mf4")
 
 def calibration_report(design, d) -> dict | None:
     """The JSON key ``calibration_fit``: the calibration the diagnosis learned (effects
-    ``mesh_loss``, ``idle_loss_scale``; re-linearised until its changes settle,
-    ``diagnosis.estimator.CAL_RELINEARISE``), or None when it named neither. ``ci95``: the
+    ``mesh_loss``, ``idle_loss_scale``, ``load_loss_scale``; re-linearised until its changes
+    settle, ``diagnosis.estimator.CAL_RELINEARISE``), or None when it named none. ``ci95``: the
     95 % half-widths (noise only), ``rms_*``: the held-out RMS of the input torque before and
     after the diagnosis, ``back_driven``: whether the recording has enough back-driven blocks
     to tell k from a transducer gain (``select_effects.backdriven``), ``back_driven_share``:
     the share of its moving blocks (above 1 rad/s, the calibration fit's rule) in which the
     input shaft gives power back."""
-    cal = {e["id"]: e for e in d.effects if e["id"] in ("mesh_loss", "idle_loss_scale")}
+    from model_core.effects import CALIBRATION_FIELDS
+    cal = {e["id"]: e for e in d.effects if e["id"] in CALIBRATION_FIELDS}
     if not cal:
         return None
     from cyclo_fmu.diagnosis.select_effects import backdriven
     c = design.calibration
-    out = {"mesh_loss_k": c.mesh_loss_k, "idle_loss_scale": c.idle_loss_scale, "ci95": {},
+    out = {"mesh_loss_k": c.mesh_loss_k, "idle_loss_scale": c.idle_loss_scale,
+           "load_loss_scale": c.load_loss_scale, "ci95": {},
            "rms_before_Nm": d.rmse_before_Nm, "rms_after_Nm": d.rmse_after_Nm, "notes": []}
-    for eid, name in (("mesh_loss", "mesh_loss_k"), ("idle_loss_scale", "idle_loss_scale")):
+    for eid, name in CALIBRATION_FIELDS.items():
         if eid in cal:
             p = cal[eid]["parameters"][f"{name}_change"]
             out[name] = getattr(c, name) + p["value"]

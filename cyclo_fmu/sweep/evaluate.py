@@ -74,6 +74,7 @@ def evaluate_design(spec, design_id: int, values: dict) -> list:
     cal = {} if design.calibration.is_default else {
         "calibrated": True, "calibration_mesh_loss_k": design.calibration.mesh_loss_k,
         "calibration_idle_loss_scale": design.calibration.idle_loss_scale,
+        "calibration_load_loss_scale": design.calibration.load_loss_scale,
         "calibration_source": design.calibration.source}
     for mode in spec.modes:
         row = {**base, "mode": mode, **stiff, **cal}
@@ -139,7 +140,8 @@ def result_schema(spec):
                   or not design_from_dict(spec.base).calibration.is_default)
     if calibrated:
         cols += [("calibrated", pa.bool_()), ("calibration_mesh_loss_k", f64),
-                 ("calibration_idle_loss_scale", f64), ("calibration_source", pa.string())]
+                 ("calibration_idle_loss_scale", f64), ("calibration_load_loss_scale", f64),
+                 ("calibration_source", pa.string())]
     cols += [("n_points", pa.int64()), ("n_locked", pa.int64()), ("eta_min", f64),
              ("eta_mean", f64), ("eta_max", f64)]
     for k in LOSS_NAMES:
