@@ -1,6 +1,7 @@
 """Platforms: the FMI 3.0 reducer (the FMI 2.0 reducer's C core behind an FMI 3 front) gives the
 FMI 2.0 reducer's numbers in fmpy and fmusim and keeps its state; the native FMUs carry sources
-a host can compile; win64 DLLs when mingw-w64 is installed, a note (not an error) without it."""
+a host can compile; win64 DLLs with mingw-w64 or Zig (the ziglang wheel), a note (not an error)
+without either."""
 import shutil
 import subprocess
 import sys
