@@ -116,7 +116,7 @@ def build_fmu(name: str = "CycloidDrive", dest="dist", design=None) -> Path:
 
 def front_platforms() -> tuple:
     """The platforms whose binary in a Python FMU will be our C front (fmi2_status_shim.c):
-    linux64 with a C compiler, win64 too with the mingw-w64 cross compiler
+    linux64 with a C compiler, win64 too with a cross compiler (mingw-w64 or Zig)
     (cyclo_fmu.native.cross); none with ``$CYCLOFMU_NO_SHIM``. Written into the FMU's
     ``_status_front``, one a line, which the slaves read (slaves.base.STATUS_FRONT)."""
     if os.environ.get("CYCLOFMU_NO_SHIM") or not _have_compiler():
@@ -171,7 +171,7 @@ def shim_header(model_description: str) -> str:
 def _install_status_shim(fmu: Path, name: str, platforms=("linux64",)) -> None:
     """Put the status front (compiled here) in place of pythonfmu's binary of each platform
     in ``platforms``, which goes next to it as ``<name>.pythonfmu.so`` (linux64) or
-    ``<name>.pythonfmu.dll`` (win64, cross-compiled with mingw-w64: cyclo_fmu.native.cross).
+    ``<name>.pythonfmu.dll`` (win64, cross-compiled with mingw-w64 or Zig: cyclo_fmu.native.cross).
     Without a C compiler the FMU keeps pythonfmu's binary (and its fmi2Fatal), with a note on
     stderr; without the cross compiler its win64 binary stays pythonfmu's."""
     import re

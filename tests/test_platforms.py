@@ -1,6 +1,7 @@
 """Platforms: the FMI 3.0 reducer (the FMI 2.0 reducer's C core behind an FMI 3 front) gives the
 FMI 2.0 reducer's numbers in fmpy and fmusim and keeps its state; the native FMUs carry sources
-a host can compile; win64 DLLs when mingw-w64 is installed, a note (not an error) without it."""
+a host can compile; win64 DLLs with mingw-w64 or Zig (the ziglang wheel), a note (not an error)
+without either."""
 import shutil
 import subprocess
 import sys
@@ -12,7 +13,8 @@ import pytest
 
 from cyclo_fmu.fmu_build import build_any
 from cyclo_fmu.hosts import hosts_dir
-from cyclo_fmu.native.cross import MINGW, win64_compiler
+from cyclo_fmu.native.cross import (MINGW, available_toolchains, compile_win64_exe,
+                                    win64_compiler)
 
 ROOT = Path(__file__).resolve().parents[1]
 STATEFUL = {"J_out": 0.01, "thermal_loss_change": 0.2, "thermal_tau": 0.5, "mode_number": 4}
@@ -142,8 +144,8 @@ FMI2_EXPORTS = ("fmi2Instantiate", "fmi2DoStep", "fmi2GetReal", "fmi2SetReal",
                 "fmi2GetFMUstate", "fmi2DeSerializeFMUstate", "fmi2FreeInstance")
 
 
-@pytest.mark.skipif(win64_compiler() is None, reason=f"no mingw-w64 ({MINGW}): the build makes "
-                    "no win64 binaries (apt-get install mingw-w64)")
+@pytest.mark.skipif(win64_compiler() is None, reason=f"no win64 cross compiler (mingw-w64's "
+                    f"{MINGW} or ziglang): the build makes no win64 binaries")
 @pytest.mark.parametrize("name", ["FeltBrakeNative", "CycloidDriveNative"])
 def test_win64_dll_exports_fmi2_and_needs_only_windows(name, tmp_path):
     objdump = shutil.which("x86_64-w64-mingw32-objdump")
@@ -162,8 +164,20 @@ def test_win64_dll_exports_fmi2_and_needs_only_windows(name, tmp_path):
                               text=True).stdout
         for fn in FMI2_EXPORTS:
             assert fn in text, fn
-        needed = {ln.split()[-1].lower() for ln in text.splitlines() if "DLL Name:" in ln}
-        assert needed <= {"kernel32.dll", "msvcrt.dll", "advapi32.dll"}, needed
+        _assert_only_windows_dlls(text)
+
+
+#: what a DLL of ours may import: Windows' own libraries and its C runtime (msvcrt with
+#: mingw-w64, the Universal C Runtime's api-ms-win-crt-* with Zig)
+WINDOWS_DLLS = {"kernel32.dll", "msvcrt.dll", "advapi32.dll"}
+
+
+def _assert_only_windows_dlls(text: str) -> set:
+    needed = {ln.split()[-1].lower() for ln in text.splitlines() if "DLL Name:" in ln}
+    assert "kernel32.dll" in needed, needed
+    other = {n for n in needed - WINDOWS_DLLS if not n.startswith("api-ms-win-crt-")}
+    assert not other, other
+    return needed
 
 
 def _dll_text(data: bytes, tmp_path) -> str:
@@ -207,8 +221,8 @@ def felt_brake(tmp_path_factory):
     return build_any("FeltBrake", tmp_path_factory.mktemp("pyfmu"))
 
 
-@pytest.mark.skipif(win64_compiler() is None, reason=f"no mingw-w64 ({MINGW}): the Python "
-                    "FMUs keep pythonfmu's win64 binary")
+@pytest.mark.skipif(win64_compiler() is None, reason=f"no win64 cross compiler (mingw-w64's "
+                    f"{MINGW} or ziglang): the Python FMUs keep pythonfmu's win64 binary")
 def test_python_fmu_win64_binary_is_the_front(felt_brake, tmp_path):
     """win64/FeltBrake.dll is our front (the whole FMI 2.0 CS API, only Windows' own DLLs,
     this build's GUID inside), pythonfmu's DLL beside it, and the slaves told so."""
@@ -222,8 +236,7 @@ def test_python_fmu_win64_binary_is_the_front(felt_brake, tmp_path):
     assert set(marker.split()) == {"linux64", "win64"}
     text = _dll_text(front, tmp_path)
     assert _exports(text) == set(FMI2_CS_API)
-    needed = {ln.split()[-1].lower() for ln in text.splitlines() if "DLL Name:" in ln}
-    assert needed <= {"kernel32.dll", "msvcrt.dll", "advapi32.dll"}, needed
+    _assert_only_windows_dlls(text)
     import re
     guid = re.search(r'guid="([^"]+)"', md).group(1)
     assert guid.encode() in front
@@ -231,13 +244,13 @@ def test_python_fmu_win64_binary_is_the_front(felt_brake, tmp_path):
 
 
 def test_python_fmu_without_a_cross_compiler_keeps_pythonfmus_win64_binary(tmp_path):
-    """No mingw-w64: linux64 gets the front, win64 keeps pythonfmu's DLL, and the marker
+    """No cross compiler: linux64 gets the front, win64 keeps pythonfmu's DLL, and the marker
     names linux64 only (so a slave on Windows raises, as pythonfmu expects)."""
     import os
     code = ("from cyclo_fmu.fmu_build import build_any; import sys; "
             "print(build_any('FeltBrake', sys.argv[1]))")
     r = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True,
-                       text=True, timeout=300, env=dict(os.environ, CYCLOFMU_MINGW="none"))
+                       text=True, timeout=300, env=dict(os.environ, CYCLOFMU_WIN64_CC="none"))
     assert r.returncode == 0, r.stderr
     with zipfile.ZipFile(tmp_path / "FeltBrake.fmu") as z:
         names = z.namelist()
@@ -257,7 +270,8 @@ def _wine():
 
 needs_wine = pytest.mark.skipif(
     win64_compiler() is None or _wine() is None,
-    reason="needs mingw-w64 and wine (apt-get install mingw-w64 wine64) to run a win64 DLL")
+    reason="needs a win64 cross compiler (mingw-w64 or ziglang) and wine (apt-get install "
+           "wine64) to run a win64 DLL")
 
 
 @pytest.fixture(scope="module")
@@ -267,14 +281,13 @@ def win_host(tmp_path_factory):
     d = tmp_path_factory.mktemp("wine")
     exe = d / "host.exe"
     src = ROOT / "cyclo_fmu" / "native" / "hostile" / "host_win64.c"
-    subprocess.run([win64_compiler(), "-std=c99", "-O2", "-Wall", "-static",
-                    f"-I{fmi_header_dir()}", "-o", str(exe), str(src)], check=True)
+    compile_win64_exe(src, [f"-I{fmi_header_dir()}"], exe)
     import os
     env = dict(os.environ, WINEPREFIX=str(d / "prefix"), WINEDEBUG="-all")
 
     def run(fmu, *args):
         import re
-        unz = d / fmu.stem
+        unz = d / f"{fmu.parent.name}_{fmu.stem}"      # one folder per FMU file
         if not unz.exists():
             zipfile.ZipFile(fmu).extractall(unz)
         md = (unz / "modelDescription.xml").read_text()
@@ -288,13 +301,20 @@ def win_host(tmp_path_factory):
     return run
 
 
+#: the cross compilers here, each one tested under wine
+TOOLCHAINS = available_toolchains() or ("none",)
+
+
 @pytest.mark.slow
 @needs_wine
-def test_python_fmu_win64_front_refuses_misuse_under_wine(felt_brake, win_host):
+@pytest.mark.parametrize("toolchain", TOOLCHAINS)
+def test_python_fmu_win64_front_refuses_misuse_under_wine(toolchain, win_host, tmp_path,
+                                                          monkeypatch):
     """The front's checks run on Windows: NULL handle, NULL name, another GUID, Model
     Exchange are refused with fmi2Error and a reason; without a Windows Python (wine has
     none) the front says that it cannot load pythonfmu's DLL and why, instead of crashing."""
-    out = win_host(felt_brake)
+    monkeypatch.setenv("CYCLOFMU_WIN64_CC", toolchain)
+    out = win_host(build_any("FeltBrake", tmp_path))
     assert "call-DoStep-NULL 3" in out and "call-GetReal-NULL 3" in out
     for case in ("nullname", "badguid", "me"):
         assert f"instantiate-{case} NULL" in out, out
@@ -308,11 +328,14 @@ def test_python_fmu_win64_front_refuses_misuse_under_wine(felt_brake, win_host):
 
 @pytest.mark.slow
 @needs_wine
-def test_native_reducer_win64_under_wine_equals_linux64_bit_for_bit(tmp_path, win_host):
-    """The win64 DLL (mingw-w64, no FMA contraction) steps the reducer 2 s at 1 ms with the
-    same numbers, to the last bit, as the linux64 binary in fmpy."""
+@pytest.mark.parametrize("toolchain", TOOLCHAINS)
+def test_native_reducer_win64_under_wine_equals_linux64_bit_for_bit(toolchain, tmp_path,
+                                                                   win_host, monkeypatch):
+    """The win64 DLL (mingw-w64 or Zig, no FMA contraction) steps the reducer 2 s at 1 ms
+    with the same numbers, to the last bit, as the linux64 binary in fmpy."""
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
+    monkeypatch.setenv("CYCLOFMU_WIN64_CC", toolchain)
     fmu = build_any("CycloidDriveNative", tmp_path)
     md = read_model_description(str(fmu))
     vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -337,6 +360,40 @@ def test_native_reducer_win64_under_wine_equals_linux64_bit_for_bit(tmp_path, wi
     assert 0.5 < ref[2] < 1.0          # eta: a loaded reducer, not a trivial zero
 
 
+@pytest.mark.skipif("zig" not in available_toolchains(),
+                    reason="the Python package ziglang is not installed (pip install ziglang)")
+def test_zig_cross_compiles_a_windows_dll_with_the_fmi2_api(tmp_path, monkeypatch):
+    """With CYCLOFMU_WIN64_CC=zig the FMU holds a PE32+ x86-64 DLL exporting the whole FMI
+    2.0 co-simulation API and nothing else, importing only Windows' kernel32 and its
+    Universal C Runtime (no Zig runtime DLL), ASLR and DEP on, and the build leaves no
+    import library or PDB in the working folder."""
+    monkeypatch.setenv("CYCLOFMU_WIN64_CC", "zig")
+    work = tmp_path / "cwd"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    fmu = build_any("FeltBrakeNative", tmp_path / "out")
+    with zipfile.ZipFile(fmu) as z:
+        data = z.read("binaries/win64/FeltBrakeNative.dll")
+        assert "sources/buildDescription.xml" in z.namelist()
+    pe = int.from_bytes(data[0x3C:0x40], "little")
+    assert data[:2] == b"MZ" and data[pe:pe + 4] == b"PE\0\0"
+    assert int.from_bytes(data[pe + 4:pe + 6], "little") == 0x8664      # x86-64
+    text = _dll_text(data, tmp_path)
+    assert _exports(text) == set(FMI2_CS_API)
+    needed = _assert_only_windows_dlls(text)
+    assert "msvcrt.dll" not in needed               # Zig links the Universal C Runtime
+    for flag in ("DYNAMIC_BASE", "NX_COMPAT", "HIGH_ENTROPY_VA"):
+        assert flag in text, flag
+    assert list(work.iterdir()) == []
+
+
+def test_an_unknown_win64_compiler_choice_is_refused(monkeypatch):
+    from model_core.errors import CycloidInputError
+    monkeypatch.setenv("CYCLOFMU_WIN64_CC", "msvc")
+    with pytest.raises(CycloidInputError, match="CYCLOFMU_WIN64_CC"):
+        win64_compiler()
+
+
 def test_without_a_cross_compiler_the_build_notes_it_and_goes_on(tmp_path):
     code = ("from cyclo_fmu.fmu_build import build_any; import sys; "
             "print(build_any('FeltBrakeNative', sys.argv[1]))")
@@ -344,7 +401,7 @@ def test_without_a_cross_compiler_the_build_notes_it_and_goes_on(tmp_path):
     r = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True,
                        text=True, timeout=300, env=dict(os.environ, CYCLOFMU_MINGW="none"))
     assert r.returncode == 0, r.stderr
-    assert "no mingw-w64 cross compiler" in r.stderr
+    assert "no win64 cross compiler" in r.stderr
     names = zipfile.ZipFile(tmp_path / "FeltBrakeNative.fmu").namelist()
     assert "binaries/linux64/FeltBrakeNative.so" in names
     assert not any(n.startswith("binaries/win64/") for n in names)

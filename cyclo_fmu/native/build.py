@@ -658,7 +658,7 @@ def build_native_fmu(design: DriveDesign | None = None, dest="dist", *,
         (lic / "LICENSE.txt").write_text(MIT_LICENSE)
         (lic / "fmi-headers-BSD-2-Clause.txt").write_text(_fmi_license(headers))
         compile_binary(src, stage / "binaries" / "linux64" / f"{NAME}.so", cc)
-        from .cross import compile_win64     # binaries/win64 when mingw-w64 is installed
+        from .cross import compile_win64     # binaries/win64 with mingw-w64 or Zig
         compile_win64(src, C_SOURCES + (GENERATED,), stage / "binaries" / "win64" / f"{NAME}.dll")
         out = dest / f"{name}.fmu"
         partial = dest / f".{name}.fmu.partial-{os.getpid()}"
