@@ -30,7 +30,7 @@ from pythonfmu.variables import Boolean, Integer, Real, String
 
 #: Inside an FMU whose binary for this platform is our C front (fmu_build._install_status_shim;
 #: ``_status_front`` lists the platforms: linux64, and win64 when the FMU was built with
-#: mingw-w64 there): a failure is reported through the variable ``_failed`` (value reference
+#: a win64 cross compiler, mingw-w64 or Zig): a failure is reported through the variable ``_failed`` (value reference
 #: 0), which the front reads after fmi2ExitInitializationMode and after a step that returned
 #: False (fmi2Discard from pythonfmu), and answers with fmi2Error. pythonfmu's own binary turns
 #: a raised exception into fmi2Fatal and its exception handling can corrupt the host's
