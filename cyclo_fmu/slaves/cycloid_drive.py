@@ -138,7 +138,13 @@ LATE_DESIGN_PARAMETERS = [
      Real),
     ("load_loss_scale", "calibration", "load_loss_scale", "1", "calibrated scale on the "
      "gear's load-dependent friction losses PL1..PL6 (the friction level of the whole gear; "
-     "1: as derived; 0 to 10)", Real)]
+     "1: as derived; 0 to 10)", Real),
+    # the warm-up's per-10 K form (model_core.design.ExtraPhysics.thermal_per_10K_torque)
+    ("thermal_loss_per_10K", "extra", "thermal_loss_per_10K", "1", "relative change of the "
+     "losses per 10 K of the grease temperature T_oil from thermal_T_ref, beyond the model's "
+     "own temperature physics: the losses times (1 + c (T_oil - thermal_T_ref)/10 K)", Real),
+    ("thermal_T_ref", "extra", "thermal_T_ref", "K", "temperature the per-10 K loss change is "
+     "referred to (a diagnosis: the recording's first temperature)", Real)]
 ALL_DESIGN_PARAMETERS = DESIGN_PARAMETERS + LATE_DESIGN_PARAMETERS
 #: design parameters of the heat balance only (run-time in both FMUs; not in the loss map)
 THERMAL_PARAMETERS = ("ambient_temperature", "housing_heat_capacity", "housing_heat_transfer",
@@ -190,6 +196,7 @@ PARAMETER_LIMITS = dict(
     load_loss_scale=(0.0, 10.0),
     # temperatures: the design's valid range, -100 to 200 degC
     ambient_temperature=(173.15, 473.15), T_oil_start=(173.15, 473.15),
+    thermal_T_ref=(173.15, 473.15),
     **{n: (sys.float_info.min, None) for n in ("housing_heat_capacity",
                                                "housing_heat_transfer", "housing_area")})
 #: [K] the grease temperatures the FMUs accept (input T_oil_in, the heat balance's result):
@@ -537,7 +544,8 @@ class CycloidDrive(UnitSlave):
             self._dynamic_extra = bool(ex.input_inertia or ex.ripple_1x or ex.ripple_roller
                                        or ex.run_in_change or ex.ripple_1x_load
                                        or ex.ripple_roller_load
-                                       or ex.thermal_loss_change)
+                                       or ex.thermal_loss_change
+                                       or ex.thermal_loss_per_10K)
             unit = core.shaft_speeds(self._mode, 1.0, self._design.z1)
             self._ratio_out = float(unit[b])
             # roller pass: z1 per turn of the ring relative to the carrier, per driving turn
@@ -696,6 +704,8 @@ class CycloidDrive(UnitSlave):
             self.tau_in += self._dynamic_torque(t, dt, w_in, tau_out)
             if self._design.extra.run_in_change:     # after it, as the native FMU adds it
                 self.tau_in += self._run_in
+            if self._design.extra.thermal_loss_per_10K:   # after it, as the native FMU
+                self.tau_in += self._per_10K
         self.P_extra = (self.tau_in - self._tau_in_gear) * w_in
         self.P_loss = self.tau_in * w_in + tau_out * self.w_out - self.P_stored
         # the support takes what the shafts do not: the gear's reaction and the drag of
@@ -724,6 +734,8 @@ class CycloidDrive(UnitSlave):
         ex = self._design.extra
         torque = float(ex.dynamic_torque(alpha, self._theta, self._order, t, loss_in))
         self._run_in = float(ex.run_in_torque(self._distance, loss_in))
+        # the per-10 K loss change at the grease temperature T_oil (not the held T_oil_start)
+        self._per_10K = float(ex.thermal_per_10K_torque(self._T, loss_in))
         # the conservative part: d/dt of J w^2/2 and of the ripples' potentials
         # -A cos(theta + phi) - A_z/z cos(z theta + phi_z), each times w = dtheta/dt
         stored = float(ex.dynamic_torque(alpha, self._theta, self._order, 0.0, 0.0))
