@@ -187,11 +187,13 @@ class ExtraPhysics:
     ripple_roller_phase: float = _f(0.0, "rad", "phase of the roller-pass ripple")
     thermal_loss_change: float = _f(0.0, "1", "relative change of the losses when warm (dynamic)")
     thermal_tau: float = _f(300.0, "s", "warm-up time constant")
-    # -- the diagnosis's replay only (REPLAY_ONLY) and the bench's transducers -------------
+    # -- the warm-up per 10 K (reducer FMUs), the diagnosis's replay only (REPLAY_ONLY) and
+    # the bench's transducers --------------------------------------------------------------
     thermal_loss_per_10K: float = _f(0.0, "1", "relative change of the losses per 10 K of the "
-                                     "grease temperature from thermal_T_ref, beyond the "
-                                     "model's own temperature physics (reducer FMUs: their "
-                                     "T_oil; the replay: the recording's temperature column)")
+                                     "grease temperature from thermal_T_ref, against the "
+                                     "model held at one temperature (reducer FMUs: their "
+                                     "T_oil, the losses held at T_oil_start, one warm-up; the "
+                                     "replay: the recording's temperature column)")
     thermal_T_ref: float = _f(293.15, "K", "temperature the per-10 K loss change is referred "
                               "to: the diagnosis writes the temperature column's first value; "
                               "the default 20 degC (room temperature) is an assumption for a "
@@ -301,9 +303,10 @@ class ExtraPhysics:
     def thermal_per_10K_torque(self, T, loss_in):
         """Loss change per 10 K at the driving shaft (N*m): c (T - T_ref)/(10 K) loss_in, with
         T the grease temperature (K), T_ref ``thermal_T_ref`` and loss_in the model's loss
-        torque referred to the driving shaft (N*m): the losses scale by (1 + c (T - T_ref)/10 K)
-        beyond the model's own temperature physics (model_core.effects 'thermal_drift', its
-        temperature form, referred to the column's first value). Scalars or arrays."""
+        torque referred to the driving shaft (N*m), the model held at one temperature: the
+        losses scale by (1 + c (T - T_ref)/10 K) (model_core.effects 'thermal_drift', its
+        temperature form, referred to the column's first value; the FMUs hold their losses at
+        T_oil_start meanwhile: one warm-up). Scalars or arrays."""
         from .effects import T_STEP   # (model_core imports it with the package)
         return self.thermal_loss_per_10K * (T - self.thermal_T_ref) / T_STEP * loss_in
 

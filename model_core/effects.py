@@ -607,8 +607,8 @@ def _apply_thermal(design, v, shape, temperature):
         return _with_extra(design, thermal_loss_per_10K=v["loss_change"], thermal_T_ref=ref), [
             f"extra.thermal_loss_per_10K, thermal_T_ref = {ref - 273.15:.4g} degC: the losses "
             "change per 10 K of the grease temperature from the temperature column's first "
-            "value, beyond the model's own temperature physics (reducer FMUs: at their T_oil, "
-            "T_oil_in or the heat balance's)"
+            "value, against the model held at one temperature (reducer FMUs: at their T_oil, "
+            "T_oil_in or the heat balance's, their losses held at T_oil_start: one warm-up)"
             + ("" if not isinstance(temperature, bool) else
                " (no reference temperature given: the design's thermal_T_ref is kept)")]
     # one warm-up (docs/explanation/thermal.md): the FMUs hold the losses at T_oil_start while

@@ -324,18 +324,21 @@ def test_a_warm_up_in_time_is_counted_once(preset_fmus):
 
 def test_a_warm_up_per_10K_follows_T_oil(preset_fmus):
     """The warm-up's per-10 K form (thermal_loss_per_10K c, thermal_T_ref T_ref: what a
-    diagnosis fits with a temperature column): the losses times (1 + c (T_oil - T_ref)/10 K),
-    beyond the model's own temperature physics. Along a T_oil_in trajectory (12 to 85 degC,
-    all four quadrants) tau_in is the model's at the same T_oil plus c (T_oil - T_ref)/10 K
-    times its loss torque, the extra loss appears in P_loss and P_extra (tau_in w_in + tau_out
-    w_out = P_loss: the energy balance exact), the gear's partial losses are the model's;
-    Python and native FMU equal to 1e-9; with the heat balance too (the grease warming from
-    15 degC), whose energy closes (mackic-rig: calibrated, idle losses, PL_mesh)."""
+    diagnosis fits with a temperature column against the model held at one temperature): one
+    warm-up, the model's losses held at T_oil_start times (1 + c (T_oil - T_ref)/10 K). Along
+    a T_oil_in trajectory (12 to 85 degC, all four quadrants) tau_in is the held model's plus
+    c (T_oil - T_ref)/10 K times its loss torque, the extra loss appears in P_loss and P_extra
+    (tau_in w_in + tau_out w_out = P_loss: the energy balance exact), the gear's partial
+    losses are the held model's; Python and native FMU equal to 1e-9; with the heat balance
+    too (the grease warming from 15 degC), whose energy closes (mackic-rig: calibrated, idle
+    losses, PL_mesh)."""
     native, python = preset_fmus
     c, T_ref = 0.08, 301.4
     extra = dict(thermal_loss_per_10K=c, thermal_T_ref=T_ref)
-    n, p = (Inst(x, use_T_oil_input=True, T_oil_in=T_ref, **extra) for x in preset_fmus)
-    plain = Inst(python, use_T_oil_input=True, T_oil_in=T_ref)
+    T0 = 305.0      # T_oil_start: the temperature the model is held at
+    n, p = (Inst(x, use_T_oil_input=True, T_oil_in=T_ref, T_oil_start=T0, **extra)
+            for x in preset_fmus)
+    plain = Inst(python, use_T_oil_input=True, T_oil_in=T0)   # the model at T_oil_start
     seen = set()
     for k in range(160):
         T_in = 321.65 + 36.5 * math.sin(0.037 * k) + 0.3 * math.sin(1.7 * k)
@@ -343,7 +346,7 @@ def test_a_warm_up_per_10K_follows_T_oil(preset_fmus):
         t = 7.0 * math.sin(0.061 * k)
         a = advance(n, 0.05, w_in=w, tau_out=t, T_oil_in=T_in)
         b = advance(p, 0.05, w_in=w, tau_out=t, T_oil_in=T_in)
-        m = advance(plain, 0.05, w_in=w, tau_out=t, T_oil_in=T_in)
+        m = advance(plain, 0.05, w_in=w, tau_out=t)
         for key in OUT:
             assert a[key] == pytest.approx(b[key], rel=RTOL, abs=ATOL), (k, key)
         w_out = p.fmu.getReal([p.vr["w_out"]])[0]
@@ -355,7 +358,8 @@ def test_a_warm_up_per_10K_follows_T_oil(preset_fmus):
         P_extra = p.fmu.getReal([p.vr["P_extra"]])[0]
         assert P_extra == pytest.approx(change * w, rel=1e-9, abs=1e-12), k
         for key in ("PL1", "PL3", "PL6", "PL_support", "PL_churn", "PL_mesh"):
-            assert b[key] == m[key], (k, key)       # the gear's own losses, at T_oil
+            assert b[key] == m[key], (k, key)       # the gear's own losses, held
+        assert b["T_oil"] == T_in                   # while T_oil follows the input
         seen.add((int(T_in // 10), w > 0, t * w < 0))
     assert len({x[0] for x in seen}) >= 7 and len({x[1:] for x in seen}) == 4
     for x in (n, p, plain):

@@ -102,8 +102,8 @@ EXTRA = (
     ("ripple_roller_load_phase", "rad", "Angle", None, False,
      "phase of the load-scaled roller-pass ripple"),
     ("thermal_loss_per_10K", "1", None, None, False, "relative change of the losses per 10 K "
-     "of the grease temperature T_oil from thermal_T_ref, beyond the model's own temperature "
-     "physics: the losses times (1 + c (T_oil - thermal_T_ref)/10 K)"),
+     "of the grease temperature T_oil from thermal_T_ref: the losses, held at T_oil_start "
+     "(one warm-up), times (1 + c (T_oil - thermal_T_ref)/10 K)"),
     ("thermal_T_ref", "K", "ThermodynamicTemperature", 173.15, True, "temperature the "
      "per-10 K loss change is referred to (a diagnosis: the recording's first temperature; "
      "173.15 to 473.15 K)"),
@@ -421,7 +421,7 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
                f'<Real {_real_attrs("W", "Power")}/>', "calculated")
             sv("T_oil", 53, "output", "continuous", "grease/housing temperature (T_oil_in, or "
                "the heat balance's); the losses are evaluated at it, or at T_oil_start while "
-               "thermal_loss_change is not 0 (one warm-up)",
+               "thermal_loss_change or thermal_loss_per_10K is not 0 (one warm-up)",
                f'<Real {_real_attrs("K", "ThermodynamicTemperature")}/>', "calculated")
             sv("Q_ambient", 54, "output", "continuous", "heat flow from the housing to the "
                "ambient (T_oil - ambient_temperature)/R", f'<Real {_real_attrs("W", "Power")}/>',

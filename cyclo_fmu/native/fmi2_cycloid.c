@@ -275,9 +275,11 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     s->out[O_T_OIL] = T;
     s->out[O_Q_AMBIENT] = (T - s->thermal[1]) / R;
     m = &CD_MAP.modes[mode];
-    /* CycloidDrive._loss_T: one warm-up. A warm-up in time (thermal_loss_change) was fitted
-     * against the model at one temperature: with it the losses stay at T_oil_start */
-    if (s->extra.thermal_loss_change != 0) T = s->thermal[0];
+    /* CycloidDrive._loss_T: one warm-up. A warm-up in time (thermal_loss_change) or per 10 K
+     * (thermal_loss_per_10K) was fitted against the model at one temperature: with it the
+     * losses stay at T_oil_start */
+    if (s->extra.thermal_loss_change != 0 || s->extra.thermal_loss_per_10K != 0)
+        T = s->thermal[0];
     cd_solve_thermal(&CD_THERMAL, mode, w_in, tau_out, T, &r);
     if (r.out_of_range && !s->warned_range
         && (fabs(tau_out) > CD_MAP_TORQUE_MAX || fabs(w_in) > CD_MAP_SPEED_MAX)) {
@@ -328,7 +330,7 @@ static void evaluate(Instance *c, double t, double dt, int commit)
         tau_in += dyn;
         if (s->extra.run_in_change != 0)
             tau_in += cd_run_in_torque(&s->extra, distance, loss_in);
-        if (s->extra.thermal_loss_per_10K != 0)   /* at T_oil, not the held T_oil_start */
+        if (s->extra.thermal_loss_per_10K != 0)   /* at T_oil; the losses at T_oil_start */
             tau_in += cd_thermal_per_10K_torque(&s->extra, s->out[O_T_OIL], loss_in);
         p_stored = p_stored * w_in;
     }

@@ -141,8 +141,8 @@ LATE_DESIGN_PARAMETERS = [
      "1: as derived; 0 to 10)", Real),
     # the warm-up's per-10 K form (model_core.design.ExtraPhysics.thermal_per_10K_torque)
     ("thermal_loss_per_10K", "extra", "thermal_loss_per_10K", "1", "relative change of the "
-     "losses per 10 K of the grease temperature T_oil from thermal_T_ref, beyond the model's "
-     "own temperature physics: the losses times (1 + c (T_oil - thermal_T_ref)/10 K)", Real),
+     "losses per 10 K of the grease temperature T_oil from thermal_T_ref: the losses, held at "
+     "T_oil_start (one warm-up), times (1 + c (T_oil - thermal_T_ref)/10 K)", Real),
     ("thermal_T_ref", "extra", "thermal_T_ref", "K", "temperature the per-10 K loss change is "
      "referred to (a diagnosis: the recording's first temperature)", Real)]
 ALL_DESIGN_PARAMETERS = DESIGN_PARAMETERS + LATE_DESIGN_PARAMETERS
@@ -419,7 +419,8 @@ class CycloidDrive(UnitSlave):
             self.parameter(name, 0.0, unit, desc, Real, min=lo, max=hi)
         self.output("T_oil", default.operating_temperature, "K", "grease/housing temperature "
                     "(T_oil_in, or the heat balance's); the losses are evaluated at it, or at "
-                    "T_oil_start while thermal_loss_change is not 0 (one warm-up)",
+                    "T_oil_start while thermal_loss_change or thermal_loss_per_10K is not 0 (one "
+                    "warm-up)",
                     depends=("T_oil_in",))
         self.output("Q_ambient", 0.0, "W", "heat flow from the housing to the ambient "
                     "(T_oil - ambient_temperature)/R", depends=("T_oil_in",))
@@ -536,7 +537,8 @@ class CycloidDrive(UnitSlave):
                 self._map_key = map_key
             self._dependent = core.thermal.temperature_dependent(self._design)
             # one warm-up: a warm-up in time holds the losses at the start's temperature
-            self._warm_in_time = bool(self._design.extra.thermal_loss_change)
+            self._warm_in_time = bool(self._design.extra.thermal_loss_change
+                                      or self._design.extra.thermal_loss_per_10K)
             self._R = core.thermal.housing_resistance(self._design)
             ex = self._design.extra
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
@@ -734,7 +736,8 @@ class CycloidDrive(UnitSlave):
         ex = self._design.extra
         torque = float(ex.dynamic_torque(alpha, self._theta, self._order, t, loss_in))
         self._run_in = float(ex.run_in_torque(self._distance, loss_in))
-        # the per-10 K loss change at the grease temperature T_oil (not the held T_oil_start)
+        # the per-10 K loss change at the grease temperature T_oil (the losses themselves held
+        # at T_oil_start: one warm-up)
         self._per_10K = float(ex.thermal_per_10K_torque(self._T, loss_in))
         # the conservative part: d/dt of J w^2/2 and of the ripples' potentials
         # -A cos(theta + phi) - A_z/z cos(z theta + phi_z), each times w = dtheta/dt
@@ -756,11 +759,11 @@ class CycloidDrive(UnitSlave):
 
     def _loss_T(self):
         """The grease temperature the losses are evaluated at [K]: the present one, or, with a
-        warm-up in time in the design (``thermal_loss_change``), the start's ``T_oil_start``.
-        A warm-up in time was fitted against the model held at one temperature, so it holds the
-        model's own temperature physics already: the losses following the heat balance (or
-        the input) as well would count that warm-up twice. T_oil and Q_ambient still follow
-        the heat balance or the input (docs/explanation/thermal.md, "One warm-up")."""
+        warm-up in the design (``thermal_loss_change`` in time, ``thermal_loss_per_10K`` per
+        10 K of T_oil), the start's ``T_oil_start``. A warm-up was fitted against the model
+        held at one temperature, so it holds the model's own temperature physics already: the
+        losses following the heat balance (or the input) as well would count that warm-up
+        twice. T_oil and Q_ambient still follow the heat balance or the input (docs/explanation/thermal.md, "One warm-up")."""
         return self.T_oil_start if self._warm_in_time else self._T
 
     def _exact(self, w_in, tau_out):
