@@ -610,10 +610,10 @@ def validate_design(d: DriveDesign) -> None:
         if not lo <= v <= hi:
             raise CycloidInputError("calibration." + name, v, f"must lie between {lo:g} and "
                                     f"{hi:g} (model_core.design.{name.upper()}_BOUNDS)")
-    if not 173.15 < d.extra.thermal_T_ref < 473.15:
-        raise CycloidInputError("extra.thermal_T_ref", d.extra.thermal_T_ref,
-                                "must be a temperature between 173.15 and 473.15 K (-100 to "
-                                "200 degC)")
+    if not 173.15 < d.extra.thermal_T_ref < 473.15:   # echoed in degC, as the file gives it
+        raise CycloidInputError("[extra].thermal_T_ref_degC",
+                                float(f"{d.extra.thermal_T_ref - KELVIN:.10g}"),
+                                "must lie between -100 and 200 degC")
     if not d.extra.run_in_change >= -1.0:
         raise CycloidInputError("extra.run_in_change", d.extra.run_in_change,
                                 "must be at least -1 (the losses cannot fall below zero)")

@@ -388,6 +388,19 @@ def test_a_warm_up_per_10K_follows_T_oil(preset_fmus):
         x.close()
 
 
+def test_a_reference_temperature_out_of_range_is_refused_by_its_file_key(tmp_path):
+    """thermal_T_ref is a grease temperature: the design file's key and degC in the error."""
+    from model_core.design import design_from_toml, design_to_toml
+    from model_core.errors import CycloidInputError
+    text = design_to_toml(DriveDesign())
+    assert "thermal_T_ref_degC = 20.0" in text
+    p = tmp_path / "d.toml"
+    p.write_text(text.replace("thermal_T_ref_degC = 20.0", "thermal_T_ref_degC = 500.0"))
+    with pytest.raises(CycloidInputError, match=r"thermal_T_ref_degC = 500.0: must lie between "
+                                                r"-100 and 200 degC"):
+        design_from_toml(p)
+
+
 @pytest.mark.parametrize("which", ["native", "python"])
 def test_state_round_trip_restores_the_temperature(preset_fmus, which):
     path = preset_fmus[0] if which == "native" else preset_fmus[1]
