@@ -37,8 +37,10 @@ ENGINES = ("fast", "bench")
 #: the bench hides the viscosity drift as what it is in the FMUs: the lubricant's viscosity-
 #: temperature slope, the reducer's grease following the recording's temperature
 BENCH_CANNOT_HIDE = {"viscosity_drift"}
-#: effects the bench hides with a temperature column (``temperature_rise``)
-BENCH_TEMPERATURE_EFFECTS = {"viscosity_drift"}
+#: effects the bench hides with a temperature column (``temperature_rise``): the viscosity
+#: drift as the true lubricant's slope, the warm-up as the reducer FMU's loss change per 10 K
+#: (extra.thermal_loss_per_10K from the column's first value, thermal_T_ref)
+BENCH_TEMPERATURE_EFFECTS = {"viscosity_drift", "thermal_drift"}
 
 #: hidden-effect sizes (the registry's synth defaults): comparable with the transducer noise
 #: (0.003 N*m), invisible by eye
@@ -320,6 +322,11 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
         true_design = replace(true_design, lubricant=lubricant_with_slope(
             true_design.lubricant, true_design.operating_temperature,
             values["ln_viscosity_change"] / T_STEP))
+    elif effect == "thermal_drift" and temperature_rise is not None:
+        # the losses change per 10 K of the grease temperature from where the column starts
+        # (the design's operating temperature): the registry's per-10 K form
+        ex = EFFECTS[effect].apply(replace(true_design, extra=ex), values, None,
+                                   temperature=true_design.operating_temperature)[0].extra
     elif effect not in ("torque_sensor_offset", "torque_sensor_gain", "torque_sensor_drift"):
         ex = switch_on(ex, effect, values, shape)
     design = replace(true_design, extra=ex)

@@ -187,9 +187,17 @@ class ExtraPhysics:
     ripple_roller_phase: float = _f(0.0, "rad", "phase of the roller-pass ripple")
     thermal_loss_change: float = _f(0.0, "1", "relative change of the losses when warm (dynamic)")
     thermal_tau: float = _f(300.0, "s", "warm-up time constant")
-    # -- the diagnosis's replay only (REPLAY_ONLY) and the bench's transducers -------------
+    # -- the warm-up per 10 K (reducer FMUs), the diagnosis's replay only (REPLAY_ONLY) and
+    # the bench's transducers --------------------------------------------------------------
     thermal_loss_per_10K: float = _f(0.0, "1", "relative change of the losses per 10 K of the "
-                                     "recording's temperature column (replay only)")
+                                     "grease temperature from thermal_T_ref, against the "
+                                     "model held at one temperature (reducer FMUs: their "
+                                     "T_oil, the losses held at T_oil_start, one warm-up; the "
+                                     "replay: the recording's temperature column)")
+    thermal_T_ref: float = _f(293.15, "K", "temperature the per-10 K loss change is referred "
+                              "to: the diagnosis writes the temperature column's first value; "
+                              "the default 20 degC (room temperature) is an assumption for a "
+                              "design that states none", "degC", None)
     viscosity_ln_change: float = _f(0.0, "1", "change of ln(viscosity) when warm, acting through "
                                     "the model's viscosity sensitivity (replay only)")
     viscosity_tau: float = _f(300.0, "s", "time constant of the viscosity drift (replay only)")
@@ -238,9 +246,10 @@ class ExtraPhysics:
     #: form the FMUs carry, the diagnosis writes that too (model_core.effects): a viscosity
     #: drift per 10 K as the lubricant's Walther line (nu_100), in time as the housing's heat
     #: capacity (tau = R C); a warm-up in time is thermal_loss_change/thermal_tau (reducer
-    #: FMUs). The per-10 K loss change and zero drift need a temperature the bench's
-    #: transducers and a per-10 K loss law the reducer FMUs do not have
-    REPLAY_ONLY = ("thermal_loss_per_10K", "viscosity_ln_change", "viscosity_tau",
+    #: FMUs), a loss change per 10 K thermal_loss_per_10K/thermal_T_ref (reducer FMUs, at
+    #: their T_oil). The per-10 K zero drift needs a temperature the bench's transducers do
+    #: not have
+    REPLAY_ONLY = ("viscosity_ln_change", "viscosity_tau",
                    "viscosity_ln_per_10K", "torque_in_zero_per_10K")
     #: fields the bench's input torque transducer FMU carries (offset, gain_error, zero_drift,
     #: zero_drift_tau; cyclo_fmu.bench.bench_parameters), not the reducer FMUs: they are not
@@ -290,6 +299,16 @@ class ExtraPhysics:
         the model's and settle as its contacts run in (model_core.effects 'run_in')."""
         import numpy as _np
         return self.run_in_change * _np.exp(-distance / self.run_in_distance) * loss_in
+
+    def thermal_per_10K_torque(self, T, loss_in):
+        """Loss change per 10 K at the driving shaft (N*m): c (T - T_ref)/(10 K) loss_in, with
+        T the grease temperature (K), T_ref ``thermal_T_ref`` and loss_in the model's loss
+        torque referred to the driving shaft (N*m), the model held at one temperature: the
+        losses scale by (1 + c (T - T_ref)/10 K) (model_core.effects 'thermal_drift', its
+        temperature form, referred to the column's first value; the FMUs hold their losses at
+        T_oil_start meanwhile: one warm-up). Scalars or arrays."""
+        from .effects import T_STEP   # (model_core imports it with the package)
+        return self.thermal_loss_per_10K * (T - self.thermal_T_ref) / T_STEP * loss_in
 
     def dynamic_torque(self, alpha, theta, order, elapsed, loss_in):
         """Inertia, ripple and warm-up torque at the driving shaft (N*m): J*alpha +
@@ -591,6 +610,10 @@ def validate_design(d: DriveDesign) -> None:
         if not lo <= v <= hi:
             raise CycloidInputError("calibration." + name, v, f"must lie between {lo:g} and "
                                     f"{hi:g} (model_core.design.{name.upper()}_BOUNDS)")
+    if not 173.15 < d.extra.thermal_T_ref < 473.15:   # echoed in degC, as the file gives it
+        raise CycloidInputError("[extra].thermal_T_ref_degC",
+                                float(f"{d.extra.thermal_T_ref - KELVIN:.10g}"),
+                                "must lie between -100 and 200 degC")
     if not d.extra.run_in_change >= -1.0:
         raise CycloidInputError("extra.run_in_change", d.extra.run_in_change,
                                 "must be at least -1 (the losses cannot fall below zero)")

@@ -553,7 +553,9 @@ def extra_torque(extra, s: dict) -> np.ndarray:
         total += extra.run_in_torque(s["distance_in"], s["loss_in"])
     temp = s.get("temperature")
     if extra.thermal_loss_per_10K and temp is not None:
-        total += EFFECTS["thermal_drift"].torque(s, [extra.thermal_loss_per_10K], None)
+        # the column is in degC; the design's reference (thermal_T_ref) in K
+        from .design import KELVIN
+        total += extra.thermal_per_10K_torque(np.asarray(temp, float) + KELVIN, s["loss_in"])
     if extra.viscosity_ln_change and s.get("sens_nu") is not None:
         total += EFFECTS["viscosity_drift"].torque(s, [extra.viscosity_ln_change],
                                                    extra.viscosity_tau)
@@ -598,10 +600,17 @@ def _apply_friction(design, v, shape, temperature):
 
 def _apply_thermal(design, v, shape, temperature):
     if temperature:
-        return _with_extra(design, thermal_loss_per_10K=v["loss_change"]), [
-            "extra.thermal_loss_per_10K: losses change with the temperature column beyond the "
-            "model's own temperature physics (replay only: not a parameter of the FMUs, whose "
-            "losses follow their grease temperature through the lubricant)"]
+        # the form is referred to the column's first value (_warm); ``temperature`` carries it
+        # in K where the diagnosis gives it (cyclo_fmu.diagnosis.report.updated_design)
+        ref = (float(temperature) if not isinstance(temperature, bool)
+               else design.extra.thermal_T_ref)
+        return _with_extra(design, thermal_loss_per_10K=v["loss_change"], thermal_T_ref=ref), [
+            f"extra.thermal_loss_per_10K, thermal_T_ref = {ref - 273.15:.4g} degC: the losses "
+            "change per 10 K of the grease temperature from the temperature column's first "
+            "value, against the model held at one temperature (reducer FMUs: at their T_oil, "
+            "T_oil_in or the heat balance's, their losses held at T_oil_start: one warm-up)"
+            + ("" if not isinstance(temperature, bool) else
+               " (no reference temperature given: the design's thermal_T_ref is kept)")]
     # one warm-up (docs/explanation/thermal.md): the FMUs hold the losses at T_oil_start while
     # a warm-up in time is in the design (it was fitted against the model held at one
     # temperature), and their heat balance warms T_oil with the fitted time constant: it is

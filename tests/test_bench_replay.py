@@ -295,6 +295,37 @@ def test_closure_temperature_driven_warm_up(sets, tmp_path, duration, tau, measu
     _assert_closes(good, bad, bad_min=2.0)
 
 
+@pytest.mark.parametrize("duration, tau, measured", [
+    (20.0, 10.0, "c 0.1195 (CI 0.1191-0.1199), 1.01 of the noise floor against 15.3"),
+    pytest.param(60.0, 30.0, "c 0.1196, 1.01 against 14.7", marks=pytest.mark.slow)])
+def test_closure_warm_up_per_10K(sets, tmp_path, duration, tau, measured):
+    """A warm-up found as "the losses change per 10 K": the reducer FMU's losses grow by 12 %
+    per 10 K of its grease temperature (extra.thermal_loss_per_10K), the grease following a
+    temperature rising 14 K from the operating temperature (time constant ``tau``; the
+    recording's temperature column, T_oil_in), its losses held at T_oil_start (one warm-up).
+    The diagnosis names the warm-up per 10 K of the column; design_updated.toml carries it with
+    the column's first value as thermal_T_ref, and the bench (the grease fed the column)
+    reproduces the recording to its noise floor; the default design does not (``measured``)."""
+    good, bad, d = _closure("thermal_drift", sets, tmp_path, duration=duration,
+                            temperature_rise=14.0, shape=tau, friction_error=0.0,
+                            effect_values={"loss_change": 0.12})
+    e = {x["id"]: x for x in d.effects}
+    assert "thermal_drift" in e and e["thermal_drift"]["form"].startswith("per 10 K")
+    c = e["thermal_drift"]["parameters"]["loss_change"]["value"]
+    ci = e["thermal_drift"]["parameters"]["loss_change"]["ci95"]
+    # the true 0.12: the model is held at the operating temperature in the diagnosis and in
+    # the FMUs alike (one warm-up), so nothing of the grease's own temperature physics mixes in
+    assert c == pytest.approx(0.12, rel=0.02), ci
+    fixed, _ = d.updated
+    assert fixed.extra.thermal_loss_per_10K == pytest.approx(c, rel=1e-9)
+    # the reference is the column's first value (the design's operating temperature, 0.05 K
+    # noise), carried to the FMUs
+    assert fixed.extra.thermal_T_ref == pytest.approx(DriveDesign().operating_temperature,
+                                                      abs=0.3)
+    assert fixed.extra.thermal_loss_change == 0.0
+    _assert_closes(good, bad, bad_min=2.0)
+
+
 def test_cli_bench_replay_and_verify(sets, short, tmp_path, capsys):
     """bench --scenario FILE (with --columns/--units as diagnose) and verify: exit 1 when the
     design does not reproduce the recording, one-line errors (exit 2) for bad input."""

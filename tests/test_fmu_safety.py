@@ -442,6 +442,18 @@ def test_native_parameter_limits_match_the_declared_ones(native):
         assert "thermal_loss_change" in errors(inst)
     finally:
         inst.close()
+    # the per-10 K warm-up's reference: a grease temperature (-100 to 200 degC), as T_oil_start
+    assert float(var["thermal_T_ref"].min) == 173.15
+    inst = Inst(native, start=False)
+    try:
+        inst.fmu.setupExperiment(startTime=0.0)
+        inst.fmu.enterInitializationMode()
+        inst.set(thermal_T_ref=250.0, thermal_loss_per_10K=-0.3)
+        with pytest.raises(Exception):
+            inst.set(thermal_T_ref=150.0)
+        assert "thermal_T_ref" in errors(inst)
+    finally:
+        inst.close()
 
 
 def test_native_drag_exponent_acts_in_initialization_mode(native):

@@ -560,10 +560,11 @@ def test_build_design_changes_every_reducer_fmu(calibrated_fmus, native, fmu):
     start = {v.name: v.start for v in md.modelVariables}
     assert float(start["mesh_loss_k"]) == 0.04 and float(start["idle_loss_scale"]) == 0.3
     assert float(start["load_loss_scale"]) == 1.12
-    # the existing variables keep their value references; the new parameter comes last
+    # the existing variables keep their value references; the new parameters come last, in
+    # the order they were added (cycloid_drive.LATE_DESIGN_PARAMETERS)
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    assert vr["load_loss_scale"] == max(vr.values())
-    assert vr["nu_100"] < vr["load_loss_scale"]
+    assert vr["thermal_T_ref"] == max(vr.values())
+    assert vr["nu_100"] < vr["load_loss_scale"] < vr["thermal_loss_per_10K"] < vr["thermal_T_ref"]
 
 
 def test_bad_input_gives_fmi2error_with_a_message(native):

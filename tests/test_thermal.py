@@ -322,6 +322,85 @@ def test_a_warm_up_in_time_is_counted_once(preset_fmus):
         x.close()
 
 
+def test_a_warm_up_per_10K_follows_T_oil(preset_fmus):
+    """The warm-up's per-10 K form (thermal_loss_per_10K c, thermal_T_ref T_ref: what a
+    diagnosis fits with a temperature column against the model held at one temperature): one
+    warm-up, the model's losses held at T_oil_start times (1 + c (T_oil - T_ref)/10 K). Along
+    a T_oil_in trajectory (12 to 85 degC, all four quadrants) tau_in is the held model's plus
+    c (T_oil - T_ref)/10 K times its loss torque, the extra loss appears in P_loss and P_extra
+    (tau_in w_in + tau_out w_out = P_loss: the energy balance exact), the gear's partial
+    losses are the held model's; Python and native FMU equal to 1e-9; with the heat balance
+    too (the grease warming from 15 degC), whose energy closes (mackic-rig: calibrated, idle
+    losses, PL_mesh)."""
+    native, python = preset_fmus
+    c, T_ref = 0.08, 301.4
+    extra = dict(thermal_loss_per_10K=c, thermal_T_ref=T_ref)
+    T0 = 305.0      # T_oil_start: the temperature the model is held at
+    n, p = (Inst(x, use_T_oil_input=True, T_oil_in=T_ref, T_oil_start=T0, **extra)
+            for x in preset_fmus)
+    plain = Inst(python, use_T_oil_input=True, T_oil_in=T0)   # the model at T_oil_start
+    seen = set()
+    for k in range(160):
+        T_in = 321.65 + 36.5 * math.sin(0.037 * k) + 0.3 * math.sin(1.7 * k)
+        w = 240.0 * math.sin(0.09 * k + 0.3)
+        t = 7.0 * math.sin(0.061 * k)
+        a = advance(n, 0.05, w_in=w, tau_out=t, T_oil_in=T_in)
+        b = advance(p, 0.05, w_in=w, tau_out=t, T_oil_in=T_in)
+        m = advance(plain, 0.05, w_in=w, tau_out=t)
+        for key in OUT:
+            assert a[key] == pytest.approx(b[key], rel=RTOL, abs=ATOL), (k, key)
+        w_out = p.fmu.getReal([p.vr["w_out"]])[0]
+        loss_in = m["tau_in"] + t * w_out / w if w else 0.0
+        change = c * (T_in - T_ref) / 10.0 * loss_in
+        assert b["tau_in"] == pytest.approx(m["tau_in"] + change, rel=1e-12, abs=1e-14), k
+        assert b["P_loss"] == pytest.approx(b["tau_in"] * w + t * w_out, rel=1e-12, abs=1e-12)
+        assert b["P_loss"] - m["P_loss"] == pytest.approx(change * w, rel=1e-9, abs=1e-12)
+        P_extra = p.fmu.getReal([p.vr["P_extra"]])[0]
+        assert P_extra == pytest.approx(change * w, rel=1e-9, abs=1e-12), k
+        for key in ("PL1", "PL3", "PL6", "PL_support", "PL_churn", "PL_mesh"):
+            assert b[key] == m[key], (k, key)       # the gear's own losses, held
+        assert b["T_oil"] == T_in                   # while T_oil follows the input
+        seen.add((int(T_in // 10), w > 0, t * w < 0))
+    assert len({x[0] for x in seen}) >= 7 and len({x[1:] for x in seen}) == 4
+    for x in (n, p, plain):
+        x.close()
+    # the heat balance: the extra loss heats the grease, and the grease's T drives the loss
+    params = dict(T_oil_start=288.15, ambient_temperature=298.15, housing_heat_capacity=300.0,
+                  **extra)
+    n, p = Inst(native, **params), Inst(python, **params)
+    R = thermal.housing_resistance(DriveDesign())
+    h, loss, q, P_start, Q_prev = 20.0, 0.0, 0.0, None, None
+    for k in range(120):
+        w, tau_out = 260.0 + 30.0 * math.sin(0.07 * k), -6.0 - 2.0 * math.sin(0.13 * k)
+        a, b = advance(n, h, w_in=w, tau_out=tau_out), advance(p, h, w_in=w, tau_out=tau_out)
+        for key in OUT:
+            assert a[key] == pytest.approx(b[key], rel=RTOL, abs=ATOL), (k, key)
+        if P_start is not None:
+            loss += P_start * h
+            q += 0.5 * (Q_prev + b["Q_ambient"]) * h
+        else:
+            T_first = b["T_oil"]
+        P_start, Q_prev = b["P_loss"], b["Q_ambient"]
+        assert b["Q_ambient"] == pytest.approx((b["T_oil"] - 298.15) / R, rel=1e-12)
+    assert b["T_oil"] > T_ref + 5                   # warmed past the reference: losses up
+    assert 300.0 * (b["T_oil"] - T_first) + q == pytest.approx(loss, rel=5e-3)
+    for x in (n, p):
+        x.close()
+
+
+def test_a_reference_temperature_out_of_range_is_refused_by_its_file_key(tmp_path):
+    """thermal_T_ref is a grease temperature: the design file's key and degC in the error."""
+    from model_core.design import design_from_toml, design_to_toml
+    from model_core.errors import CycloidInputError
+    text = design_to_toml(DriveDesign())
+    assert "thermal_T_ref_degC = 20.0" in text
+    p = tmp_path / "d.toml"
+    p.write_text(text.replace("thermal_T_ref_degC = 20.0", "thermal_T_ref_degC = 500.0"))
+    with pytest.raises(CycloidInputError, match=r"thermal_T_ref_degC = 500.0: must lie between "
+                                                r"-100 and 200 degC"):
+        design_from_toml(p)
+
+
 @pytest.mark.parametrize("which", ["native", "python"])
 def test_state_round_trip_restores_the_temperature(preset_fmus, which):
     path = preset_fmus[0] if which == "native" else preset_fmus[1]

@@ -39,6 +39,10 @@ def updated_design(design: DriveDesign, d: Diagnosis):
         if eid != e["id"]:
             eid, values, shape = resolve_effect(e["id"], values, shape)
         form = e.get("form", "").startswith("per 10 K")
+        if form and e.get("reference_temperature_C") is not None:
+            # the temperature the per-10 K form was referred to, K (extra.thermal_T_ref)
+            from model_core.design import KELVIN
+            form = float(e["reference_temperature_C"]) + KELVIN
         fixed, more = eff.apply(fixed, values, shape, temperature=form)
         notes += more
     if d.unexplained.get("present"):

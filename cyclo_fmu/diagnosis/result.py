@@ -179,6 +179,10 @@ def _entry(t, S, prob, P, first, rel1, base_rss, stability, check, offset=0.0):
              "separating_run": eff.separating_run,
              "form": "per 10 K of the temperature column" if form else
                      ("time" if eff.shape else "")}
+    if form:
+        # the per-10 K form is referred to the column's first value (model_core.effects._warm):
+        # the updated design carries it as extra.thermal_T_ref
+        entry["reference_temperature_C"] = float(np.asarray(sig["temperature"], float)[0])
     if check is not None:
         entry["twins"] = check.to_json()
     return entry, form

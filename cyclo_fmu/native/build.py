@@ -101,6 +101,12 @@ EXTRA = (
      "amplitude at 10 N.m of |tau_out|, in proportion"),
     ("ripple_roller_load_phase", "rad", "Angle", None, False,
      "phase of the load-scaled roller-pass ripple"),
+    ("thermal_loss_per_10K", "1", None, None, False, "relative change of the losses per 10 K "
+     "of the grease temperature T_oil from thermal_T_ref: the losses, held at T_oil_start "
+     "(one warm-up), times (1 + c (T_oil - thermal_T_ref)/10 K)"),
+    ("thermal_T_ref", "K", "ThermodynamicTemperature", 173.15, True, "temperature the "
+     "per-10 K loss change is referred to (a diagnosis: the recording's first temperature; "
+     "173.15 to 473.15 K)"),
 )
 
 #: Outputs, in the order of the C state's out[] (value references 10..29), then ``locked``.
@@ -223,6 +229,8 @@ def design_constants(design: DriveDesign):
     # stay)
     from ..slaves.cycloid_drive import LATE_DESIGN_PARAMETERS
     for name, section, field, unit, desc, kind in LATE_DESIGN_PARAMETERS:
+        if section == "extra":    # run-time parameters of the native FMU (EXTRA)
+            continue
         out.append((name, kind.__name__, getattr(getattr(design, section), field), unit, desc))
     return out
 
@@ -413,7 +421,7 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
                f'<Real {_real_attrs("W", "Power")}/>', "calculated")
             sv("T_oil", 53, "output", "continuous", "grease/housing temperature (T_oil_in, or "
                "the heat balance's); the losses are evaluated at it, or at T_oil_start while "
-               "thermal_loss_change is not 0 (one warm-up)",
+               "thermal_loss_change or thermal_loss_per_10K is not 0 (one warm-up)",
                f'<Real {_real_attrs("K", "ThermodynamicTemperature")}/>', "calculated")
             sv("Q_ambient", 54, "output", "continuous", "heat flow from the housing to the "
                "ambient (T_oil - ambient_temperature)/R", f'<Real {_real_attrs("W", "Power")}/>',

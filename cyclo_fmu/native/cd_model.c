@@ -198,6 +198,12 @@ double cd_dynamic_torque(const CDExtra *x, double alpha, double theta, double or
            + x->thermal_loss_change * (1.0 - exp(-elapsed / x->thermal_tau)) * loss_in;
 }
 
+/* ExtraPhysics.thermal_per_10K_torque: c (T - T_ref)/(10 K) loss_in, T the grease temperature */
+double cd_thermal_per_10K_torque(const CDExtra *x, double T, double loss_in)
+{
+    return x->thermal_loss_per_10K * (T - x->thermal_T_ref) / 10.0 * loss_in;
+}
+
 /* ThermalMap.locate, ThermalMap.solve and lossmap.blend_solutions */
 void cd_solve_thermal(const CDThermalMap *tm, int mode, double w_in, double tau_out, double T,
                       CDSolution *out)

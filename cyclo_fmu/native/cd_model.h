@@ -51,9 +51,11 @@ typedef struct {
     double stribeck_exponent;  /* delta of exp(-(|w|/w_s)^delta): 1 Tustin .. 2 Gaussian */
     double run_in_change, run_in_distance;   /* run-in: c exp(-distance/s0) loss_in */
     double ripple_1x_load, ripple_1x_load_phase, ripple_roller_load, ripple_roller_load_phase;
+    /* the warm-up per 10 K: c (T_oil - T_ref)/10 K loss_in */
+    double thermal_loss_per_10K, thermal_T_ref;
 } CDExtra;
 
-#define CD_N_EXTRA 18
+#define CD_N_EXTRA 20
 
 /* A discovered loss term (design [[extra.discovered]], model_core.discovered): the torque
  * coefficient * sgn(w) (|w|/300 rad/s)^speed_exponent (|tau_out|/10 N*m)^load_exponent. */
@@ -89,6 +91,10 @@ void cd_solve(const CDMap *map, int mode, double w_in, double tau_out, CDSolutio
 
 /* ExtraPhysics.steady_torque: drag and Stribeck torque at driving speed w (N*m). */
 double cd_steady_torque(const CDExtra *x, double w);
+
+/* ExtraPhysics.thermal_per_10K_torque: the loss change per 10 K of the grease temperature T
+ * (K) from thermal_T_ref (N*m). */
+double cd_thermal_per_10K_torque(const CDExtra *x, double T, double loss_in);
 
 /* ExtraPhysics.dynamic_torque: inertia, ripple and warm-up torque (N*m). */
 double cd_dynamic_torque(const CDExtra *x, double alpha, double theta, double order,

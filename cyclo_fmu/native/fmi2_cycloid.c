@@ -68,11 +68,13 @@ static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "drag_torque", "stribeck_torque", "stribeck_speed", "input_inertia", "ripple_1x",
     "ripple_1x_phase", "ripple_roller", "ripple_roller_phase", "thermal_loss_change",
     "thermal_tau", "drag_exponent", "stribeck_exponent", "run_in_change", "run_in_distance",
-    "ripple_1x_load", "ripple_1x_load_phase", "ripple_roller_load", "ripple_roller_load_phase"};
+    "ripple_1x_load", "ripple_1x_load_phase", "ripple_roller_load", "ripple_roller_load_phase",
+    "thermal_loss_per_10K", "thermal_T_ref"};
 
 #define STATE_MAGIC 0x43444e53u   /* "CDNS" */
-#define STATE_VERSION 5u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
-                              * load ripple, CDState.distance; 5: the oil temperature */
+#define STATE_VERSION 6u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
+                              * load ripple, CDState.distance; 5: the oil temperature;
+                              * 6: CDExtra's warm-up per 10 K */
 
 /* Everything that defines the instance's behaviour from here on: inputs, parameters,
  * outputs and the dynamic state. Plain data: copied and serialised as it is. */
@@ -150,7 +152,8 @@ static double *extra_field(CDExtra *x, int i)
     f[9] = &x->thermal_tau; f[10] = &x->drag_exponent; f[11] = &x->stribeck_exponent;
     f[12] = &x->run_in_change; f[13] = &x->run_in_distance; f[14] = &x->ripple_1x_load;
     f[15] = &x->ripple_1x_load_phase; f[16] = &x->ripple_roller_load;
-    f[17] = &x->ripple_roller_load_phase;
+    f[17] = &x->ripple_roller_load_phase; f[18] = &x->thermal_loss_per_10K;
+    f[19] = &x->thermal_T_ref;
     return f[i];
 }
 
@@ -173,6 +176,9 @@ static const char *extra_problem(int i, double v)
         return v >= -1 ? NULL : "must be at least -1";
     case 13:
         return v > 0 ? NULL : "must be positive";
+    case 19:
+        return (v > T_OIL_MIN && v < T_OIL_MAX) ? NULL
+               : "must lie between 173.15 and 473.15 K (-100 to 200 degC)";
     default:
         return NULL;
     }
@@ -241,7 +247,7 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     int dynamic = s->extra.input_inertia != 0 || s->extra.ripple_1x != 0
                   || s->extra.ripple_roller != 0 || s->extra.thermal_loss_change != 0
                   || s->extra.run_in_change != 0 || s->extra.ripple_1x_load != 0
-                  || s->extra.ripple_roller_load != 0;
+                  || s->extra.ripple_roller_load != 0 || s->extra.thermal_loss_per_10K != 0;
     /* CycloidDrive._temperature: the input, or the heat balance stepped with the loss at the
      * step's start held over the step: the step's inputs at the temperature of its start
      * (CycloidDrive._loss_at_start: evaluated without a step of the dynamic terms) */
@@ -269,9 +275,11 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     s->out[O_T_OIL] = T;
     s->out[O_Q_AMBIENT] = (T - s->thermal[1]) / R;
     m = &CD_MAP.modes[mode];
-    /* CycloidDrive._loss_T: one warm-up. A warm-up in time (thermal_loss_change) was fitted
-     * against the model at one temperature: with it the losses stay at T_oil_start */
-    if (s->extra.thermal_loss_change != 0) T = s->thermal[0];
+    /* CycloidDrive._loss_T: one warm-up. A warm-up in time (thermal_loss_change) or per 10 K
+     * (thermal_loss_per_10K) was fitted against the model at one temperature: with it the
+     * losses stay at T_oil_start */
+    if (s->extra.thermal_loss_change != 0 || s->extra.thermal_loss_per_10K != 0)
+        T = s->thermal[0];
     cd_solve_thermal(&CD_THERMAL, mode, w_in, tau_out, T, &r);
     if (r.out_of_range && !s->warned_range
         && (fabs(tau_out) > CD_MAP_TORQUE_MAX || fabs(w_in) > CD_MAP_SPEED_MAX)) {
@@ -322,6 +330,8 @@ static void evaluate(Instance *c, double t, double dt, int commit)
         tau_in += dyn;
         if (s->extra.run_in_change != 0)
             tau_in += cd_run_in_torque(&s->extra, distance, loss_in);
+        if (s->extra.thermal_loss_per_10K != 0)   /* at T_oil; the losses at T_oil_start */
+            tau_in += cd_thermal_per_10K_torque(&s->extra, s->out[O_T_OIL], loss_in);
         p_stored = p_stored * w_in;
     }
     s->out[O_TAU_IN] = tau_in;

@@ -138,7 +138,13 @@ LATE_DESIGN_PARAMETERS = [
      Real),
     ("load_loss_scale", "calibration", "load_loss_scale", "1", "calibrated scale on the "
      "gear's load-dependent friction losses PL1..PL6 (the friction level of the whole gear; "
-     "1: as derived; 0 to 10)", Real)]
+     "1: as derived; 0 to 10)", Real),
+    # the warm-up's per-10 K form (model_core.design.ExtraPhysics.thermal_per_10K_torque)
+    ("thermal_loss_per_10K", "extra", "thermal_loss_per_10K", "1", "relative change of the "
+     "losses per 10 K of the grease temperature T_oil from thermal_T_ref: the losses, held at "
+     "T_oil_start (one warm-up), times (1 + c (T_oil - thermal_T_ref)/10 K)", Real),
+    ("thermal_T_ref", "extra", "thermal_T_ref", "K", "temperature the per-10 K loss change is "
+     "referred to (a diagnosis: the recording's first temperature)", Real)]
 ALL_DESIGN_PARAMETERS = DESIGN_PARAMETERS + LATE_DESIGN_PARAMETERS
 #: design parameters of the heat balance only (run-time in both FMUs; not in the loss map)
 THERMAL_PARAMETERS = ("ambient_temperature", "housing_heat_capacity", "housing_heat_transfer",
@@ -190,6 +196,7 @@ PARAMETER_LIMITS = dict(
     load_loss_scale=(0.0, 10.0),
     # temperatures: the design's valid range, -100 to 200 degC
     ambient_temperature=(173.15, 473.15), T_oil_start=(173.15, 473.15),
+    thermal_T_ref=(173.15, 473.15),
     **{n: (sys.float_info.min, None) for n in ("housing_heat_capacity",
                                                "housing_heat_transfer", "housing_area")})
 #: [K] the grease temperatures the FMUs accept (input T_oil_in, the heat balance's result):
@@ -412,7 +419,8 @@ class CycloidDrive(UnitSlave):
             self.parameter(name, 0.0, unit, desc, Real, min=lo, max=hi)
         self.output("T_oil", default.operating_temperature, "K", "grease/housing temperature "
                     "(T_oil_in, or the heat balance's); the losses are evaluated at it, or at "
-                    "T_oil_start while thermal_loss_change is not 0 (one warm-up)",
+                    "T_oil_start while thermal_loss_change or thermal_loss_per_10K is not 0 (one "
+                    "warm-up)",
                     depends=("T_oil_in",))
         self.output("Q_ambient", 0.0, "W", "heat flow from the housing to the ambient "
                     "(T_oil - ambient_temperature)/R", depends=("T_oil_in",))
@@ -529,7 +537,8 @@ class CycloidDrive(UnitSlave):
                 self._map_key = map_key
             self._dependent = core.thermal.temperature_dependent(self._design)
             # one warm-up: a warm-up in time holds the losses at the start's temperature
-            self._warm_in_time = bool(self._design.extra.thermal_loss_change)
+            self._warm_in_time = bool(self._design.extra.thermal_loss_change
+                                      or self._design.extra.thermal_loss_per_10K)
             self._R = core.thermal.housing_resistance(self._design)
             ex = self._design.extra
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
@@ -537,7 +546,8 @@ class CycloidDrive(UnitSlave):
             self._dynamic_extra = bool(ex.input_inertia or ex.ripple_1x or ex.ripple_roller
                                        or ex.run_in_change or ex.ripple_1x_load
                                        or ex.ripple_roller_load
-                                       or ex.thermal_loss_change)
+                                       or ex.thermal_loss_change
+                                       or ex.thermal_loss_per_10K)
             unit = core.shaft_speeds(self._mode, 1.0, self._design.z1)
             self._ratio_out = float(unit[b])
             # roller pass: z1 per turn of the ring relative to the carrier, per driving turn
@@ -696,6 +706,8 @@ class CycloidDrive(UnitSlave):
             self.tau_in += self._dynamic_torque(t, dt, w_in, tau_out)
             if self._design.extra.run_in_change:     # after it, as the native FMU adds it
                 self.tau_in += self._run_in
+            if self._design.extra.thermal_loss_per_10K:   # after it, as the native FMU
+                self.tau_in += self._per_10K
         self.P_extra = (self.tau_in - self._tau_in_gear) * w_in
         self.P_loss = self.tau_in * w_in + tau_out * self.w_out - self.P_stored
         # the support takes what the shafts do not: the gear's reaction and the drag of
@@ -724,6 +736,9 @@ class CycloidDrive(UnitSlave):
         ex = self._design.extra
         torque = float(ex.dynamic_torque(alpha, self._theta, self._order, t, loss_in))
         self._run_in = float(ex.run_in_torque(self._distance, loss_in))
+        # the per-10 K loss change at the grease temperature T_oil (the losses themselves held
+        # at T_oil_start: one warm-up)
+        self._per_10K = float(ex.thermal_per_10K_torque(self._T, loss_in))
         # the conservative part: d/dt of J w^2/2 and of the ripples' potentials
         # -A cos(theta + phi) - A_z/z cos(z theta + phi_z), each times w = dtheta/dt
         stored = float(ex.dynamic_torque(alpha, self._theta, self._order, 0.0, 0.0))
@@ -744,11 +759,11 @@ class CycloidDrive(UnitSlave):
 
     def _loss_T(self):
         """The grease temperature the losses are evaluated at [K]: the present one, or, with a
-        warm-up in time in the design (``thermal_loss_change``), the start's ``T_oil_start``.
-        A warm-up in time was fitted against the model held at one temperature, so it holds the
-        model's own temperature physics already: the losses following the heat balance (or
-        the input) as well would count that warm-up twice. T_oil and Q_ambient still follow
-        the heat balance or the input (docs/explanation/thermal.md, "One warm-up")."""
+        warm-up in the design (``thermal_loss_change`` in time, ``thermal_loss_per_10K`` per
+        10 K of T_oil), the start's ``T_oil_start``. A warm-up was fitted against the model
+        held at one temperature, so it holds the model's own temperature physics already: the
+        losses following the heat balance (or the input) as well would count that warm-up
+        twice. T_oil and Q_ambient still follow the heat balance or the input (docs/explanation/thermal.md, "One warm-up")."""
         return self.T_oil_start if self._warm_in_time else self._T
 
     def _exact(self, w_in, tau_out):
