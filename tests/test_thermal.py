@@ -30,6 +30,14 @@ OUT = ("T_oil", "Q_ambient", "P_loss", "tau_in", "tau_housing", "eta", "eta0", "
        "PL6", "PL_support", "PL_churn", "PL_mesh", "J_load", "tau_in_static")
 
 
+
+def _oil_trajectory(k):
+    """Step ``k`` of a measured-looking trajectory: grease temperature 12 to 85 degC and back
+    [K], across every node of the map and between them; driving speed [rad/s] and load
+    [N*m] through all four quadrants."""
+    return (321.65 + 36.5 * math.sin(0.037 * k) + 0.3 * math.sin(1.7 * k),
+            240.0 * math.sin(0.09 * k + 0.3), 7.0 * math.sin(0.061 * k))
+
 def values(inst, names=OUT):
     return dict(zip(names, inst.fmu.getReal([inst.vr[n] for n in names])))
 
@@ -266,9 +274,7 @@ def test_python_and_native_fmus_agree_for_the_calibrated_preset_while_warm(prese
     # across every node of the map and between them, in all four quadrants
     seen = set()
     for k in range(200):
-        T_in = 321.65 + 36.5 * math.sin(0.037 * k) + 0.3 * math.sin(1.7 * k)
-        w = 240.0 * math.sin(0.09 * k + 0.3)
-        t = 7.0 * math.sin(0.061 * k)
+        T_in, w, t = _oil_trajectory(k)
         a = advance(n, 0.05, w_in=w, tau_out=t, T_oil_in=T_in)
         b = advance(p, 0.05, w_in=w, tau_out=t, T_oil_in=T_in)
         assert a["T_oil"] == b["T_oil"] == T_in
@@ -341,9 +347,7 @@ def test_a_warm_up_per_10K_follows_T_oil(preset_fmus):
     plain = Inst(python, use_T_oil_input=True, T_oil_in=T0)   # the model at T_oil_start
     seen = set()
     for k in range(160):
-        T_in = 321.65 + 36.5 * math.sin(0.037 * k) + 0.3 * math.sin(1.7 * k)
-        w = 240.0 * math.sin(0.09 * k + 0.3)
-        t = 7.0 * math.sin(0.061 * k)
+        T_in, w, t = _oil_trajectory(k)
         a = advance(n, 0.05, w_in=w, tau_out=t, T_oil_in=T_in)
         b = advance(p, 0.05, w_in=w, tau_out=t, T_oil_in=T_in)
         m = advance(plain, 0.05, w_in=w, tau_out=t)

@@ -127,6 +127,18 @@ def evidence(prob, S, opts) -> list:
     return sorted(rows, key=lambda r: r["bic"])
 
 
+def _in_first_analysis(first, eid, base_rss):
+    """What effect ``eid`` explains in the first analysis ``first`` = (S1, prob1, P1), at the
+    design's own level (a re-linearised effect is reported there): (RMS explained in the fit,
+    share of the base RSS), or None where the first analysis did not select it."""
+    S1, prob1, _ = first
+    own = [x for x in S1.terms if x.effect == eid]
+    if not own:
+        return None
+    rest1 = prob1.fit(tuple(x for x in S1.terms if x not in own), cv=False)
+    return fit_rms(prob1, rest1, S1), (rest1.rss - S1.rss) / max(base_rss, 1e-300)
+
+
 def _entry(t, S, prob, P, first, rel1, base_rss, stability, check, offset=0.0):
     """One selected effect's dict (drop-one explained RMS, its torque at sample level, its
     parameters with 95 % intervals, its twin check). ``offset``: the change of a calibration
@@ -142,21 +154,13 @@ def _entry(t, S, prob, P, first, rel1, base_rss, stability, check, offset=0.0):
     if t.effect == "friction_miscalibrated" and rel1 and first is not None:
         # relinearised: what the level explains, and its torque, are the first analysis's
         # (at the design's own level), at the whole relative error
-        S1, prob1, P1 = first
-        fr1 = [x for x in S1.terms if x.effect == t.effect]
-        if fr1:
-            rest1 = prob1.fit(tuple(x for x in S1.terms if x not in fr1), cv=False)
-            expl = fit_rms(prob1, rest1, S1)
-            share = (rest1.rss - S1.rss) / max(base_rss, 1e-300)
+        P1 = first[2]
+        expl, share = _in_first_analysis(first, t.effect, base_rss) or (expl, share)
         whole = (1 + rel1) * (1 + float(v[0])) - 1
         torque = whole * first_order(eff.basis(P1.sig, None), dt, bw)[:, 0]
     if offset and first is not None:
-        S1, prob1, P1 = first
-        c1 = [x for x in S1.terms if x.effect == t.effect]
-        if c1:
-            rest1 = prob1.fit(tuple(x for x in S1.terms if x not in c1), cv=False)
-            expl = fit_rms(prob1, rest1, S1)
-            share = (rest1.rss - S1.rss) / max(base_rss, 1e-300)
+        P1 = first[2]
+        expl, share = _in_first_analysis(first, t.effect, base_rss) or (expl, share)
         whole = offset + float(v[0])
         torque = whole * first_order(eff.basis(P1.sig, None), dt, bw)[:, 0]
     params = {}
