@@ -499,18 +499,8 @@ def discover(residual, t, w_in, T_out, *, samples_per_block=None, block=0.01,
         ``Discovery.nuisance_change`` (add it to the fitted values; it is ~0 when the form is
         unrelated to the library terms).
     """
-    t = np.asarray(t, float)
-    w_in = np.asarray(w_in, float)
-    dt = float(np.median(np.diff(t)))
-    m = int(samples_per_block or max(1, int(round(block / dt))))
-    from scipy.ndimage import uniform_filter1d
-    w_s = uniform_filter1d(w_in, max(1, int(round(SPEED_SMOOTHING / dt))), mode="nearest")
-    theta = np.concatenate([[0.0], np.cumsum(0.5 * (w_in[1:] + w_in[:-1]) * np.diff(t))])
-    s = {"t": t, "w_in": w_in, "tau_out": -np.asarray(T_out, float),
-         "alpha_in": np.gradient(w_s, t), "theta_in": theta,
-         "order_roller": roller_pass_order(mode, z1),
-         "temperature": None if temperature is None else np.asarray(temperature, float),
-         "T_in_model": None if model_T_in is None else np.asarray(model_T_in, float)}
+    s, m = _signals(t, w_in, T_out, samples_per_block, block, temperature, model_T_in,
+                    mode, z1)
     lib = library or Library.default(temperature is not None, model_T_in is not None)
     cols = lib.block_columns(s, m, bandwidth)
     y = (np.asarray(residual_blocks, float) if residual_blocks is not None
@@ -537,6 +527,36 @@ def discover(residual, t, w_in, T_out, *, samples_per_block=None, block=0.01,
     if reason:
         return Discovery(False, None, [], before, after, noise, removed, "", reason,
                          candidates=cand, n_folds=n_folds)
+    terms, texts, readings, design_terms, not_in, pred = _proposed_terms(sd, cols, nz, n)
+    formula = "T_extra at the driving shaft = " + " ".join(texts)
+    return Discovery(True, formula, terms, before, after, noise, removed,
+                     "; ".join(dict.fromkeys(readings)),
+                     design_terms=tuple(design_terms[:MAX_TERMS]), not_in_design=not_in,
+                     candidates=cand, n_folds=n_folds, prediction=pred,
+                     nuisance_change=[float(x) for x in sd.nuisance_change_],
+                     nuisance_se=[float(x) for x in sd.nuisance_se_])
+
+
+def _signals(t, w_in, T_out, samples_per_block, block, temperature, model_T_in, mode, z1):
+    """The dictionary's sample-level signals of :func:`discover` and the samples per block."""
+    t = np.asarray(t, float)
+    w_in = np.asarray(w_in, float)
+    dt = float(np.median(np.diff(t)))
+    m = int(samples_per_block or max(1, int(round(block / dt))))
+    from scipy.ndimage import uniform_filter1d
+    w_s = uniform_filter1d(w_in, max(1, int(round(SPEED_SMOOTHING / dt))), mode="nearest")
+    theta = np.concatenate([[0.0], np.cumsum(0.5 * (w_in[1:] + w_in[:-1]) * np.diff(t))])
+    s = {"t": t, "w_in": w_in, "tau_out": -np.asarray(T_out, float),
+         "alpha_in": np.gradient(w_s, t), "theta_in": theta,
+         "order_roller": roller_pass_order(mode, z1),
+         "temperature": None if temperature is None else np.asarray(temperature, float),
+         "T_in_model": None if model_T_in is None else np.asarray(model_T_in, float)}
+    return s, m
+
+
+def _proposed_terms(sd, cols, nz, n):
+    """The fitted sparse form ``sd`` as report terms, formula texts, readings, design terms,
+    the features the design cannot carry, and its block-level prediction."""
     terms, texts, readings, design_terms, not_in = [], [], [], [], []
     pred = np.zeros(n)
     X = np.hstack(([nz] if nz is not None and nz.size else []) + cols)
@@ -556,13 +576,7 @@ def discover(residual, t, w_in, T_out, *, samples_per_block=None, block=0.01,
             design_terms.append(dt_)
         else:
             not_in.append(feat.name)
-    formula = "T_extra at the driving shaft = " + " ".join(texts)
-    return Discovery(True, formula, terms, before, after, noise, removed,
-                     "; ".join(dict.fromkeys(readings)),
-                     design_terms=tuple(design_terms[:MAX_TERMS]), not_in_design=not_in,
-                     candidates=cand, n_folds=n_folds, prediction=pred,
-                     nuisance_change=[float(x) for x in sd.nuisance_change_],
-                     nuisance_se=[float(x) for x in sd.nuisance_se_])
+    return terms, texts, readings, design_terms, not_in, pred
 
 
 # -- closure: the friction level and the discovered coefficients made consistent -------------------
