@@ -259,7 +259,9 @@ def _secant(evaluate, H, lo, inv, companion=False):
     one does), which then make the history: the next interpolation has three points near
     the root (from start nodes ~0.02 apart the first estimate is off by up to ~3e-5, and the
     next one, through it and the nodes, by ~1e-10, short of _FIXED_POINT_TOL). Returns (the
-    rows at each point's evaluation of smallest |f - eta0|, stuck)."""
+    rows at each point's evaluation of smallest |f - eta0|, stuck, the points kept (eta0 and
+    g, each (K, n)): where g jumps at the root the secant's last points straddle the jump, and
+    they narrow the bracket of the solver that takes over)."""
     n = H.shape[2]
     stuck = np.zeros(n, bool)
     active = np.flatnonzero((np.abs(H[_F] - H[_X]) > _FIXED_POINT_TOL).all(0))
@@ -324,10 +326,11 @@ def _secant(evaluate, H, lo, inv, companion=False):
             stuck[active[tired]] = True
         active = active[going & ~tired]
     best = np.argmin(np.abs(H[_F] - H[_X]), axis=0)
-    return H[:, best, np.arange(n)], stuck
+    return H[:, best, np.arange(n)], stuck, (H[_X], H[_F] - H[_X])
 
 
 def _regula_falsi(eta0_from, sel, a, ga, gb, x_last, g_last, T1, Ls, converged):
+    # (x_last, g_last: the secant's points, (K, points) or (points,))
     """Regula falsi (Illinois) on the bracket (a, 1] with g(a) = ga >= 0 >= g(1) = gb, at the
     points ``sel`` where the secant failed, narrowed first by the secant's last point in range
     (x_last, g_last). Keeps each point's best evaluation (smallest |g|: near the locking pole g
@@ -338,10 +341,11 @@ def _regula_falsi(eta0_from, sel, a, ga, gb, x_last, g_last, T1, Ls, converged):
     xs, fs, Ts, gs = a.copy(), ga + a, T1.copy(), ga.copy()
     Ls = [np.array(arr, float) for arr in Ls]
     b = np.ones_like(a)
-    inside = (x_last > a) & (x_last < b)
-    up0, down0 = inside & (g_last >= 0), inside & (g_last < 0)
-    a, ga = np.where(up0, x_last, a), np.where(up0, g_last, ga)
-    b, gb = np.where(down0, x_last, b), np.where(down0, g_last, gb)
+    for x0, g0 in zip(np.atleast_2d(x_last), np.atleast_2d(g_last)):
+        inside = (x0 > a) & (x0 < b)
+        up0, down0 = inside & (g0 >= 0), inside & (g0 < 0)
+        a, ga = np.where(up0, x0, a), np.where(up0, g0, ga)
+        b, gb = np.where(down0, x0, b), np.where(down0, g0, gb)
     live = np.ones(sel.size, bool)
     side = np.zeros(sel.size)   # Illinois: which end was kept last (+1 b, -1 a)
     for _ in range(_BRACKET_MAX):
@@ -655,7 +659,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         E0 = evaluate(np.ones_like(T_flat))
         H = np.stack([E0, evaluate(np.clip(E0[_F], lo, 1.0))], axis=1)
     g_one = H[_F, 0] - 1.0                       # g(1) <= 0: the upper end of every bracket
-    h, stuck = _secant(evaluate, H, lo, inv, companion=n <= _PAIR_START_MAX)
+    h, stuck, (x_kept, g_kept) = _secant(evaluate, H, lo, inv, companion=n <= _PAIR_START_MAX)
     x1, f1, T1 = h[_X], h[_F], h[_T1]
     g1 = f1 - x1
     L = list(h[_L:])
@@ -675,7 +679,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         # the locking pole; such points are solved again on the bracket (lo, 1], where
         # g(1) <= 0, by regula falsi (Illinois); no root above lo where g(lo) < 0
         lo_b = lo[bad]
-        x_last, g_last = x1.copy(), g1.copy()
+        x_last, g_last = x_kept, g_kept
         f_lo, L_lo, T1_lo = eta0_from(lo_b, bad)
         g_lo = f_lo - lo_b
         solvable[bad] = g_lo >= 0
@@ -695,8 +699,8 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
                 return np.abs(Tm * c_k - T_flat[sel]) <= 1e-10 * np.abs(T_flat[sel])
 
             xs, fs, Ts, Ls = _regula_falsi(
-                eta0_from, bad, lo_b[keep], g_lo[keep], g_one[bad], x_last[bad],
-                g_last[bad], T1[bad], [arr[bad] for arr in L], converged)
+                eta0_from, bad, lo_b[keep], g_lo[keep], g_one[bad], x_last[:, bad],
+                g_last[:, bad], T1[bad], [arr[bad] for arr in L], converged)
             x1[bad], f1[bad], T1[bad] = xs, fs, Ts
             for arr, ls in zip(L, Ls):
                 arr[bad] = ls
