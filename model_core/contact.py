@@ -32,6 +32,9 @@ _REFERENCE_MAX_POINTS = 16
 #: map's batch of 2500 points has about 10 % left after the second step, of whose problems
 #: the worst ruled how long the whole batch iterated)
 _ACTIVE_SET_SHARE = 2
+#: [points] batches from this size on (a map's); a few points iterate together to the end
+#: (the bookkeeping would cost more than the steps it saves: one operating point)
+_ACTIVE_SET_MIN = 64
 _REFERENCE_PER_DECADE = 2
 _REFERENCE_LOG10 = np.arange(-4.0, 6.01, 1.0 / _REFERENCE_PER_DECADE)
 _REFERENCE_TORQUES = 10.0 ** _REFERENCE_LOG10
@@ -257,17 +260,19 @@ class _Geometry:
         # iteration (active set), the others go on; each point then stops by its own test
         shape = rot.shape
         nd = self.n_distinct
-        rot = rot.reshape(-1, nd)
-        T_k = np.broadcast_to(T_k, shape[:-1] + (1,)).reshape(-1, 1)
-        if l.ndim != 3:
-            l, c, l2 = (x.reshape(x.shape[0], 1, nd) for x in (l, c, l2))
+        batch = rot.size >= _ACTIVE_SET_MIN * nd
+        if batch:
+            rot = rot.reshape(-1, nd)
+            T_k = np.broadcast_to(T_k, shape[:-1] + (1,)).reshape(-1, 1)
+            if l.ndim != 3:
+                l, c, l2 = (x.reshape(x.shape[0], 1, nd) for x in (l, c, l2))
         out, idx = None, None
         for it in range(_NEWTON_ITERATIONS):
             if it == 1 and l.shape[0] > 1:
                 # after one step every rotation is right of its root and only decreases: a
                 # roller out of contact at the largest rotation of the batch stays out, and
                 # its terms (zeros) are dropped from the sums
-                r_max = rot.max(0)
+                r_max = rot.reshape(-1, nd).max(0)
                 rows = np.any(self._l * r_max - self._c > 0, axis=1)
                 if not rows.all():
                     l, l2, c = l[rows], l2[rows], c[rows]
@@ -284,6 +289,10 @@ class _Geometry:
             # (np.zeros: np.zeros_like's Python wrapper costs more than the division)
             step = np.divide(t - T_k, dt, out=np.zeros(t.shape), where=dt > 0)
             rot = rot - step
+            if not batch:
+                if (np.abs(step) <= _NEWTON_RTOL * np.abs(rot)).all():
+                    break
+                continue
             going = (np.abs(step) > _NEWTON_RTOL * np.abs(rot)).any(-1)
             if not going.any():
                 break

@@ -75,6 +75,8 @@ _BRACKET_MAX = 100
 #: _FIXED_POINT_MAX (24 single-point evaluations) before the bracket took over
 _SECANT_PROGRESS = 0.5
 _SECANT_PATIENCE = 3
+#: [steps] the secant step from which progress is watched (the maps' points converge in 3-4)
+_SECANT_WATCH = 3
 #: up to this many points left on the bracket (a few points cost what one does: numpy's
 #: per-call overhead, as _PAIR_START_MAX), each step evaluates _MULTISECTION_POINTS points
 #: of every bracket in one call, the regula falsi's point and an even grid, and keeps the
@@ -265,10 +267,10 @@ def _secant(evaluate, H, lo, inv, companion=False):
     n = H.shape[2]
     stuck = np.zeros(n, bool)
     active = np.flatnonzero((np.abs(H[_F] - H[_X]) > _FIXED_POINT_TOL).all(0))
-    # the smallest |f - eta0| each point had, and its evaluations in a row without progress
-    best_r = np.abs(H[_F] - H[_X]).min(0)
-    strikes = np.zeros(n, int)
-    for _ in range(_FIXED_POINT_MAX):
+    # from the _SECANT_WATCH-th step on (a smooth point has converged by then): the smallest
+    # |f - eta0| each point had, and its evaluations in a row without progress
+    best_r = strikes = None
+    for step_no in range(_FIXED_POINT_MAX):
         if active.size == 0:
             break
         at = slice(None) if active.size == n else active   # all: no index copies
@@ -308,23 +310,26 @@ def _secant(evaluate, H, lo, inv, companion=False):
             H = np.repeat(H[:, best, np.arange(n)][:, None], k, 1)
             H[:, :, at] = E.reshape(_ROWS, k, -1)
             active = active[(np.abs(E[_F] - E[_X]) > _FIXED_POINT_TOL).reshape(k, -1).all(0)]
-            best_r[active] = np.abs(H[_F][:, active] - H[_X][:, active]).min(0)
             continue
         # the new point replaces the one of largest |G|
         worst = np.argmax(np.abs(Ga), axis=0)
+        if step_no == _SECANT_WATCH:
+            best_r, strikes = np.abs(H[_F] - H[_X]).min(0), np.zeros(n, int)
         E = evaluate(x2, active)
         H[:, worst, active] = E
         r = np.abs(E[_F] - E[_X])
         going = r > _FIXED_POINT_TOL
-        # no progress for _SECANT_PATIENCE evaluations in a row: g is not smooth at the
-        # root; the bracketed solver takes the point
-        gained = r <= _SECANT_PROGRESS * best_r[active]
-        strikes[active] = np.where(gained, 0, strikes[active] + 1)
-        best_r[active] = np.minimum(best_r[active], r)
-        tired = going & (strikes[active] >= _SECANT_PATIENCE)
-        if tired.any():
-            stuck[active[tired]] = True
-        active = active[going & ~tired]
+        if best_r is not None:
+            # no progress for _SECANT_PATIENCE evaluations in a row: g is not smooth at the
+            # root; the bracketed solver takes the point
+            gained = r <= _SECANT_PROGRESS * best_r[active]
+            strikes[active] = np.where(gained, 0, strikes[active] + 1)
+            best_r[active] = np.minimum(best_r[active], r)
+            tired = going & (strikes[active] >= _SECANT_PATIENCE)
+            if tired.any():
+                stuck[active[tired]] = True
+                going = going & ~tired
+        active = active[going]
     best = np.argmin(np.abs(H[_F] - H[_X]), axis=0)
     return H[:, best, np.arange(n)], stuck, (H[_X], H[_F] - H[_X])
 
