@@ -7,7 +7,8 @@ Causality: the motor integrates the rigid drive train and outputs speed and acce
 reducer and brake take speed and give torque. The output-side inertia (brake drum, coupling,
 T30FN rotor) is a parameter of the reducer, which reflects it to the motor's integrator
 (``tau_in_static``, ``J_load`` speeding up, ``J_load_dec`` slowing down): no component
-differentiates a co-simulation input. Parameters: resources/<component>.ssv bound to each component in the .ssd
+differentiates a co-simulation input. The reducer's grease temperature ``T_oil`` is the input
+torque transducer's ``temperature`` (its zero's drift per 10 K). Parameters: resources/<component>.ssv bound to each component in the .ssd
 (libcosim applies them) and the same values in resources/TestBench.ssv, which ``run_ssp``
 passes to fmpy as ``parameter_set`` (fmpy ignores ParameterBindings). The paper's series steps the motor
 frequency and the brake torque; each pair is held to steady state.
@@ -35,9 +36,10 @@ CONNECTORS = {
     "drive": [("w_in", "input"), ("tau_out", "input"), ("alpha_in", "input"),
               ("w_out", "output"), ("tau_in", "output"), ("tau_in_static", "output"),
               ("J_load", "output"), ("J_load_dec", "output"), ("torque_out", "output"),
-              ("tau_housing", "output"), ("P_loss", "output"), ("eta", "output")],
+              ("tau_housing", "output"), ("P_loss", "output"), ("eta", "output"),
+              ("T_oil", "output")],
     "brake": [("w", "input"), ("tau_out", "output"), ("torque_shaft", "output")],
-    "t_in": [("x", "input"), ("y", "output")],
+    "t_in": [("x", "input"), ("temperature", "input"), ("y", "output")],
     "n_in": [("x", "input"), ("y", "output")],
     "t_out": [("x", "input"), ("y", "output")],
     "n_out": [("x", "input"), ("y", "output")],
@@ -87,6 +89,11 @@ CONNECTIONS = [
     ("drive", "w_out", "brake", "w"),
     ("brake", "tau_out", "drive", "tau_out"),
     ("drive", "tau_in", "t_in", "x"),
+    # the input torque transducer's temperature (its zero's drift per 10 K) is the reducer's
+    # grease temperature: the T22 sits on the input shaft next to the housing, and a replay
+    # feeds the recording's temperature column to T_oil_in, so the transducer reads at the
+    # temperature the diagnosis fitted its drift to
+    ("drive", "T_oil", "t_in", "temperature"),
     ("motor", "w", "n_in", "x"),
     ("drive", "torque_out", "t_out", "x"),
     ("drive", "w_out", "n_out", "x"),
@@ -166,6 +173,8 @@ class Sensors:
     torque_out_offset: float = 0.0
     torque_in_zero_drift: float = 0.0  # N*m, the input transducer's zero drift when warm
     torque_in_zero_tau: float = 300.0  # s, its time constant
+    torque_in_zero_per_10K: float = 0.0    # N*m per 10 K of its temperature (the reducer's T_oil)
+    torque_in_zero_T_ref: float = 293.15   # K, where that zero is right
     seed: int = 1
 
 
@@ -225,17 +234,25 @@ def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDe
     # (1 + g) T + offset), on top of the sensors' own: the bench reads as the diagnosed bench did
     g_in, off_in = sensors.torque_in_gain_error, sensors.torque_in_offset
     drift, tau = sensors.torque_in_zero_drift, sensors.torque_in_zero_tau
+    per_10K, T_ref = sensors.torque_in_zero_per_10K, sensors.torque_in_zero_T_ref
     if design is not None:
         ex = design.extra
         g_in = (1 + g_in) * (1 + ex.torque_in_gain_error) - 1
         off_in = off_in + ex.torque_in_offset
-        # and the zero's drift in time form (torque_in_zero_drift, torque_in_zero_tau); its
-        # temperature form (torque_in_zero_per_10K) needs a temperature the bench does not have
+        # and the zero's drift in time form (torque_in_zero_drift, torque_in_zero_tau)
         if ex.torque_in_zero_drift:
             if drift and abs(tau - ex.torque_in_zero_tau) > 1e-9:
                 raise ValueError("torque_in_zero_tau: the sensors' and the design's zero drifts "
                                  "have different time constants; the transducer has one")
             drift, tau = drift + ex.torque_in_zero_drift, ex.torque_in_zero_tau
+        # and per 10 K of its temperature (torque_in_zero_per_10K from torque_in_zero_T_ref;
+        # the transducer's temperature input is the reducer's T_oil). The transducer has one
+        # reference: the sensors' drift c1 (T - T1)/10 K beside the design's c2 (T - T2)/10 K
+        # is (c1 + c2) (T - T2)/10 K + c1 (T2 - T1)/10 K, the constant in the offset (exact)
+        if ex.torque_in_zero_per_10K:
+            from model_core.rig import zero_drift_per_10K
+            off_in = off_in + zero_drift_per_10K(per_10K, ex.torque_in_zero_T_ref, T_ref)
+            per_10K, T_ref = per_10K + ex.torque_in_zero_per_10K, ex.torque_in_zero_T_ref
     for name, scale, noise, res, gain, off in (
             ("t_in", 1.0, sensors.torque_noise, sensors.torque_resolution, g_in, off_in),
             ("n_in", RPM_PER_RAD_S, sensors.speed_noise, sensors.speed_resolution, 0.0, 0.0),
@@ -243,7 +260,9 @@ def bench_parameters(sc: Scenario, sensors: Sensors = Sensors(), design: DriveDe
              sensors.torque_out_gain_error, sensors.torque_out_offset),
             ("n_out", RPM_PER_RAD_S, sensors.speed_noise, sensors.speed_resolution, 0.0, 0.0)):
         p.update({f"{name}.zero_drift": float(drift if name == "t_in" else 0.0),
-                  f"{name}.zero_drift_tau": float(tau if name == "t_in" else 300.0)})
+                  f"{name}.zero_drift_tau": float(tau if name == "t_in" else 300.0),
+                  f"{name}.zero_per_10K": float(per_10K if name == "t_in" else 0.0),
+                  f"{name}.zero_T_ref": float(T_ref if name == "t_in" else 293.15)})
         p.update({f"{name}.scale": float(scale), f"{name}.noise": float(noise),
                   f"{name}.resolution": float(res), f"{name}.gain_error": float(gain),
                   f"{name}.offset": float(off), f"{name}.bandwidth": float(sensors.bandwidth),

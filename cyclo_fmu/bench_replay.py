@@ -8,8 +8,9 @@ measured speed's +-2 ms mean, advanced by the loop's time constant) and the brak
 by a load machine in torque control applying the measured output torque at the output shaft
 (``FeltBrake.torque_control``; the measured torque already holds the output side's inertia,
 so the reducer's ``J_out`` is 0). A recording's temperature column becomes the reducer's grease
-temperature (its input ``T_oil_in``); without one the reducer's heat balance runs from
-``T_oil_start``. The lean master (``bench.run_fmus``) feeds the two measured
+temperature (its input ``T_oil_in``), and through the bench's connection of the reducer's
+``T_oil`` the input torque transducer's temperature (its zero's drift per 10 K); without one the
+reducer's heat balance runs from ``T_oil_start``. The lean master (``bench.run_fmus``) feeds the two measured
 signals into the FMUs' inputs at every step; the simulated recording has the recording's time
 base (a recording sampled unevenly is run on its median step and interpolated back).
 
@@ -18,7 +19,7 @@ The recording is read by the same reader, checks and unit handling as ``diagnose
 
 ``verify``: the co-simulation with a design (e.g. the ``design_updated.toml`` a diagnosis
 wrote: its friction level, ``[calibration]``, ``[extra]`` physics in the reducer FMU and the
-input torque transducer's offset and gain in the transducer FMU) on the recording's own
+input torque transducer's offset, gain and zero drift in the transducer FMU) on the recording's own
 inputs, with noise-free transducers; the residual of the input torque on the diagnosis's
 10 ms block means against the recording's noise floor at that block length (the transducer
 noise from sample-to-sample differences, as the diagnosis estimates it, of the recording and of
@@ -161,10 +162,15 @@ def replay_recording(rec, mode: str, fmu_dir, design: DriveDesign = None,
         signals["drive.T_oil_in"] = T_oil
         params["drive.use_T_oil_input"] = True
         notes.append("the reducer's grease temperature follows the recording's temperature "
-                     "column (T_oil_in)")
+                     "column (T_oil_in)"
+                     + (", and the input torque transducer's zero drifts with it (its "
+                        "temperature input is the reducer's T_oil)"
+                        if params.get("t_in.zero_per_10K") else ""))
     else:
         notes.append("no temperature column: the reducer's grease follows its heat balance "
-                     "from T_oil_start")
+                     "from T_oil_start"
+                     + (", and the input torque transducer's zero drift per 10 K with it"
+                        if params.get("t_in.zero_per_10K") else ""))
     res = run_fmus(fmu_dir, params, n * step, step, progress=progress, fmus=fmus,
                    signals=signals)
     sim = {"time_s": grid,

@@ -689,7 +689,8 @@ def cmd_synth(args) -> int:
     if args.engine == "bench" and rise is not None and effects[0] not in BENCH_TEMPERATURE_EFFECTS:
         raise CycloidInputError("effect", effects[0], "with --temperature-rise the bench hides "
                                 f"only {', '.join(sorted(BENCH_TEMPERATURE_EFFECTS))} (the "
-                                "reducer's grease on the temperature); use --engine fast")
+                                "reducer's grease on the temperature, the input torque "
+                                "transducer on the grease's); use --engine fast")
     if args.engine == "bench" and rise is None and effects[0] in BENCH_CANNOT_HIDE:
         raise CycloidInputError("effect", effects[0], "the bench's FMUs carry it only through "
                                 "a temperature (give --temperature-rise), not in time; or use "

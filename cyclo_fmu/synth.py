@@ -39,8 +39,9 @@ ENGINES = ("fast", "bench")
 BENCH_CANNOT_HIDE = {"viscosity_drift"}
 #: effects the bench hides with a temperature column (``temperature_rise``): the viscosity
 #: drift as the true lubricant's slope, the warm-up as the reducer FMU's loss change per 10 K
-#: (extra.thermal_loss_per_10K from the column's first value, thermal_T_ref)
-BENCH_TEMPERATURE_EFFECTS = {"viscosity_drift", "thermal_drift"}
+#: (extra.thermal_loss_per_10K from the column's first value, thermal_T_ref), the input
+#: torque transducer's zero drift per 10 K of its temperature input (the reducer's T_oil)
+BENCH_TEMPERATURE_EFFECTS = {"viscosity_drift", "thermal_drift", "torque_sensor_drift"}
 
 #: hidden-effect sizes (the registry's synth defaults): comparable with the transducer noise
 #: (0.003 N*m), invisible by eye
@@ -301,7 +302,8 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
     T_oil_in), and the recording carries it as its temperature column (noise 0.05 K). The
     viscosity drift is then the true lubricant's: its Walther line with d ln(nu)/dT =
     ln_viscosity_change / 10 K at the operating temperature (thermal.lubricant_with_slope, the
-    diagnosis's own mapping), in a reducer FMU built with it."""
+    diagnosis's own mapping), in a reducer FMU built with it; the transducer's zero drift is
+    per 10 K of its temperature input (the reducer's T_oil) from the operating temperature."""
     import tempfile
     from .bench import COMPONENTS, Scenario, Sensors, bench_parameters, recording_from_result, run_fmus
     from .fmu_build import build_fmu
@@ -314,8 +316,13 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
                       torque_in_gain_error=values.get("gain_error", 0.0)
                       if effect == "torque_sensor_gain" else 0.0,
                       torque_in_zero_drift=values.get("offset_change", 0.0)
-                      if effect == "torque_sensor_drift" else 0.0,
-                      torque_in_zero_tau=shape if effect == "torque_sensor_drift" else 300.0)
+                      if effect == "torque_sensor_drift" and temperature_rise is None else 0.0,
+                      torque_in_zero_tau=shape if effect == "torque_sensor_drift"
+                      and temperature_rise is None else 300.0,
+                      torque_in_zero_per_10K=values.get("offset_change", 0.0)
+                      if effect == "torque_sensor_drift" and temperature_rise is not None
+                      else 0.0,
+                      torque_in_zero_T_ref=true_design.operating_temperature)
     if effect == "viscosity_drift":      # the true lubricant (a temperature column only)
         from model_core.effects import T_STEP
         from model_core.thermal import lubricant_with_slope

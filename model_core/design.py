@@ -216,8 +216,17 @@ class ExtraPhysics:
                                      "reads with it)")
     torque_in_zero_tau: float = _f(300.0, "s", "time constant of the zero's drift")
     torque_in_zero_per_10K: float = _f(0.0, "N*m", "drift of the input torque transducer's zero "
-                                       "per 10 K of the recording's temperature column (replay "
-                                       "only)")
+                                       "per 10 K of its temperature from "
+                                       "torque_in_zero_T_ref, a diagnosis found (the replay "
+                                       "corrects the reading at the recording's temperature "
+                                       "column; the bench's transducer FMU reads with it at "
+                                       "its temperature input, fed the reducer's T_oil)")
+    torque_in_zero_T_ref: float = _f(293.15, "K", "temperature at which the input torque "
+                                     "transducer's zero is right, the reference of "
+                                     "torque_in_zero_per_10K: the diagnosis writes the "
+                                     "temperature column's first value; the default 20 degC "
+                                     "(room temperature, where transducers are zeroed) is an "
+                                     "assumption for a design that states none", "degC", None)
 
     discovered: tuple = _f((), "-", "discovered loss terms (model_core.discovered."
                            "DiscoveredTerm): a sparse sum of power laws in driving speed and "
@@ -247,15 +256,13 @@ class ExtraPhysics:
     #: drift per 10 K as the lubricant's Walther line (nu_100), in time as the housing's heat
     #: capacity (tau = R C); a warm-up in time is thermal_loss_change/thermal_tau (reducer
     #: FMUs), a loss change per 10 K thermal_loss_per_10K/thermal_T_ref (reducer FMUs, at
-    #: their T_oil). The per-10 K zero drift needs a temperature the bench's transducers do
-    #: not have
-    REPLAY_ONLY = ("viscosity_ln_change", "viscosity_tau",
-                   "viscosity_ln_per_10K", "torque_in_zero_per_10K")
+    #: their T_oil)
+    REPLAY_ONLY = ("viscosity_ln_change", "viscosity_tau", "viscosity_ln_per_10K")
     #: fields the bench's input torque transducer FMU carries (offset, gain_error, zero_drift,
-    #: zero_drift_tau; cyclo_fmu.bench.bench_parameters), not the reducer FMUs: they are not
-    #: physics of the drive
+    #: zero_drift_tau, zero_per_10K, zero_T_ref; cyclo_fmu.bench.bench_parameters), not the
+    #: reducer FMUs: they are not physics of the drive
     TRANSDUCER = ("torque_in_offset", "torque_in_gain_error", "torque_in_zero_drift",
-                  "torque_in_zero_tau")
+                  "torque_in_zero_tau", "torque_in_zero_per_10K", "torque_in_zero_T_ref")
 
     def steady_torque(self, w):
         """Drag and Stribeck torque at driving speed w (rad/s), N*m, signed with the motion:
@@ -610,10 +617,11 @@ def validate_design(d: DriveDesign) -> None:
         if not lo <= v <= hi:
             raise CycloidInputError("calibration." + name, v, f"must lie between {lo:g} and "
                                     f"{hi:g} (model_core.design.{name.upper()}_BOUNDS)")
-    if not 173.15 < d.extra.thermal_T_ref < 473.15:   # echoed in degC, as the file gives it
-        raise CycloidInputError("[extra].thermal_T_ref_degC",
-                                float(f"{d.extra.thermal_T_ref - KELVIN:.10g}"),
-                                "must lie between -100 and 200 degC")
+    for name in ("thermal_T_ref", "torque_in_zero_T_ref"):
+        v = getattr(d.extra, name)
+        if not 173.15 < v < 473.15:   # echoed in degC, as the file gives it
+            raise CycloidInputError(f"[extra].{name}_degC", float(f"{v - KELVIN:.10g}"),
+                                    "must lie between -100 and 200 degC")
     if not d.extra.run_in_change >= -1.0:
         raise CycloidInputError("extra.run_in_change", d.extra.run_in_change,
                                 "must be at least -1 (the losses cannot fall below zero)")

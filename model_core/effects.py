@@ -567,15 +567,21 @@ def extra_torque(extra, s: dict) -> np.ndarray:
 def reading_model(extra, torque_in, s=None):
     """What the input torque transducer reads for a true input torque (N*m), with the
     transducer corrections a diagnosis wrote to ``extra``: (1 + gain_error) T + offset, plus
-    the zero's drift where the signals ``s`` (time, temperature) are given."""
+    the zero's drift where the signals ``s`` (time, temperature) are given: in time from the
+    recording's start, and per 10 K of the temperature column (degC) from the design's
+    ``torque_in_zero_T_ref`` (model_core.rig.zero_drift_per_10K, the transducer FMU's
+    formula)."""
     reading = (1.0 + extra.torque_in_gain_error) * torque_in + extra.torque_in_offset
     if s is not None:
-        drift = EFFECTS["torque_sensor_drift"]
         if extra.torque_in_zero_drift:
-            reading = reading + drift.torque(s, [extra.torque_in_zero_drift],
-                                             extra.torque_in_zero_tau)
+            reading = reading + EFFECTS["torque_sensor_drift"].torque(
+                s, [extra.torque_in_zero_drift], extra.torque_in_zero_tau)
         if extra.torque_in_zero_per_10K and s.get("temperature") is not None:
-            reading = reading + drift.torque(s, [extra.torque_in_zero_per_10K], None)
+            from .design import KELVIN
+            from .rig import zero_drift_per_10K
+            reading = reading + zero_drift_per_10K(
+                extra.torque_in_zero_per_10K, np.asarray(s["temperature"], float) + KELVIN,
+                extra.torque_in_zero_T_ref)
     return reading
 
 
@@ -716,8 +722,27 @@ def _apply_zero_drift(design, v, shape, temperature):
             + " (a sensor fault: warm the transducer up and re-zero it; the replay corrects the "
             "reading)")
     if temperature:
-        return _with_extra(design, torque_in_zero_per_10K=ex.torque_in_zero_per_10K
-                           + v["offset_change"]), [note]
+        # the form is referred to the column's first value (_warm); ``temperature`` carries it
+        # in K where the diagnosis gives it (cyclo_fmu.diagnosis.report.updated_design): the
+        # transducer's torque_in_zero_T_ref. A drift per 10 K already in the design keeps its
+        # reference; the new one's, c2 (T - T0)/10 K = c2 (T - T1)/10 K + c2 (T1 - T0)/10 K,
+        # adds the constant to the offset (exact: the transducer has one reference)
+        c = v["offset_change"]
+        ref = (float(temperature) if not isinstance(temperature, bool)
+               else ex.torque_in_zero_T_ref)
+        if ex.torque_in_zero_per_10K:
+            from .rig import zero_drift_per_10K
+            shift = zero_drift_per_10K(c, ex.torque_in_zero_T_ref, ref)
+            return _with_extra(design, torque_in_zero_per_10K=ex.torque_in_zero_per_10K + c,
+                               torque_in_offset=ex.torque_in_offset + shift), [
+                note + f"; added at the design's reference {ex.torque_in_zero_T_ref - 273.15:.4g}"
+                f" degC, {1e3 * shift:.3g} mN*m to the offset"]
+        return _with_extra(design, torque_in_zero_per_10K=c, torque_in_zero_T_ref=ref), [
+            note + f"; extra.torque_in_zero_per_10K from torque_in_zero_T_ref = "
+            f"{ref - 273.15:.4g} degC (the bench's input torque transducer at its temperature "
+            "input, the reducer's T_oil)"
+            + ("" if not isinstance(temperature, bool) else
+               " (no reference temperature given: the design's torque_in_zero_T_ref is kept)")]
     if ex.torque_in_zero_drift and abs(ex.torque_in_zero_tau - shape) > 1e-9:
         # a drift of another time constant already in the design: the new fit holds only
         # what that one left; kept at the earlier time constant, added (a first-order sum)

@@ -66,6 +66,24 @@ _ETA0_FLOOR = 1e-3
 #: extremely sensitive to eta0), and the most steps (the bisection it replaces took 60)
 _BRACKET_RTOL = 2 * np.finfo(float).eps
 _BRACKET_MAX = 100
+#: the secant hands a point to the bracketed solver when _SECANT_PATIENCE evaluations in a
+#: row did not bring its |f - eta0| below _SECANT_PROGRESS [1] times the smallest it had:
+#: on a smooth g the secant gains orders of magnitude a step, so no progress means g is not
+#: smooth at the root. The roll-or-skid switch of a plain roller (friction.roll_or_skid)
+#: makes the losses jump there: g jumps across zero (measured: +6.8e-7 to -1.2e-6 at 829 r/min,
+#: 0.54 N*m of the physical S1 map), there is no root to converge to, and the secant bounced to
+#: _FIXED_POINT_MAX (24 single-point evaluations) before the bracket took over
+_SECANT_PROGRESS = 0.5
+_SECANT_PATIENCE = 3
+#: [steps] the secant step from which progress is watched (the maps' points converge in 3-4)
+_SECANT_WATCH = 3
+#: up to this many points left on the bracket (a few points cost what one does: numpy's
+#: per-call overhead, as _PAIR_START_MAX), each step evaluates _MULTISECTION_POINTS points
+#: of every bracket in one call, the regula falsi's point and an even grid, and keeps the
+#: sub-bracket where g changes sign: a jump of g (above) is then narrowed to adjacent floats
+#: in 7 calls instead of 27 (regula falsi, Illinois, degrades to about bisection there)
+_MULTISECTION_MAX = 16
+_MULTISECTION_POINTS = 16
 
 
 def _state_subset(state, sel):
@@ -243,11 +261,16 @@ def _secant(evaluate, H, lo, inv, companion=False):
     one does), which then make the history: the next interpolation has three points near
     the root (from start nodes ~0.02 apart the first estimate is off by up to ~3e-5, and the
     next one, through it and the nodes, by ~1e-10, short of _FIXED_POINT_TOL). Returns (the
-    rows at each point's evaluation of smallest |f - eta0|, stuck)."""
+    rows at each point's evaluation of smallest |f - eta0|, stuck, the points kept (eta0 and
+    g, each (K, n)): where g jumps at the root the secant's last points straddle the jump, and
+    they narrow the bracket of the solver that takes over)."""
     n = H.shape[2]
     stuck = np.zeros(n, bool)
     active = np.flatnonzero((np.abs(H[_F] - H[_X]) > _FIXED_POINT_TOL).all(0))
-    for _ in range(_FIXED_POINT_MAX):
+    # from the _SECANT_WATCH-th step on (a smooth point has converged by then): the smallest
+    # |f - eta0| each point had, and its evaluations in a row without progress
+    best_r = strikes = None
+    for step_no in range(_FIXED_POINT_MAX):
         if active.size == 0:
             break
         at = slice(None) if active.size == n else active   # all: no index copies
@@ -290,14 +313,29 @@ def _secant(evaluate, H, lo, inv, companion=False):
             continue
         # the new point replaces the one of largest |G|
         worst = np.argmax(np.abs(Ga), axis=0)
+        if step_no == _SECANT_WATCH:
+            best_r, strikes = np.abs(H[_F] - H[_X]).min(0), np.zeros(n, int)
         E = evaluate(x2, active)
         H[:, worst, active] = E
-        active = active[np.abs(E[_F] - E[_X]) > _FIXED_POINT_TOL]
+        r = np.abs(E[_F] - E[_X])
+        going = r > _FIXED_POINT_TOL
+        if best_r is not None:
+            # no progress for _SECANT_PATIENCE evaluations in a row: g is not smooth at the
+            # root; the bracketed solver takes the point
+            gained = r <= _SECANT_PROGRESS * best_r[active]
+            strikes[active] = np.where(gained, 0, strikes[active] + 1)
+            best_r[active] = np.minimum(best_r[active], r)
+            tired = going & (strikes[active] >= _SECANT_PATIENCE)
+            if tired.any():
+                stuck[active[tired]] = True
+                going = going & ~tired
+        active = active[going]
     best = np.argmin(np.abs(H[_F] - H[_X]), axis=0)
-    return H[:, best, np.arange(n)], stuck
+    return H[:, best, np.arange(n)], stuck, (H[_X], H[_F] - H[_X])
 
 
 def _regula_falsi(eta0_from, sel, a, ga, gb, x_last, g_last, T1, Ls, converged):
+    # (x_last, g_last: the secant's points, (K, points) or (points,))
     """Regula falsi (Illinois) on the bracket (a, 1] with g(a) = ga >= 0 >= g(1) = gb, at the
     points ``sel`` where the secant failed, narrowed first by the secant's last point in range
     (x_last, g_last). Keeps each point's best evaluation (smallest |g|: near the locking pole g
@@ -308,10 +346,11 @@ def _regula_falsi(eta0_from, sel, a, ga, gb, x_last, g_last, T1, Ls, converged):
     xs, fs, Ts, gs = a.copy(), ga + a, T1.copy(), ga.copy()
     Ls = [np.array(arr, float) for arr in Ls]
     b = np.ones_like(a)
-    inside = (x_last > a) & (x_last < b)
-    up0, down0 = inside & (g_last >= 0), inside & (g_last < 0)
-    a, ga = np.where(up0, x_last, a), np.where(up0, g_last, ga)
-    b, gb = np.where(down0, x_last, b), np.where(down0, g_last, gb)
+    for x0, g0 in zip(np.atleast_2d(x_last), np.atleast_2d(g_last)):
+        inside = (x0 > a) & (x0 < b)
+        up0, down0 = inside & (g0 >= 0), inside & (g0 < 0)
+        a, ga = np.where(up0, x0, a), np.where(up0, g0, ga)
+        b, gb = np.where(down0, x0, b), np.where(down0, g0, gb)
     live = np.ones(sel.size, bool)
     side = np.zeros(sel.size)   # Illinois: which end was kept last (+1 b, -1 a)
     for _ in range(_BRACKET_MAX):
@@ -322,6 +361,10 @@ def _regula_falsi(eta0_from, sel, a, ga, gb, x_last, g_last, T1, Ls, converged):
         m = np.where(den != 0, (a[i] * -gb[i] + b[i] * ga[i]) / np.where(den != 0, den, 1.0),
                      0.5 * (a[i] + b[i]))
         m = np.where((m > a[i]) & (m < b[i]), m, 0.5 * (a[i] + b[i]))
+        if i.size <= _MULTISECTION_MAX:
+            _multisection_step(eta0_from, sel, i, m, a, b, ga, gb, side, xs, fs, Ts, gs, Ls,
+                               live, converged)
+            continue
         fm, Lm, Tm = eta0_from(m, sel[i])
         gm = fm - m
         better = np.abs(gm) < np.abs(gs[i])
@@ -339,6 +382,50 @@ def _regula_falsi(eta0_from, sel, a, ga, gb, x_last, g_last, T1, Ls, converged):
         done = (np.abs(gm) <= _FIXED_POINT_TOL) & converged(fm, Tm, sel[i])
         live[i] = (gm != 0) & (b[i] - a[i] > _BRACKET_RTOL * b[i]) & ~done
     return xs, fs, Ts, Ls
+
+
+def _multisection_step(eta0_from, sel, i, m, a, b, ga, gb, side, xs, fs, Ts, gs, Ls, live,
+                       converged):
+    """One step of ``_regula_falsi`` for the few live brackets ``i`` (arrays updated in
+    place): g at the regula falsi's point ``m`` and at _MULTISECTION_POINTS - 1 evenly spaced
+    points of each bracket, all in one call; the bracket becomes the sub-interval where g
+    first changes sign (g >= 0 at its lower end, < 0 at its upper end, as the bracket's
+    invariant), the best evaluation (smallest |g|) is kept, and a bracket stops as in the
+    regula falsi. The points of a bracket are listed with ``m`` last, so that the contact
+    solver's warm start for the next call is that of the regula falsi's point."""
+    k = _MULTISECTION_POINTS
+    ni = i.size
+    grid = a[i] + (b[i] - a[i]) * (np.arange(1, k) / k)[:, None]          # (k - 1, ni)
+    X = np.concatenate([grid, m[None, :]])                               # (k, ni)
+    fm, Lm, Tm = eta0_from(X.reshape(-1), np.tile(sel[i], k))
+    F, T = fm.reshape(k, ni), Tm.reshape(k, ni)
+    G = F - X
+    cols = np.arange(ni)
+    j = np.argmin(np.abs(G), axis=0)
+    gj = G[j, cols]
+    better = np.abs(gj) < np.abs(gs[i])
+    w = i[better]
+    xs[w], fs[w], Ts[w], gs[w] = X[j, cols][better], F[j, cols][better], T[j, cols][better], \
+        gj[better]
+    for arr, name in zip(Ls, _GEAR_NAMES):
+        arr[w] = np.broadcast_to(getattr(Lm, name), (k * ni,)).reshape(k, ni)[j, cols][better]
+    # the sub-bracket: the first point (ascending) with g < 0 and the point below it
+    order = np.argsort(X, axis=0)
+    Xs, Gs = np.take_along_axis(X, order, 0), np.take_along_axis(G, order, 0)
+    neg = Gs < 0
+    has = neg.any(0)
+    first = np.argmax(neg, axis=0)
+    below = np.maximum(first - 1, 0)
+    lower_a = has & (first > 0)
+    b_new = np.where(has, Xs[first, cols], b[i])
+    gb_new = np.where(has, Gs[first, cols], gb[i])
+    a_new = np.where(lower_a, Xs[below, cols], np.where(has, a[i], Xs[-1]))
+    ga_new = np.where(lower_a, Gs[below, cols], np.where(has, ga[i], Gs[-1]))
+    a[i], b[i], ga[i], gb[i] = a_new, b_new, ga_new, gb_new
+    side[i] = 0.0
+    done = ((np.abs(G) <= _FIXED_POINT_TOL)
+            & converged(fm, Tm, np.tile(sel[i], k)).reshape(k, ni)).any(0)
+    live[i] = ~(G == 0).any(0) & (b[i] - a[i] > _BRACKET_RTOL * b[i]) & ~done
 
 
 def mesh_loss(eta0_model, x, wdir, mesh_power, k, losses=None):
@@ -577,7 +664,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         E0 = evaluate(np.ones_like(T_flat))
         H = np.stack([E0, evaluate(np.clip(E0[_F], lo, 1.0))], axis=1)
     g_one = H[_F, 0] - 1.0                       # g(1) <= 0: the upper end of every bracket
-    h, stuck = _secant(evaluate, H, lo, inv, companion=n <= _PAIR_START_MAX)
+    h, stuck, (x_kept, g_kept) = _secant(evaluate, H, lo, inv, companion=n <= _PAIR_START_MAX)
     x1, f1, T1 = h[_X], h[_F], h[_T1]
     g1 = f1 - x1
     L = list(h[_L:])
@@ -597,7 +684,7 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
         # the locking pole; such points are solved again on the bracket (lo, 1], where
         # g(1) <= 0, by regula falsi (Illinois); no root above lo where g(lo) < 0
         lo_b = lo[bad]
-        x_last, g_last = x1.copy(), g1.copy()
+        x_last, g_last = x_kept, g_kept
         f_lo, L_lo, T1_lo = eta0_from(lo_b, bad)
         g_lo = f_lo - lo_b
         solvable[bad] = g_lo >= 0
@@ -617,8 +704,8 @@ def operating_point(design, mode: str, w_in, T_in=None, *, T_out=None,
                 return np.abs(Tm * c_k - T_flat[sel]) <= 1e-10 * np.abs(T_flat[sel])
 
             xs, fs, Ts, Ls = _regula_falsi(
-                eta0_from, bad, lo_b[keep], g_lo[keep], g_one[bad], x_last[bad],
-                g_last[bad], T1[bad], [arr[bad] for arr in L], converged)
+                eta0_from, bad, lo_b[keep], g_lo[keep], g_one[bad], x_last[:, bad],
+                g_last[:, bad], T1[bad], [arr[bad] for arr in L], converged)
             x1[bad], f1[bad], T1[bad] = xs, fs, Ts
             for arr, ls in zip(L, Ls):
                 arr[bad] = ls

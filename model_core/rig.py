@@ -11,6 +11,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from .effects import T_STEP
+
 
 @dataclass(frozen=True)
 class InductionMotor:
@@ -243,3 +245,39 @@ class Transducer:
         if self.resolution > 0:
             y = self.resolution * round(y / self.resolution)
         return y
+
+
+#: [K] the temperatures a transducer's zero-drift reference and temperature input may take
+#: (-100 to 200 degC, the reducer FMUs' grease temperature range): beyond them a value is a
+#: unit mistake (degC given as K), not a transducer's environment
+TRANSDUCER_T_RANGE = (173.15, 473.15)
+
+
+def zero_drift_per_10K(per_10K, T, T_ref):
+    """A transducer zero's drift with temperature: c (T - T_ref)/(10 K), in the reading's
+    unit.
+
+    The zero of a strain-gauge torque transducer moves with its temperature (catalogues quote
+    it per 10 K, e.g. HBM T22: 0.1 % of the nominal torque per 10 K); to first order the
+    reading gains ``per_10K`` (c, reading unit per 10 K) for each 10 K that ``T`` (K) lies
+    above the reference ``T_ref`` (K) at which it was zeroed. The one implementation, used by
+    the transducer FMU (cyclo_fmu.slaves.transducer; its C twin rig_transducer.c), the
+    diagnosis's replay (model_core.effects.reading_model) and the synthesiser. Scalars or
+    numpy arrays.
+
+    Parameters
+    ----------
+    per_10K : float
+        Drift c of the zero per 10 K, reading unit (N*m for a torque transducer).
+    T : float or array
+        Temperature of the transducer, K.
+    T_ref : float
+        Temperature at which the zero is right, K.
+
+    Returns
+    -------
+    float or array
+        The zero's drift, reading unit: c (T - T_ref) / T_STEP, T_STEP = 10 K
+        (model_core.effects.T_STEP).
+    """
+    return per_10K * (T - T_ref) / T_STEP

@@ -125,8 +125,9 @@ def test_every_extra_field_has_one_home():
     base = bench_parameters(Scenario("x"), design=DriveDesign())
     for name in ExtraPhysics.TRANSDUCER:
         d = DriveDesign()
+        value = {"torque_in_zero_tau": 5.0, "torque_in_zero_T_ref": 310.0}.get(name, 0.01)
         d = dataclasses.replace(d, extra=dataclasses.replace(
-            d.extra, **{name: 0.01 if name != "torque_in_zero_tau" else 5.0,
-                        "torque_in_zero_drift": 0.002}))
+            d.extra, **{name: value, "torque_in_zero_drift": 0.002,
+                        "torque_in_zero_per_10K": 0.003}))
         p = bench_parameters(Scenario("x"), design=d)
         assert any(p[k] != base[k] for k in p if k.startswith("t_in.")), name

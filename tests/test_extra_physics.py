@@ -79,3 +79,37 @@ def test_fmu_carries_the_extra_physics(fmu):
     assert inst.get("tau_in")[0] - ref.get("tau_in")[0] == pytest.approx(1e-3 * 5e4, rel=1e-9)
     inst.close()
     ref.close()
+
+
+def test_zero_drift_per_10K_is_referred_to_the_column_start_and_adds_exactly():
+    """The diagnosis's zero drift per 10 K is referred to the temperature column's first value
+    (model_core.effects._warm): design_updated.toml carries that value as
+    torque_in_zero_T_ref, and the replay reads c (T - T_ref)/10 K (model_core.rig.
+    zero_drift_per_10K, the transducer FMU's formula). A second drift found against a design
+    that has one keeps the design's reference and moves the difference into the offset: the
+    reading is the sum of both drifts at every temperature (the transducer has one
+    reference)."""
+    from dataclasses import replace
+
+    from model_core import DriveDesign
+    from model_core.effects import EFFECTS, reading_model
+    eff = EFFECTS["torque_sensor_drift"]
+    T_col = np.array([31.0, 35.0, 48.0, 60.0])              # degC
+    d1, notes = eff.apply(DriveDesign(), {"offset_change": 0.02}, None,
+                          temperature=31.0 + 273.15)
+    assert d1.extra.torque_in_zero_per_10K == 0.02
+    assert d1.extra.torque_in_zero_T_ref == pytest.approx(304.15, abs=1e-12)
+    assert any("torque_in_zero_T_ref = 31 degC" in n for n in notes)
+    s = {"temperature": T_col}
+    x = np.full(4, 0.5)
+    assert np.allclose(reading_model(d1.extra, x, s) - x, 0.02 * (T_col - 31.0) / 10,
+                       rtol=0, atol=1e-15)
+    d2, _ = eff.apply(d1, {"offset_change": -0.005}, None, temperature=40.0 + 273.15)
+    assert d2.extra.torque_in_zero_T_ref == d1.extra.torque_in_zero_T_ref
+    want = 0.02 * (T_col - 31.0) / 10 - 0.005 * (T_col - 40.0) / 10
+    assert np.allclose(reading_model(d2.extra, x, s) - x, want, rtol=0, atol=1e-15)
+    # no reference given (a bare True): the design's is kept
+    d3, notes = eff.apply(replace(DriveDesign(), extra=replace(
+        DriveDesign().extra, torque_in_zero_T_ref=300.0)), {"offset_change": 0.01}, None,
+        temperature=True)
+    assert d3.extra.torque_in_zero_T_ref == 300.0 and "kept" in notes[0]

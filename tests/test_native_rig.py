@@ -66,6 +66,76 @@ def test_string_schedules_and_a_coupled_drum_are_twins_too(both):
     assert np.ptp(out[1]["brake.tau_out"]) > 1.0
 
 
+@pytest.fixture(scope="module")
+def transducers(fmu_dir, tmp_path_factory):
+    """The Python torque transducer (the session's) and its native twin."""
+    d = tmp_path_factory.mktemp("native_transducer")
+    return str(fmu_dir / "TorqueTransducer.fmu"), str(build_any("TorqueTransducerNative", d))
+
+
+def test_transducer_zero_drifts_with_its_temperature_input_in_both(transducers):
+    """The zero's drift per 10 K of the temperature input (model_core.rig.zero_drift_per_10K):
+    along a temperature trajectory (a warm-up and a cooling, 20-80 degC) the reading is
+    (1 + g) x + offset + c (T - T_ref)/10 K at every step (closed form; no bandwidth, noise or
+    quantisation), beside the zero's drift in time, in the Python FMU and the native one alike
+    (to the last bit: the same arithmetic in the same order)."""
+    from fmu_helpers import Inst
+    c, T_ref, g, off, d0, tau = 0.015, 300.0, 0.01, 0.002, 0.004, 0.05
+    h = 1e-3
+    t = h * np.arange(1, 201)
+    T = 293.15 + 60.0 * np.sin(np.pi * t / t[-1])            # K, up to 80 degC and back
+    x = 1.5 + 0.5 * np.cos(7.0 * t)
+    got = []
+    for path in transducers:
+        i = Inst(path, bandwidth=0.0, gain_error=g, offset=off, zero_per_10K=c,
+                 zero_T_ref=T_ref, zero_drift=d0, zero_drift_tau=tau, x=x[0], temperature=T_ref)
+        y0 = i.get("y")[0]
+        ys = []
+        for xk, Tk in zip(x, T):
+            i.step(x=xk, temperature=Tk, dt=h)
+            ys.append(i.get("y")[0])
+        i.close()
+        assert y0 == pytest.approx((1 + g) * x[0] + off, abs=1e-15)   # T = T_ref at the start
+        got.append(np.array(ys))
+    closed = (1 + g) * x + off + d0 * (1 - np.exp(-t / tau)) + c * (T - T_ref) / 10.0
+    assert np.max(np.abs(got[0] - closed)) < 1e-12
+    assert np.array_equal(got[0], got[1])
+    assert np.ptp(c * (T - T_ref) / 10.0) > 0.08                     # the drift was there
+
+
+@pytest.mark.parametrize("which", [0, 1])
+def test_transducer_refuses_bad_temperature_values(transducers, which):
+    """A reference outside 173.15-473.15 K or a zero drift that is not finite is refused at
+    initialisation, a temperature input outside that range (0 K from a master that starts its
+    connections at 0, degC given as K) at the step that reads it: fmi2Error and a message
+    naming the variable. With zero_per_10K = 0 the input is not read (the default bench under
+    fmpy's SSP master, which starts it at 0, runs)."""
+    from fmpy.fmi1 import FMICallException
+    from fmu_helpers import Inst
+    path = transducers[which]
+    for bad, name in ((dict(zero_T_ref=500.0, zero_per_10K=0.01), "zero_T_ref"),
+                      (dict(zero_per_10K=float("nan")), "zero_per_10K")):
+        i = Inst(path, start=False)
+        with pytest.raises(FMICallException):
+            i.start(**bad)
+        assert any(name in m for _, m in i.messages), (bad, i.messages)
+        i.close()
+    i = Inst(path, zero_per_10K=0.01, temperature=310.0)
+    i.step(x=1.0, temperature=330.0)
+    for T in (0.0, float("nan"), 40.0):
+        with pytest.raises(FMICallException):
+            i.step(x=1.0, temperature=T)
+        # (the native front refuses a NaN already at fmi2SetReal, naming it)
+        assert i.messages[-1][1].startswith("temperature = "), i.messages
+        i.close()
+        i = Inst(path, zero_per_10K=0.01, temperature=310.0)
+    i.close()
+    i = Inst(path, temperature=0.0)                   # not read: no drift per 10 K
+    i.step(x=1.0, temperature=0.0)
+    assert i.get("y")[0] == pytest.approx(1.0, abs=0.1)
+    i.close()
+
+
 # -- the FMI front ----------------------------------------------------------------------------
 class Host:
     """A minimal C host over ctypes: the FMU's functions with a logger that records messages."""

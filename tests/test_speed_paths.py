@@ -129,3 +129,51 @@ def test_one_point_takes_three_loss_evaluations(monkeypatch, name, mode, T):
     op = operating_point(DESIGNS[name], mode, w, T)
     assert len(calls) <= 3
     assert np.isfinite(op.eta) and abs(float(op.torques[mode[0]]) - T) <= 1e-7 * abs(T)
+
+
+@pytest.mark.parametrize("profile", ["paper", "physical"])
+def test_the_solvers_shortcuts_leave_the_maps_as_they_were(profile, monkeypatch):
+    """The 50 x 50 map's shortcuts (docs/explanation/performance.md) change no result beyond
+    1e-10: the Newton iteration of the contact problems going on with the points not yet
+    converged alone (contact._ACTIVE_SET_SHARE), the secant handing a point that makes no
+    progress to the bracket (efficiency._SECANT_PATIENCE) and the bracket's multisection for
+    a few points (efficiency._MULTISECTION_MAX), against the same solvers with all three off
+    (the whole batch iterated until its last point converged; the secant to _FIXED_POINT_MAX;
+    regula falsi alone): the 50 x 50 maps in every mode, efficiencies, basic efficiencies,
+    torques and partial losses, and the ModeMap of S1 and S2. The physical S1 map holds the
+    point whose losses jump at the root (a plain roller switching between rolling and
+    skidding), which the shortcuts reach by another path."""
+    import math
+
+    import model_core.contact as C
+    import model_core.efficiency as E
+    from model_core import efficiency_map
+    d = DriveDesign(profile=profile)
+    speeds = rpm_to_rad_s(np.linspace(500, 2800, 50))
+    torques = np.linspace(0.1, 0.85, 50)
+
+    def run():
+        out = {}
+        for mode in ("S1", "S2", "12", "21", "1S", "2S"):
+            s, t = (speeds, torques) if mode[0] == "S" else (speeds / 15, torques * 15)
+            m = efficiency_map(d, mode, s, t)
+            out[mode] = dict(eta=m.eta, eta0=m.eta0, locked=m.locked, P_in=m.input_power,
+                             **m.losses)
+        for mode in ("S1", "S2"):
+            mm = ModeMap(d, mode, 30.0, 350.0)
+            W, T = np.meshgrid(np.linspace(-340, 340, 23), np.linspace(-29, 29, 19))
+            r = mm.solve_arrays(W.ravel() + 0.5, T.ravel())
+            out["ModeMap " + mode] = {k: np.asarray(v, float) for k, v in r.items()}
+        return out
+    fast = run()
+    monkeypatch.setattr(C, "_ACTIVE_SET_SHARE", math.inf)
+    monkeypatch.setattr(E, "_SECANT_PATIENCE", E._FIXED_POINT_MAX + 1)
+    monkeypatch.setattr(E, "_MULTISECTION_MAX", 0)
+    plain = run()
+    for mode in fast:
+        for k in fast[mode]:
+            x, y = np.asarray(fast[mode][k], float), np.asarray(plain[mode][k], float)
+            np.testing.assert_array_equal(np.isnan(x), np.isnan(y), err_msg=(mode, k))
+            ok = ~np.isnan(x)
+            assert np.all(np.abs(x[ok] - y[ok]) <= 1e-10 * np.maximum(1.0, np.abs(y[ok]))), \
+                (mode, k, np.max(np.abs(x[ok] - y[ok])))

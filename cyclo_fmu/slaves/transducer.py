@@ -1,5 +1,6 @@
-"""FMI slave: a torque or speed transducer (gain and offset errors, bandwidth, noise,
-quantisation, unit scale), switchable to ideal with ``ideal = true``.
+"""FMI slave: a torque or speed transducer (gain and offset errors, a zero drifting in time
+and with the transducer's temperature, bandwidth, noise, quantisation, unit scale),
+switchable to ideal with ``ideal = true``.
 
 One implementation, three FMUs that differ only in the units they declare: ``Transducer``
 (any signal, unit "1"), ``TorqueTransducer`` (N.m in, N.m out) and ``SpeedTransducer`` (rad/s
@@ -54,6 +55,19 @@ class Transducer(UnitSlave):
                        "zero_drift_tau)), output units (finite)")
         self.parameter("zero_drift_tau", 300.0, "s", "time constant of the zero's drift",
                        min=sys.float_info.min)
+        # the zero's drift with the transducer's temperature (model_core.rig.zero_drift_per_10K)
+        T_lo, T_hi = core.rig.TRANSDUCER_T_RANGE
+        self.parameter("zero_per_10K", 0.0, yu, "drift of the zero per 10 K of the input "
+                       "temperature from zero_T_ref: offset + zero_per_10K (temperature - "
+                       "zero_T_ref)/10 K, output units (finite)")
+        self.parameter("zero_T_ref", 293.15, "K", "temperature at which the zero is right "
+                       "(the reference of zero_per_10K; 173.15 to 473.15 K)", min=T_lo,
+                       max=T_hi)
+        self.input("temperature", 293.15, "K", "the transducer's temperature (e.g. the "
+                   "reducer's T_oil on the bench); read only while zero_per_10K is not 0, "
+                   "then it must lie between 173.15 and 473.15 K. Not connected, it keeps its "
+                   "start value 293.15 K, the default zero_T_ref: no drift")
+        self._depends["y"] = ["x", "temperature"]
         self._filtered = None
 
     init_independent = ("bandwidth",)   # the filter starts at the input
@@ -75,7 +89,7 @@ class Transducer(UnitSlave):
         try:
             self.check_limits()
             for name in ("scale", "gain_error", "offset", "bandwidth", "noise", "resolution",
-                         "zero_drift", "zero_drift_tau"):
+                         "zero_drift", "zero_drift_tau", "zero_per_10K"):
                 v = getattr(self, name)
                 if not math.isfinite(v):
                     raise ValueError(f"{name} = {v!r}: must be finite")
@@ -85,6 +99,18 @@ class Transducer(UnitSlave):
             self.fail(f"invalid parameter: {exc}")
         self._model = core.rig.Transducer(self.gain_error, self.offset, self.bandwidth,
                                           self.noise, self.resolution)
+        self._per_10K = core.rig.zero_drift_per_10K if self.zero_per_10K else None
+
+    def _temperature_drift(self):
+        """The zero's drift at the input temperature (output units); the temperature checked."""
+        T = self.temperature
+        lo, hi = core.rig.TRANSDUCER_T_RANGE
+        if not (isinstance(T, (int, float)) and lo <= T <= hi):
+            self.fail(f"temperature = {T!r} K: must be a temperature between {lo:g} and "
+                      f"{hi:g} K while zero_per_10K = {self.zero_per_10K!r} is not 0 (a "
+                      "temperature in degC needs + 273.15; a master that starts its "
+                      "connections at 0 must initialise this one)")
+        return self._per_10K(self.zero_per_10K, T, self.zero_T_ref)
 
     def _evaluate_init(self):
         x = self.x
@@ -108,12 +134,15 @@ class Transducer(UnitSlave):
                                                   _NOISE_BLOCK).tolist()
             self._block, k = self._block + 1, 0
         self._next = k + 1
-        if self.zero_drift:
+        if self.zero_drift or self._per_10K is not None:
             # the zero's warm-up at the step's end (model_core.effects' torque_sensor_drift in
-            # its time form), added before the quantisation as the offset is
-            self.y = self._model.reading(self._filtered, self._noise[k],
-                                         self.zero_drift * (1.0 - math.exp(
-                                             -elapsed / self.zero_drift_tau)))
+            # its time form) and its drift with the temperature input (model_core.rig.
+            # zero_drift_per_10K), added before the quantisation as the offset is
+            drift = (self.zero_drift * (1.0 - math.exp(-elapsed / self.zero_drift_tau))
+                     if self.zero_drift else 0.0)
+            if self._per_10K is not None:
+                drift = drift + self._temperature_drift()
+            self.y = self._model.reading(self._filtered, self._noise[k], drift)
         else:
             self.y = self._model.reading(self._filtered, self._noise[k])
 
