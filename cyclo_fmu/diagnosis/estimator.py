@@ -116,6 +116,9 @@ class Diagnoser:
                                 if c != "none" and (calibrate or c not in CALIBRATION_EFFECTS))
         self.progress = progress
         self._bar = None
+        #: set on the second pass of ``_decide_beside_form`` (the design carries the proposed
+        #: form; no discovery and no closed-form competition there)
+        self._beside_form = False
 
     def _stage(self, name):
         if self._bar is not None:
@@ -201,6 +204,8 @@ class Diagnoser:
         d = report(rec, first, sel, J, rem, P, rel1, P0, self.calibration_offsets_)
         d.notes += self._notes
         d.stages = {"replay": P, "select": sel, "twins": J, "remainder": rem}
+        if not self._beside_form:
+            self._decide_beside_form(rec, d)
         self.diagnosis_ = d
         self._bar.close()
         self._bar = None
@@ -220,6 +225,8 @@ class Diagnoser:
             P, sel, J, rem = alt
         self._stage("discover")
         self._prob, self._notes = sel.prob, []
+        if self._beside_form:
+            return P, sel, J, rem
         out = self._calibration_against_forms(rec, P, sel, rem) if compete else None
         if out is not None:
             # the calibration effects stood in for a form outside the library: the stages run
@@ -344,6 +351,65 @@ class Diagnoser:
                 f"{fit_b.bic:.1f} against {fit_a.bic:.1f}, at least {DELTA_BIC:g} lower "
                 "needed); a free loss scale stands in for a loss of another law")
         return ids, note, text
+
+    def _decide_beside_form(self, rec, d):
+        """The named effects decided again with the proposed closed form in the model.
+
+        The selection names library effects before the discovery stage exists: an effect that
+        only took up part of a loss outside the library (a free loss scale such as the friction
+        level takes up a share of any loss that grows with the load, and its re-linearisation
+        then carries that share into every later stage) stands there beside a remainder the
+        form explains. So the form is put into the design (``[[extra.discovered]]``, as the
+        updated design carries it: replayed through the same core, not a linear column beside
+        a stale linearisation) and the stages replay, select, twins and remainder run again on
+        the recording; an effect named before that is not named there (nor, for the friction
+        level, kept in its calibration) stood in for the form and is withdrawn. The
+        unexplained remainder, its claims and the proposal stay the first pass's (they are the
+        evidence for the form). Skipped where the form holds terms the design cannot carry."""
+        prop = d.unexplained.get("proposed") or {}
+        named = [e["id"] for e in d.effects]
+        if d.calibration and "friction_miscalibrated" not in named:
+            named.append("friction_miscalibrated")
+        if (not d.unexplained.get("present") or not prop.get("formula") or not named
+                or not prop.get("design_terms") or prop.get("not_in_design")):
+            return
+        from .report import _discovered
+        design, _ = _discovered(self.design, prop)
+        two = Diagnoser(design, self.mode, self.bandwidth, self.block, self.n_folds,
+                        candidates=self.candidates)
+        two._beside_form = True
+        try:
+            d2 = two.fit(rec).diagnosis_
+        except DiagnosisError:
+            return
+        kept = {e["id"] for e in d2.effects} | ({"friction_miscalibrated"}
+                                                if d2.calibration else set())
+        gone = [e for e in named if e not in kept]
+        if not gone:
+            return
+        d.effects = [e for e in d.effects if e["id"] not in gone]
+        if "friction_miscalibrated" in gone:
+            d.calibration = {}
+        best = d.effects[0] if d.effects else None
+        d.effect = best["id"] if best else "none"
+        d.effect_description = EFFECTS[d.effect].description
+        d.parameters = ({**d.calibration, **best["parameters"]} if best and d.calibration
+                        and d.effect != "friction_miscalibrated"
+                        else dict(best["parameters"]) if best else {})
+        d.indistinguishable_from = best.get("indistinguishable_from", []) if best else []
+        if not d.indistinguishable_from:
+            d.suggested_test = ""
+        d.withdrawn = list(d.withdrawn) + [e for e in gone if e not in d.withdrawn]
+        change = prop.get("library_change") or {}
+        prop["library_change"] = {k: v for k, v in change.items() if k not in gone}
+        un = d.unexplained
+        un["statement"] = un["statement"].rstrip(".") + "; " + ", ".join(gone) + (
+            " stood in for it: not named beside the proposed form (the stages run again with "
+            "the form in the design).")
+        d.notes.append(f"{', '.join(gone)} withdrawn: with the proposed closed form in the "
+                       "design (replayed through the core) the selection, its twins and the "
+                       "remainder do not name " + ("it" if len(gone) == 1 else "them")
+                       + "; it took up part of the loss the form describes")
 
     @staticmethod
     def _calibration_values(S):
