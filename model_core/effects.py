@@ -155,7 +155,15 @@ def _run_in(s, shape):
 
 
 def _viscosity(s, shape):
-    return (s["sens_nu"] * _warm(s, shape))[:, None]
+    """d T/d ln(nu) times the warm-up; with the curvature ``sens_nu2`` and a size
+    ``nu_secant`` c0 in the signals, the secant through 0 and c0 of the second-order response
+    (S1 + c0 g S2 / 2) g: the drift c g evaluated to second order at c = c0
+    (``model_core.lossmap.viscosity_curvature``; a re-linearisation at the fitted size)."""
+    g = _warm(s, shape)
+    c0 = s.get("nu_secant")
+    if c0 and s.get("sens_nu2") is not None:
+        return ((s["sens_nu"] + 0.5 * c0 * g * s["sens_nu2"]) * g)[:, None]
+    return (s["sens_nu"] * g)[:, None]
 
 
 def _inertia(s, shape):
@@ -556,11 +564,14 @@ def extra_torque(extra, s: dict) -> np.ndarray:
         # the column is in degC; the design's reference (thermal_T_ref) in K
         from .design import KELVIN
         total += extra.thermal_per_10K_torque(np.asarray(temp, float) + KELVIN, s["loss_in"])
+    # (to second order where the signals carry the curvature: the secant at the design's size)
     if extra.viscosity_ln_change and s.get("sens_nu") is not None:
-        total += EFFECTS["viscosity_drift"].torque(s, [extra.viscosity_ln_change],
+        total += EFFECTS["viscosity_drift"].torque({**s, "nu_secant": extra.viscosity_ln_change},
+                                                   [extra.viscosity_ln_change],
                                                    extra.viscosity_tau)
     if extra.viscosity_ln_per_10K and temp is not None and s.get("sens_nu") is not None:
-        total += EFFECTS["viscosity_drift"].torque(s, [extra.viscosity_ln_per_10K], None)
+        total += EFFECTS["viscosity_drift"].torque({**s, "nu_secant": extra.viscosity_ln_per_10K},
+                                                   [extra.viscosity_ln_per_10K], None)
     return total
 
 

@@ -477,3 +477,30 @@ def blend_solutions(a, b, f, ia, ib):
     p_in, p_out = (p_a, -p_b) if forward else (p_b, -p_a)
     eta = p_out / p_in if (p_in > 0 and p_out > 0 and not locked) else 0.0
     return speeds, torques, losses, eta, eta0, locked, forward
+
+
+#: [1] half-width in ln(viscosity) of the central second difference of
+#: :func:`viscosity_curvature`: ln(1.42), half of the ln 2 a warm-up of 20-30 K changes a
+#: mineral grease's viscosity by (the drifts the second-order term matters for); over it the
+#: losses' dependence on ln(nu) is smooth (a power law of the film's speed parameter), so the
+#: second difference is the curvature to a few per cent
+VISCOSITY_CURVATURE_STEP = 0.35
+
+
+def viscosity_curvature(design, mode, w_in, tau_out, grid=(18, 14)):
+    """d^2 tau_in / d(ln nu)^2 along a recording [N*m], the central second difference of the
+    model's input torque over +-``VISCOSITY_CURVATURE_STEP`` in ln(viscosity) (all three
+    replays on the same ``grid``, so their interpolation errors cancel).
+
+    With the first derivative ``S1`` (the replay's ``sens_nu``) it gives the input torque of a
+    viscosity change x to second order, tau_in(x) = tau_in(0) + x S1 + x^2/2 S2: the
+    viscosity drift (``model_core.effects``, ``viscosity_drift``) evaluated at its fitted size
+    rather than linearised at the design's viscosity (a drift of ln 0.5 leaves a second-order
+    term of about a third of the linear one)."""
+    from .design import scale_viscosity
+    h = VISCOSITY_CURVATURE_STEP
+    up = replay_input_torque(scale_viscosity(design, math.exp(h)), mode, w_in, tau_out, grid)[0]
+    mid = replay_input_torque(design, mode, w_in, tau_out, grid)[0]
+    dn = replay_input_torque(scale_viscosity(design, math.exp(-h)), mode, w_in, tau_out,
+                             grid)[0]
+    return (up - 2.0 * mid + dn) / (h * h)

@@ -70,6 +70,18 @@ CAL_PASSES = 3
 #: (which then meet the closed forms of ``_calibration_against_forms`` and, withdrawn there,
 #: left a worse selection on an independent recording of a gain error beside a drag)
 SAME_PHYSICS = (("idle_loss_scale", "load_independent_loss"),)
+#: [1] re-linearise the viscosity drift beyond this difference between its fitted change of
+#: ln(viscosity) and the size its basis was taken at (0 first: the design's viscosity). The
+#: input torque is not linear in ln(nu): a drift of ln 0.5 leaves a second-order term of about
+#: a third of the linear one (1.5 of 4.2 mN*m on an independent recording). Re-linearised,
+#: the drift's basis is the secant of the second-order response at the fitted size
+#: (``effects._viscosity``, the curvature from ``lossmap.viscosity_curvature``); a step dc
+#: from it leaves dc^2/2 of the curvature, below 1 % of the linear part at 0.05 for the core's
+#: curvatures (S2/S1 about 1)
+VISCOSITY_RELINEARISE = 0.05
+#: re-linearisation passes of the viscosity drift at most (a secant iteration; two settle a
+#: drift of ln 0.5)
+NU_PASSES = 3
 #: [s] at least this much moving recording (below it nothing can be separated)
 MIN_MOVING_S = 2.0
 #: [rad/s] a recording whose input never exceeds this speed (about 10 r/min) stands still
@@ -198,6 +210,10 @@ class Diagnoser:
             P, sel, self.calibration_offsets_ = self._relinearise_calibration(
                 rec, P, sel, rem, rel1)
             P, sel, J, rem = self._judge(rec, P, sel, rel1, compete=False)
+            self._notes = notes + [n for n in self._notes if n not in notes]
+        if self._viscosity_far(P, rem.S):
+            notes = self._notes
+            P, sel, J, rem = self._relinearise_viscosity(rec, P, sel, rem, rel1)
             self._notes = notes + [n for n in self._notes if n not in notes]
         rem.unexplained["_rejected"] = J.rejected
         self._stage("report")
@@ -410,6 +426,46 @@ class Diagnoser:
                        "design (replayed through the core) the selection, its twins and the "
                        "remainder do not name " + ("it" if len(gone) == 1 else "them")
                        + "; it took up part of the loss the form describes")
+
+    @staticmethod
+    def _viscosity_far(P, S):
+        c = next((float(S.of(t)[0][0]) for t in S.terms if t.effect == "viscosity_drift"),
+                 None)
+        return (c is not None and bool(P.options.get("viscosity_drift"))
+                and abs(c - (P.sig.get("nu_secant") or 0.0)) > VISCOSITY_RELINEARISE)
+
+    def _relinearise_viscosity(self, rec, P, sel, rem, rel1):
+        """The viscosity drift evaluated at its fitted size: its columns become the secant of
+        the model's second-order response in ln(viscosity) through 0 and the fitted change
+        (``effects._viscosity``; the curvature ``lossmap.viscosity_curvature`` at the design
+        of the replay), the selection and the stages after it run again; repeated while the
+        fitted change moves by more than ``VISCOSITY_RELINEARISE`` (``NU_PASSES`` at most).
+        The replay itself is not repeated: the curvature is three replays on the sensitivity
+        grid, the columns are rebuilt in place. Returns ``(P, sel, J, rem)``."""
+        from model_core.design import scale_friction_level
+        from model_core.lossmap import viscosity_curvature
+        from .problem import masked_means
+        eff = EFFECTS["viscosity_drift"]
+        J = None
+        for _ in range(NU_PASSES):
+            if not self._viscosity_far(P, rem.S):
+                break
+            c = next(float(rem.S.of(t)[0][0]) for t in rem.S.terms
+                     if t.effect == "viscosity_drift")
+            if P.sig.get("sens_nu2") is None:
+                design = scale_friction_level(self.design, 1 + rel1) if rel1 else self.design
+                P.sig["sens_nu2"] = viscosity_curvature(design, self.mode, rec.speed_in,
+                                                        -rec.torque_out)
+            P.sig["nu_secant"] = c
+            n = len(P.y) * P.m
+            sig = {k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == rec.time.shape
+                       else v) for k, v in P.sig.items()}
+            for t in P.options["viscosity_drift"]:
+                P.X[:, list(t.cols)] = masked_means(first_order(
+                    eff.basis(sig, t.shape), P.dt, P.bandwidth), P.mask[:n], P.m)
+            sel = select(P, self.n_folds, forced=sel.forced)
+            P, sel, J, rem = self._judge(rec, P, sel, rel1, compete=False)
+        return P, sel, J, rem
 
     @staticmethod
     def _calibration_values(S):

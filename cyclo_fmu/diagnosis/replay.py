@@ -171,6 +171,11 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
                          sens_idle=sens_idle, tau_out=tau_out, sens_load=sens_load)
     if bandwidth > 0:
         sig["theta_in"] = sig["theta_in"] + w_s / (2 * math.pi * bandwidth)
+    ex = design.extra
+    if ex.viscosity_ln_change or ex.viscosity_ln_per_10K:
+        # the design's viscosity drift to second order (effects.extra_torque)
+        from model_core.lossmap import viscosity_curvature
+        sig["sens_nu2"] = viscosity_curvature(design, mode, w_in, tau_out)
     T_true = T_in + extra_torque(design.extra, sig)
     sig["T_in_model"] = T_true
     return Replay(reading_model(design.extra, T_true, sig), sig)
