@@ -155,16 +155,18 @@ def _run_in(s, shape):
 
 
 def _viscosity(s, shape):
-    """d T/d ln(nu) times the warm-up; with the curvature ``sens_nu2`` and a size
-    ``nu_secant`` c0 in the signals, the secant through 0 and c0 of the second-order response
-    (S1 + c0 g S2 / 2) g: the drift c g evaluated to second order at c = c0
-    (``model_core.lossmap.viscosity_curvature``; a re-linearisation at the fitted size)."""
+    """d T/d ln(nu) times the warm-up g; with ``nu_secant`` c0 and ``nu_steps`` (span X, the
+    model's torque changes at X/2 and X: ``lossmap.viscosity_steps``) in the signals, the
+    secant D(c0 g)/c0 of the response D(x) = u (4 D_1/2 - D_1) + u^2 (2 D_1 - 4 D_1/2),
+    u = x/X, the quadratic in ln(nu) through the three replays: the drift c g evaluated at its
+    size c = c0 (a re-linearisation at the fitted size) instead of at the design's viscosity."""
     g = _warm(s, shape)
     c0 = s.get("nu_secant")
-    if c0 and s.get("sens_nu2") is not None:
-        return ((s["sens_nu"] + 0.5 * c0 * g * s["sens_nu2"]) * g)[:, None]
+    if c0 and s.get("nu_steps") is not None:
+        X, half, full = s["nu_steps"]
+        u = c0 * g / X
+        return ((u * (4.0 * half - full) + u * u * (2.0 * full - 4.0 * half)) / c0)[:, None]
     return (s["sens_nu"] * g)[:, None]
-
 
 def _inertia(s, shape):
     return s["alpha_in"][:, None]
@@ -564,7 +566,7 @@ def extra_torque(extra, s: dict) -> np.ndarray:
         # the column is in degC; the design's reference (thermal_T_ref) in K
         from .design import KELVIN
         total += extra.thermal_per_10K_torque(np.asarray(temp, float) + KELVIN, s["loss_in"])
-    # (to second order where the signals carry the curvature: the secant at the design's size)
+    # (through the replays at the drift's size where the signals carry them: effects._viscosity)
     if extra.viscosity_ln_change and s.get("sens_nu") is not None:
         total += EFFECTS["viscosity_drift"].torque({**s, "nu_secant": extra.viscosity_ln_change},
                                                    [extra.viscosity_ln_change],

@@ -479,28 +479,21 @@ def blend_solutions(a, b, f, ia, ib):
     return speeds, torques, losses, eta, eta0, locked, forward
 
 
-#: [1] half-width in ln(viscosity) of the central second difference of
-#: :func:`viscosity_curvature`: ln(1.42), half of the ln 2 a warm-up of 20-30 K changes a
-#: mineral grease's viscosity by (the drifts the second-order term matters for); over it the
-#: losses' dependence on ln(nu) is smooth (a power law of the film's speed parameter), so the
-#: second difference is the curvature to a few per cent
-VISCOSITY_CURVATURE_STEP = 0.35
 
+def viscosity_steps(design, mode, w_in, tau_out, span, grid=(18, 14)):
+    """``(span, dT_half, dT_full)``: the change of the model's input torque along a recording
+    [N*m] when ln(viscosity) changes by ``span``/2 and by ``span`` (replays on ``grid``, the
+    design's own on the same grid, so their interpolation errors cancel).
 
-def viscosity_curvature(design, mode, w_in, tau_out, grid=(18, 14)):
-    """d^2 tau_in / d(ln nu)^2 along a recording [N*m], the central second difference of the
-    model's input torque over +-``VISCOSITY_CURVATURE_STEP`` in ln(viscosity) (all three
-    replays on the same ``grid``, so their interpolation errors cancel).
-
-    With the first derivative ``S1`` (the replay's ``sens_nu``) it gives the input torque of a
-    viscosity change x to second order, tau_in(x) = tau_in(0) + x S1 + x^2/2 S2: the
-    viscosity drift (``model_core.effects``, ``viscosity_drift``) evaluated at its fitted size
-    rather than linearised at the design's viscosity (a drift of ln 0.5 leaves a second-order
-    term of about a third of the linear one)."""
+    With them a viscosity change x between 0 and ``span`` is evaluated through the quadratic
+    in ln(nu) through the three replays (``model_core.effects._viscosity``): the drift at its
+    size rather than linearised at the design's viscosity. The core's input torque is not
+    linear in ln(nu), nor is a Taylor series at the design's viscosity good over a large drift:
+    at ln 0.5 the linear term misses a fifth of the response and the second-order term at the
+    design's viscosity still 40 % of that miss; the quadratic through the drift's own end and
+    middle interpolates where a Taylor series extrapolates."""
     from .design import scale_viscosity
-    h = VISCOSITY_CURVATURE_STEP
-    up = replay_input_torque(scale_viscosity(design, math.exp(h)), mode, w_in, tau_out, grid)[0]
-    mid = replay_input_torque(design, mode, w_in, tau_out, grid)[0]
-    dn = replay_input_torque(scale_viscosity(design, math.exp(-h)), mode, w_in, tau_out,
-                             grid)[0]
-    return (up - 2.0 * mid + dn) / (h * h)
+    T = [replay_input_torque(scale_viscosity(design, math.exp(x)), mode, w_in, tau_out,
+                             grid)[0] if x else None for x in (0.5 * span, span)]
+    base = replay_input_torque(design, mode, w_in, tau_out, grid)[0]
+    return span, T[0] - base, T[1] - base

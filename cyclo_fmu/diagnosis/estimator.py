@@ -74,10 +74,10 @@ SAME_PHYSICS = (("idle_loss_scale", "load_independent_loss"),)
 #: ln(viscosity) and the size its basis was taken at (0 first: the design's viscosity). The
 #: input torque is not linear in ln(nu): a drift of ln 0.5 leaves a second-order term of about
 #: a third of the linear one (1.5 of 4.2 mN*m on an independent recording). Re-linearised,
-#: the drift's basis is the secant of the second-order response at the fitted size
-#: (``effects._viscosity``, the curvature from ``lossmap.viscosity_curvature``); a step dc
-#: from it leaves dc^2/2 of the curvature, below 1 % of the linear part at 0.05 for the core's
-#: curvatures (S2/S1 about 1)
+#: the drift's basis is the secant of the model's response at the fitted size (a quadratic in
+#: ln(nu) through replays at the drift's middle and end: ``effects._viscosity``,
+#: ``lossmap.viscosity_steps``); a step dc from it leaves about dc^2/2 of the curvature, below
+#: 1 % of the linear part at 0.05 for the core's curvatures (S2/S1 about 1)
 VISCOSITY_RELINEARISE = 0.05
 #: re-linearisation passes of the viscosity drift at most (a secant iteration; two settle a
 #: drift of ln 0.5)
@@ -437,25 +437,27 @@ class Diagnoser:
     def _relinearise_viscosity(self, rec, P, sel, rem, rel1):
         """The viscosity drift evaluated at its fitted size: its columns become the secant of
         the model's second-order response in ln(viscosity) through 0 and the fitted change
-        (``effects._viscosity``; the curvature ``lossmap.viscosity_curvature`` at the design
-        of the replay), the selection and the stages after it run again; repeated while the
-        fitted change moves by more than ``VISCOSITY_RELINEARISE`` (``NU_PASSES`` at most).
-        The replay itself is not repeated: the curvature is three replays on the sensitivity
-        grid, the columns are rebuilt in place. Returns ``(P, sel, J, rem)``."""
+        (``effects._viscosity``: the quadratic in ln(nu) through replays at the design's
+        viscosity, half the fitted change and the whole of it, ``lossmap.viscosity_steps``),
+        the selection and the stages after it run again; repeated while the fitted change
+        moves by more than ``VISCOSITY_RELINEARISE`` (``NU_PASSES`` at most). The replay of
+        the recording itself is not repeated: two replays on the sensitivity grid per pass,
+        the columns rebuilt in place. Returns ``(P, sel, J, rem)``."""
         from model_core.design import scale_friction_level
-        from model_core.lossmap import viscosity_curvature
+        from model_core.lossmap import viscosity_steps
         from .problem import masked_means
+        from .replay import viscosity_span
         eff = EFFECTS["viscosity_drift"]
         J = None
         for _ in range(NU_PASSES):
             if not self._viscosity_far(P, rem.S):
                 break
-            c = next(float(rem.S.of(t)[0][0]) for t in rem.S.terms
-                     if t.effect == "viscosity_drift")
-            if P.sig.get("sens_nu2") is None:
-                design = scale_friction_level(self.design, 1 + rel1) if rel1 else self.design
-                P.sig["sens_nu2"] = viscosity_curvature(design, self.mode, rec.speed_in,
-                                                        -rec.torque_out)
+            t = next(t for t in rem.S.terms if t.effect == "viscosity_drift")
+            c = float(rem.S.of(t)[0][0])
+            design = scale_friction_level(self.design, 1 + rel1) if rel1 else self.design
+            P.sig["nu_steps"] = viscosity_steps(design, self.mode, rec.speed_in,
+                                                -rec.torque_out,
+                                                c * viscosity_span(P.sig, t.shape))
             P.sig["nu_secant"] = c
             n = len(P.y) * P.m
             sig = {k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == rec.time.shape
