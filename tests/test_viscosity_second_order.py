@@ -47,16 +47,16 @@ def test_the_response_through_the_drifts_own_replays_matches_the_core():
 
 
 @pytest.mark.slow
-def test_a_halved_viscosity_is_named_alone_with_nothing_left():
-    """ln nu falling by ln 0.5 with 60 s (a warm-up), hidden through the core to second order
-    on a 300 s recording: linearised at the design's viscosity it left 1.5 mN*m unexplained
-    (measured with the re-linearisation switched off); evaluated at its fitted size the drift is
-    named alone, of the right size, and nothing is left."""
-    r = synthesize({"viscosity_drift": ({"ln_viscosity_change": math.log(0.5)}, 60.0)}, 71,
-                   "S2", "medium", plan="full", friction_error=0.0)
-    d = Diagnoser(None, "S2").fit(as_recording(r)).diagnosis_
+def test_a_halved_viscosity_is_named_alone_at_its_size():
+    """ln nu falling by ln 0.5 with 60 s (a warm-up), hidden through the core at its size on
+    a 300 s recording: linearised at the design's viscosity the drift came out at -0.671
+    (measured with the re-linearisation switched off); evaluated at its fitted size it is
+    named alone at ln 0.5 to 0.01, and nothing is left."""
+    r = synthesize({"viscosity_drift": ({"ln_viscosity_change": math.log(0.5)}, 60.0)}, 74,
+                   "S1", "medium", plan="full", friction_error=0.0)
+    d = Diagnoser(None, "S1").fit(as_recording(r)).diagnosis_
     assert [e["id"] for e in d.effects] == ["viscosity_drift"]
     p = d.effects[0]["parameters"]
-    assert p["ln_viscosity_change"]["value"] == pytest.approx(math.log(0.5), abs=0.1)
+    assert p["ln_viscosity_change"]["value"] == pytest.approx(math.log(0.5), abs=0.01)
     assert p["tau"]["value"] == 60.0
     assert not d.unexplained["present"], d.unexplained["statement"]
