@@ -212,8 +212,8 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
     if sens_nu is not None and hidden["viscosity_drift"][0].get("ln_viscosity_change"):
         # the viscosity drift through the core at its size (the quadratic in ln(nu) through
         # replays at the drift's end and middle: effects._viscosity)
+        from model_core.effects import viscosity_span
         from model_core.lossmap import viscosity_steps
-        from .diagnosis.replay import viscosity_span
         c, sh = hidden["viscosity_drift"][0]["ln_viscosity_change"], hidden["viscosity_drift"][1]
         sh = None if temperature is not None else sh
         sig["nu_steps"] = viscosity_steps(true_design, mode, w_in, tau_out,

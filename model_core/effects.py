@@ -168,6 +168,15 @@ def _viscosity(s, shape):
         return ((u * (4.0 * half - full) + u * u * (2.0 * full - 4.0 * half)) / c0)[:, None]
     return (s["sens_nu"] * g)[:, None]
 
+
+def viscosity_span(s, shape):
+    """The largest |warm-up| of the viscosity drift's basis along a recording (1 for a drift
+    in time; the largest |T - T0|/10 K of the temperature form, ``shape`` None): the span of
+    ln(viscosity) the replays of ``lossmap.viscosity_steps`` must cover is the drift's size
+    times it."""
+    return float(np.max(np.abs(_warm(s, shape)))) if shape is None else 1.0
+
+
 def _inertia(s, shape):
     return s["alpha_in"][:, None]
 

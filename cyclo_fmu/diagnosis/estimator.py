@@ -72,15 +72,16 @@ CAL_PASSES = 3
 SAME_PHYSICS = (("idle_loss_scale", "load_independent_loss"),)
 #: [1] re-linearise the viscosity drift beyond this difference between its fitted change of
 #: ln(viscosity) and the size its basis was taken at (0 first: the design's viscosity). The
-#: input torque is not linear in ln(nu): a drift of ln 0.5 leaves a second-order term of about
-#: a third of the linear one (1.5 of 4.2 mN*m on an independent recording). Re-linearised,
+#: input torque is not linear in ln(nu): a drift of ln 0.5 leaves a term beyond the linear one
+#: of about a fifth of it (1.1-1.3 mN*m unexplained on independent recordings). Re-linearised,
 #: the drift's basis is the secant of the model's response at the fitted size (a quadratic in
 #: ln(nu) through replays at the drift's middle and end: ``effects._viscosity``,
-#: ``lossmap.viscosity_steps``); a step dc from it leaves about dc^2/2 of the curvature, below
-#: 1 % of the linear part at 0.05 for the core's curvatures (S2/S1 about 1)
-VISCOSITY_RELINEARISE = 0.05
+#: ``lossmap.viscosity_steps``); the secant iteration stops within 0.01 of its fixed point:
+#: twice the 95 % half-width of the fitted change on the independent recordings (0.005 on
+#: 3-5 minutes), and below 1.5 % of a drift of ln 0.5
+VISCOSITY_RELINEARISE = 0.01
 #: re-linearisation passes of the viscosity drift at most (a secant iteration; two settle a
-#: drift of ln 0.5)
+#: drift of ln 0.5 on the independent recordings)
 NU_PASSES = 3
 #: [s] at least this much moving recording (below it nothing can be separated)
 MIN_MOVING_S = 2.0
@@ -444,9 +445,9 @@ class Diagnoser:
         the recording itself is not repeated: two replays on the sensitivity grid per pass,
         the columns rebuilt in place. Returns ``(P, sel, J, rem)``."""
         from model_core.design import scale_friction_level
+        from model_core.effects import viscosity_span
         from model_core.lossmap import viscosity_steps
         from .problem import masked_means
-        from .replay import viscosity_span
         eff = EFFECTS["viscosity_drift"]
         J = None
         for _ in range(NU_PASSES):

@@ -114,14 +114,6 @@ def calibration_sensitivities(design, mode, w_in, tau_out):
     return sens_k, sens_idle, sens_load
 
 
-def viscosity_span(sig, shape):
-    """The largest |warm-up| of the viscosity drift's basis along a recording (1 for a drift
-    in time; the largest |T - T0|/10 K of the temperature form): the span of ln(viscosity) the
-    replays of ``lossmap.viscosity_steps`` cover is the drift's size times it."""
-    from model_core.effects import _warm
-    return float(np.max(np.abs(_warm(sig, shape)))) if shape is None else 1.0
-
-
 def _scaled(design, mu=1.0, nu=1.0):
     from model_core.design import scale_friction_level, scale_viscosity
     return scale_viscosity(scale_friction_level(design, mu), nu)
@@ -180,14 +172,16 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
     if bandwidth > 0:
         sig["theta_in"] = sig["theta_in"] + w_s / (2 * math.pi * bandwidth)
     ex = design.extra
-    if ex.viscosity_ln_change or (ex.viscosity_ln_per_10K and sig.get("temperature")
-                                  is not None):
-        # the design's viscosity drift at its size (effects.extra_torque, effects._viscosity)
+    per_10K = bool(ex.viscosity_ln_per_10K) and sig.get("temperature") is not None
+    if bool(ex.viscosity_ln_change) != per_10K:
+        # the design's viscosity drift at its size (effects.extra_torque, effects._viscosity;
+        # one form only: the replays are taken over one span)
+        from model_core.effects import viscosity_span
         from model_core.lossmap import viscosity_steps
-        c = ex.viscosity_ln_change or ex.viscosity_ln_per_10K
+        c, shape = ((ex.viscosity_ln_per_10K, None) if per_10K
+                    else (ex.viscosity_ln_change, ex.viscosity_tau))
         sig["nu_steps"] = viscosity_steps(design, mode, w_in, tau_out,
-                                          c * viscosity_span(sig, ex.viscosity_tau
-                                                             if ex.viscosity_ln_change else None))
+                                          c * viscosity_span(sig, shape))
     T_true = T_in + extra_torque(design.extra, sig)
     sig["T_in_model"] = T_true
     return Replay(reading_model(design.extra, T_true, sig), sig)
