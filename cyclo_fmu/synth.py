@@ -210,6 +210,16 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
             math.log(1.05) - math.log(0.95))
     sig = effect_signals(t, w_in, loss_in, mode, design.z1, temperature, T_in_model=tau_in,
                          sens_nu=sens_nu, tau_out=tau_out)
+    if sens_nu is not None and hidden["viscosity_drift"][0].get("ln_viscosity_change"):
+        # the viscosity drift through the core at its size (the quadratic in ln(nu) through
+        # replays at the drift's end and middle: effects._viscosity)
+        from model_core.effects import viscosity_span
+        from model_core.lossmap import viscosity_steps
+        c, sh = hidden["viscosity_drift"][0]["ln_viscosity_change"], hidden["viscosity_drift"][1]
+        sh = None if temperature is not None else sh
+        sig["nu_steps"] = viscosity_steps(true_design, mode, w_in, tau_out,
+                                          c * viscosity_span(sig, sh))
+        sig["nu_secant"] = c
     if design.extra.discovered:      # a design's discovered loss, as the core evaluates it
         tau_in = tau_in + design.extra.discovered_torque(w_in, tau_out)
     extra = np.zeros_like(t)

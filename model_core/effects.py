@@ -155,7 +155,26 @@ def _run_in(s, shape):
 
 
 def _viscosity(s, shape):
-    return (s["sens_nu"] * _warm(s, shape))[:, None]
+    """d T/d ln(nu) times the warm-up g; with ``nu_secant`` c0 and ``nu_steps`` (span X, the
+    model's torque changes at X/2 and X: ``lossmap.viscosity_steps``) in the signals, the
+    secant D(c0 g)/c0 of the response D(x) = u (4 D_1/2 - D_1) + u^2 (2 D_1 - 4 D_1/2),
+    u = x/X, the quadratic in ln(nu) through the three replays: the drift c g evaluated at its
+    size c = c0 (a re-linearisation at the fitted size) instead of at the design's viscosity."""
+    g = _warm(s, shape)
+    c0 = s.get("nu_secant")
+    if c0 and s.get("nu_steps") is not None:
+        X, half, full = s["nu_steps"]
+        u = c0 * g / X
+        return ((u * (4.0 * half - full) + u * u * (2.0 * full - 4.0 * half)) / c0)[:, None]
+    return (s["sens_nu"] * g)[:, None]
+
+
+def viscosity_span(s, shape):
+    """The largest |warm-up| of the viscosity drift's basis along a recording (1 for a drift
+    in time; the largest |T - T0|/10 K of the temperature form, ``shape`` None): the span of
+    ln(viscosity) the replays of ``lossmap.viscosity_steps`` must cover is the drift's size
+    times it."""
+    return float(np.max(np.abs(_warm(s, shape)))) if shape is None else 1.0
 
 
 def _inertia(s, shape):
@@ -556,11 +575,14 @@ def extra_torque(extra, s: dict) -> np.ndarray:
         # the column is in degC; the design's reference (thermal_T_ref) in K
         from .design import KELVIN
         total += extra.thermal_per_10K_torque(np.asarray(temp, float) + KELVIN, s["loss_in"])
+    # (through the replays at the drift's size where the signals carry them: effects._viscosity)
     if extra.viscosity_ln_change and s.get("sens_nu") is not None:
-        total += EFFECTS["viscosity_drift"].torque(s, [extra.viscosity_ln_change],
+        total += EFFECTS["viscosity_drift"].torque({**s, "nu_secant": extra.viscosity_ln_change},
+                                                   [extra.viscosity_ln_change],
                                                    extra.viscosity_tau)
     if extra.viscosity_ln_per_10K and temp is not None and s.get("sens_nu") is not None:
-        total += EFFECTS["viscosity_drift"].torque(s, [extra.viscosity_ln_per_10K], None)
+        total += EFFECTS["viscosity_drift"].torque({**s, "nu_secant": extra.viscosity_ln_per_10K},
+                                                   [extra.viscosity_ln_per_10K], None)
     return total
 
 

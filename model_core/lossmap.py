@@ -477,3 +477,24 @@ def blend_solutions(a, b, f, ia, ib):
     p_in, p_out = (p_a, -p_b) if forward else (p_b, -p_a)
     eta = p_out / p_in if (p_in > 0 and p_out > 0 and not locked) else 0.0
     return speeds, torques, losses, eta, eta0, locked, forward
+
+
+def viscosity_steps(design, mode, w_in, tau_out, span, grid=None):
+    """``(span, dT_half, dT_full)``: the change of the model's input torque along a recording
+    [N*m] when ln(viscosity) changes by ``span``/2 and by ``span`` (three replays on ``grid``,
+    by default the full map's: the map's interpolation error changes with the viscosity, and
+    on the sensitivities' coarser 18 x 14 grid the differences biased a fitted change of
+    ln 0.5 by 0.02-0.06 on independent recordings, against 0.01 on the full grid).
+
+    With them a viscosity change x between 0 and ``span`` is evaluated through the quadratic
+    in ln(nu) through the three replays (``model_core.effects._viscosity``): the drift at its
+    size rather than linearised at the design's viscosity. The core's input torque is not
+    linear in ln(nu), nor is a Taylor series at the design's viscosity good over a large drift:
+    at ln 0.5 the linear term misses a fifth of the response and the second-order term at the
+    design's viscosity still 40 % of that miss; the quadratic through the drift's own end and
+    middle interpolates where a Taylor series extrapolates."""
+    from .design import scale_viscosity
+    base = replay_input_torque(design, mode, w_in, tau_out, grid)[0]
+    half, full = (replay_input_torque(scale_viscosity(design, math.exp(x)), mode, w_in,
+                                      tau_out, grid)[0] - base for x in (0.5 * span, span))
+    return span, half, full

@@ -171,6 +171,17 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
                          sens_idle=sens_idle, tau_out=tau_out, sens_load=sens_load)
     if bandwidth > 0:
         sig["theta_in"] = sig["theta_in"] + w_s / (2 * math.pi * bandwidth)
+    ex = design.extra
+    per_10K = bool(ex.viscosity_ln_per_10K) and sig.get("temperature") is not None
+    if bool(ex.viscosity_ln_change) != per_10K:
+        # the design's viscosity drift at its size (effects.extra_torque, effects._viscosity;
+        # one form only: the replays are taken over one span)
+        from model_core.effects import viscosity_span
+        from model_core.lossmap import viscosity_steps
+        c, shape = ((ex.viscosity_ln_per_10K, None) if per_10K
+                    else (ex.viscosity_ln_change, ex.viscosity_tau))
+        sig["nu_steps"] = viscosity_steps(design, mode, w_in, tau_out,
+                                          c * viscosity_span(sig, shape))
     T_true = T_in + extra_torque(design.extra, sig)
     sig["T_in_model"] = T_true
     return Replay(reading_model(design.extra, T_true, sig), sig)

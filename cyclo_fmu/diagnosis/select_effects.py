@@ -94,6 +94,13 @@ def keeps_place(prob, terms, t, bases, min_expl) -> bool:
     return rest.bic - full.bic >= DELTA_BIC and explained(rest, full) >= min_expl
 
 
+def place_gap(prob, terms, t, bases) -> float:
+    """The BIC by which term ``t`` of ``terms`` earns its place next to the basis of
+    ``bases`` that best replaces it (``keeps_place``'s evidence)."""
+    rest = best_next_to(prob, tuple(x for x in terms if x != t), bases)
+    return rest.bic - prob.fit(tuple(terms) + (rest.terms[-1],)).bic
+
+
 def best_shape(prob, terms, options):
     fits = [prob.fit(tuple(terms) + (t,), cv=False) for t in options]
     return min(zip(fits, options), key=lambda p: p[0].bic)[1]
@@ -137,11 +144,16 @@ def select(P, n_folds: int, forced=()) -> Selected:
     # a time drift (warm-up) must explain what no steady function of the operating point
     # explains: a plan that visits its operating points in time order makes any smooth
     # function of the operating point correlate with time, and a drift term would absorb it
+    # (one at a time, the one with the least evidence beside the steady basis first: several
+    # drifts selected together each look redundant beside the others, and setting them all
+    # aside at once loses the one the recording holds)
     confounded = []
     while True:
-        drop = [t.effect for t in S.terms if EFFECTS[t.effect].time_drift
-                and t.effect not in forced
-                and not keeps_place(prob, S.terms, t, P.steady, min_expl)]
+        gaps = [(place_gap(prob, S.terms, t, P.steady), t.effect) for t in S.terms
+                if EFFECTS[t.effect].time_drift and t.effect not in forced]
+        drop = [min(gaps)[1]] if gaps and not all(
+            keeps_place(prob, S.terms, t, P.steady, min_expl) for t in S.terms
+            if EFFECTS[t.effect].time_drift and t.effect not in forced) else []
         if not drop:
             break
         confounded += drop
