@@ -57,3 +57,11 @@ def test_order_amplitude_is_the_least_squares_of_its_sine_and_cosine():
         assert abs(got[1] - ref_se) <= 1e-9 * ref_se
         if turns > 10:
             assert abs(got[0] - 2e-3) < 4 * got[1]
+
+
+def test_releasing_the_free_heap_leaves_the_allocator_alone_when_asked(monkeypatch):
+    """The diagnosis hands free heap pages back between stages (glibc only); with
+    CYCLO_FMU_KEEP_MALLOC set nothing is touched."""
+    from cyclo_fmu.slaves import heap
+    monkeypatch.setenv("CYCLO_FMU_KEEP_MALLOC", "1")
+    assert heap.release_free_heap() is False

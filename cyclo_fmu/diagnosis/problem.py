@@ -294,6 +294,9 @@ def build_problem(rec, design, mode, candidates, bandwidth, block,
             keys, B = columns[(eid, term.shape)]
             columns[(eid, term.shape)] = (keys, X[:, list(term.cols)] if not term.cols else
                                           X[:, term.cols[0]:term.cols[-1] + 1])
+    # the replay's temporaries are freed: their heap pages go back before the next stage's peak
+    from ..slaves.heap import release_free_heap
+    release_free_heap()
     return Problem(rp=rp, sig=sig, y=y, X=X, options=options, generic=generic, steady=steady,
                    structure=structure, groups=groups, blocks=blocks, m=m, dt=dt,
                    T_model_f=T_model_f, loaded=loaded, mask=mask, valid=valid,

@@ -79,3 +79,17 @@ def keep_temporaries_on_heap() -> bool:
 def _keep(libc):
     libc.mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)
     libc.mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD)
+
+
+def release_free_heap() -> bool:
+    """Give the heap's free pages back to the kernel (glibc's ``malloc_trim``: whole free pages
+    anywhere in the heap, not only at its top), between the stages of a long computation whose
+    temporaries :func:`keep_temporaries_on_heap` keeps: the next stage's peak then starts from
+    what is alive, not from the last stage's. A few ms; False where nothing was done (not
+    glibc, or ``CYCLO_FMU_KEEP_MALLOC``)."""
+    libc = _glibc()
+    if libc is None:
+        return False
+    libc.malloc_trim(0)
+    return True
+
