@@ -232,6 +232,32 @@ def _level(S, cols, width):
     return P, np.where(low_ok, np.fmax(base, np.fmax(flank[0], flank[1])), np.nan)
 
 
+def hann_spectrogram(x, fs, nper):
+    """(frequencies [Hz], power spectral density [x^2/Hz] of each segment (n_freq, n_seg)) of
+    ``x`` in Hann-windowed segments of ``nper`` samples, half overlapping, each segment's mean
+    removed: ``scipy.signal.spectrogram(x, fs, window="hann", nperseg=nper,
+    noverlap=nper // 2, detrend="constant", scaling="density")`` written out with its own
+    operations (the same numbers; scipy.signal's import costs more than the spectrogram)."""
+    from scipy import fft as sp_fft
+    fac = np.linspace(-np.pi, np.pi, nper + 1)      # the periodic Hann window, as scipy's
+    win = np.zeros(nper + 1)
+    for k, a in enumerate((0.5, 0.5)):
+        win += a * np.cos(k * fac)
+    win = win[:-1]
+    scale = 1.0 / (fs * (win * win).sum())
+    seg = np.lib.stride_tricks.sliding_window_view(x, nper)[::nper - nper // 2]
+    seg = win * (seg - np.mean(seg, -1, keepdims=True))
+    P = sp_fft.rfft(seg, n=nper)
+    del seg
+    P = np.conjugate(P) * P
+    P *= scale
+    if nper % 2:
+        P[..., 1:] *= 2
+    else:
+        P[..., 1:-1] *= 2                    # (the Nyquist bin is not paired)
+    return sp_fft.rfftfreq(nper, 1 / fs), np.moveaxis(P.real, -1, -2)
+
+
 def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=2.5, speed=None,
                    orders=()) -> list:
     """Narrow peaks of the residual's spectrum at fixed frequencies (Welch: 2 s Hann segments,
@@ -253,8 +279,6 @@ def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=2.5, speed=None,
     judged: a line there cannot be told from a low-frequency rise at this resolution.
 
     Returns [(frequency Hz, amplitude N*m)], largest first."""
-    from scipy.ndimage import median_filter
-    from scipy.signal import spectrogram
     r = np.asarray(r, float)
     orders = list(orders)
     n = len(r)
@@ -264,8 +288,7 @@ def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=2.5, speed=None,
         return []
     if speed is not None and len(speed) < n:
         raise ValueError(f"speed: {len(speed)} samples for a residual of {n}")
-    f, _, S = spectrogram(r - np.mean(r), fs=fs, window="hann", nperseg=nper,
-                          noverlap=nper // 2, detrend="constant", scaling="density")
+    f, S = hann_spectrogram(r - np.mean(r), fs, nper)
     df = f[1] - f[0]
     n_seg = S.shape[1]
     width = max(3, int(round(10.0 / df)) | 1)
@@ -390,9 +413,9 @@ def bursts(t, spikes, w, T_out) -> dict:
         out["events_with_burst"][name] = (int(hit.sum()), len(events))
         every = "reversal" not in name or hit.sum() >= REVERSAL_SHARE * len(events)
         if k >= 3 and every:
-            from scipy.stats import binom
+            from scipy.special import bdtrc      # binomial P(X >= k): scipy.stats.binom.sf
             p0 = max(float(near.mean()), 1e-12)
-            if binom.sf(k - 1, n, p0) < BURST_P:
+            if bdtrc(k - 1, n, p0) < BURST_P:
                 out["tied"].append(name)
         left &= ~near
     out["at"]["elsewhere"] = int(left.sum())
@@ -479,7 +502,7 @@ def locate(t, r, w, T_out, T_in, alpha, temperature=None) -> dict:
 
 def ljung_box_p(x, lags=20):
     """p-value of the Ljung-Box test that x is white (small p: structure left)."""
-    from scipy.stats import chi2
+    from scipy.special import chdtrc     # the chi-square tail: scipy.stats.chi2.sf
     x = np.asarray(x, float) - np.mean(x)
     n = len(x)
     denom = np.dot(x, x)
@@ -489,4 +512,4 @@ def ljung_box_p(x, lags=20):
     for k in range(1, lags + 1):
         r = np.dot(x[k:], x[:-k]) / denom
         q += r * r / (n - k)
-    return float(chi2.sf(n * (n + 2) * q, lags))
+    return float(chdtrc(lags, n * (n + 2) * q))
