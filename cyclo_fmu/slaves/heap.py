@@ -23,7 +23,7 @@ allocator (docs/explanation/fmu-safety.md; the map of an FMU solves with glibc's
 ``benchmarks/bench_fmu_heap.py`` measures what that costs).
 
 A program using ``model_core`` directly gets the same with the environment variables
-``MALLOC_MMAP_THRESHOLD_=4194304 MALLOC_TRIM_THRESHOLD_=67108864`` or by calling
+``MALLOC_MMAP_THRESHOLD_=33554432 MALLOC_TRIM_THRESHOLD_=67108864`` or by calling
 ``keep_temporaries_on_heap()``. Elsewhere than on glibc (macOS, Windows, musl) nothing is
 changed; the environment variable ``CYCLO_FMU_KEEP_MALLOC`` (any non-empty value) leaves the
 allocator alone.
