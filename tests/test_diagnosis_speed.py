@@ -129,3 +129,24 @@ def test_a_diagnosis_imports_neither_scipy_signal_nor_scipy_stats(tmp_path):
             "print(sorted(m for m in ('scipy.signal', 'scipy.stats') if m in sys.modules))\n")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert r.stdout.strip().splitlines()[-1] == "[]"
+
+
+def test_replays_sharing_their_speed_look_ups_give_the_same_torques():
+    """A replay and its sensitivities look the recording's speeds up once per speed grid
+    (``replay_input_torque(..., located=)``): the same numbers as each on its own, speeds
+    below the grid and reversals included, both profiles."""
+    from model_core import DriveDesign
+    from model_core.lossmap import replay_input_torque
+    rng = np.random.default_rng(9)
+    n = 40000
+    w = np.concatenate([np.linspace(-300.0, 300.0, n // 2), rng.uniform(-0.01, 0.01, n // 4),
+                        rng.uniform(0.0, 300.0, n - n // 2 - n // 4)])
+    tau = rng.uniform(-2.0, 2.0, n)
+    for profile, mode in (("physical", "S1"), ("physical", "1S"), ("paper", "S2")):
+        d = DriveDesign(profile=profile)
+        located = {}
+        for grid in ((18, 14), None, (18, 14)):       # the third from the shared look-ups
+            got = replay_input_torque(d, mode, w, tau, grid, located)
+            ref = replay_input_torque(d, mode, w, tau, grid)
+            assert all(np.array_equal(a, b) for a, b in zip(got, ref))
+        assert len(located) == 2

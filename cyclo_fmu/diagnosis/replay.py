@@ -134,11 +134,12 @@ def _block_sum(xb, item):
     return s
 
 
-def calibration_sensitivities(design, mode, w_in, tau_out):
+def calibration_sensitivities(design, mode, w_in, tau_out, located=None):
     """d T_in_model / d mesh_loss_k, / d idle_loss_scale and / d load_loss_scale along a
     recording [N*m], finite differences on SENSITIVITY_GRID (k forward, backward at its upper
     bound; the scales central, one-sided at their bounds); the second None where the
-    design has no load-independent losses (paper profile, losses = "load_dependent")."""
+    design has no load-independent losses (paper profile, losses = "load_dependent").
+    ``located``: ``replay_input_torque``'s look-ups of these speeds, shared."""
     from model_core.design import (IDLE_LOSS_SCALE_BOUNDS, LOAD_LOSS_SCALE_BOUNDS,
                                    MESH_LOSS_K_BOUNDS)
     from dataclasses import replace as _replace
@@ -147,7 +148,7 @@ def calibration_sensitivities(design, mode, w_in, tau_out):
 
     def T(grid=g, **changes):
         d = _replace(design, calibration=_replace(cal, **changes)) if changes else design
-        return replay_input_torque(d, mode, w_in, tau_out, grid)[0]
+        return replay_input_torque(d, mode, w_in, tau_out, grid, located)[0]
     base = T()
     hk = MESH_LOSS_STEP if cal.mesh_loss_k + MESH_LOSS_STEP <= MESH_LOSS_K_BOUNDS[1] \
         else -MESH_LOSS_STEP
@@ -202,7 +203,8 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
     model's torque) are not computed unless given, and are None in the signals."""
     t, w_in, T_out = rec.time, rec.speed_in, rec.torque_out
     tau_out = -T_out
-    T_in, loss = replay_input_torque(design, mode, w_in, tau_out)
+    located = {}      # the speeds' places on the maps' speed grids, looked up once per grid
+    T_in, loss = replay_input_torque(design, mode, w_in, tau_out, located=located)
     h = SENSITIVITY_STEP
     dln = math.log(1 + h) - math.log(1 - h)
     g = SENSITIVITY_GRID
@@ -210,15 +212,17 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
     def diff(**k):
         up = {n: 1 + h for n in k}
         dn = {n: 1 - h for n in k}
-        return (replay_input_torque(_scaled(design, **up), mode, w_in, tau_out, g)[0]
-                - replay_input_torque(_scaled(design, **dn), mode, w_in, tau_out, g)[0]) / dln
+        return (replay_input_torque(_scaled(design, **up), mode, w_in, tau_out, g, located)[0]
+                - replay_input_torque(_scaled(design, **dn), mode, w_in, tau_out, g,
+                                      located)[0]) / dln
     given = tuple(sensitivities) if sensitivities is not None else ()
     sens_mu, sens_nu, sens_k, sens_idle, sens_load = given + (None,) * (5 - len(given))
     # (a sensitivity passed as None is computed at this design)
     sens_mu = diff(mu=1) if sens_mu is None else sens_mu
     sens_nu = diff(nu=1) if sens_nu is None else sens_nu
     if calibration and (sens_k is None or sens_idle is None or sens_load is None):
-        sens_k, sens_idle, sens_load = calibration_sensitivities(design, mode, w_in, tau_out)
+        sens_k, sens_idle, sens_load = calibration_sensitivities(design, mode, w_in, tau_out,
+                                                                 located)
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
     from scipy.ndimage import uniform_filter1d
     w_s = uniform_filter1d(w_in, max(1, int(round(SPEED_SMOOTHING / dt))), mode="nearest")
