@@ -14,13 +14,19 @@ the summed PSS of the process tree (sampled every 50 ms) and the command's max R
   command reads it as 10 ms block means). Target: <= 120 s, <= 2 GB. Long: opt-in.
 
 Reference measured in the same run: a bare interpreter importing what the command imports
-(numpy, scipy.signal, scipy.stats, pyarrow.csv, matplotlib.pyplot), and for the 36 M case
+(numpy, scipy.ndimage, scipy.special, scipy.fft, pyarrow.csv, matplotlib.figure; before
+2026-11-26 afternoon: numpy, scipy.signal, scipy.stats, pyarrow.csv, matplotlib.pyplot), and
+for the 36 M case
 pyarrow's bare streaming parse of the file. ``--before PATH`` also runs the command from another
 copy of the code (e.g. ``git archive`` of an older commit), alternating with this one, so a
 before/after pair shares the machine's load. ``--inprocess`` adds read, check and diagnose
 timed inside one process for the 600 000 samples.
 
+``--json`` runs ``cyclo-fmu diagnose FILE --mode auto --json`` instead (the diagnosis printed:
+no folder, figure or report; the form issue 18's target names).
+
     python benchmarks/bench_diagnosis.py [--repeat 3] [--big] [--keep DIR] [--before PATH]
+                                          [--json]
 """
 from __future__ import annotations
 
@@ -94,9 +100,15 @@ def run(argv, src=ROOT):
             "err": err.decode(errors="replace").strip().splitlines()[-1:]}
 
 
+#: ``--json``: the command as ``cyclo-fmu diagnose FILE --mode auto --json`` (the diagnosis
+#: printed; no folder, no figure, no report) instead of ``--out DIR``
+AS_JSON = []
+
+
 def diagnose(path, out, src):
     cli = [sys.executable, "-m", "cyclo_fmu.cli"]
-    return run(cli + ["diagnose", str(path), "--mode", "auto", "--out", str(out)], src)
+    where = ["--json"] if AS_JSON else ["--out", str(out)]
+    return run(cli + ["diagnose", str(path), "--mode", "auto"] + where, src)
 
 
 def show(label, r, target=""):
@@ -107,7 +119,7 @@ def show(label, r, target=""):
 
 
 def reference_imports():
-    code = "import numpy, scipy.signal, scipy.stats, pyarrow.csv, matplotlib.pyplot"
+    code = "import numpy, scipy.ndimage, scipy.special, scipy.fft, pyarrow.csv, matplotlib.figure"
     return run([sys.executable, "-c", code])
 
 
@@ -163,7 +175,11 @@ def main():
     ap.add_argument("--keep", type=Path, help="write the recordings here (reused if present)")
     ap.add_argument("--before", help="a copy of older code to run alternately (PYTHONPATH)")
     ap.add_argument("--inprocess", action="store_true")
+    ap.add_argument("--json", action="store_true",
+                    help="run the command with --json (printed, no folder) instead of --out")
     a = ap.parse_args()
+    if a.json:
+        AS_JSON.append(True)
     with tempfile.TemporaryDirectory() as tmp:
         d = a.keep or Path(tmp)
         d.mkdir(parents=True, exist_ok=True)

@@ -351,7 +351,7 @@ REPLAY_MARGIN = 1.05
 REPLAY_CHUNK = 16384
 
 
-def replay_input_torque(design, mode, w_in, tau_out, grid=None):
+def replay_input_torque(design, mode, w_in, tau_out, grid=None, located=None):
     """The input torque the model predicts along a recording, and its loss part (both N*m).
 
     Parameters
@@ -366,6 +366,10 @@ def replay_input_torque(design, mode, w_in, tau_out, grid=None):
 
     grid : (int, int), optional
         Points of the map over torque and speed (default: ModeMap's 36 x 28).
+    located : dict, optional
+        Shared by the replays of one ``w_in`` (a replay and its sensitivities): where its
+        speeds lie on a map's speed grid (``ModeMap.locate_speeds``), per chunk, kept under
+        the grid, so that maps with the same speed grid look them up once. The same numbers.
 
     Returns
     -------
@@ -382,9 +386,17 @@ def replay_input_torque(design, mode, w_in, tau_out, grid=None):
     # in chunks (the map is the same for every chunk), the input torque alone: the numbers of
     # solve_arrays(...)["tau_in"], without its other outputs' temporaries
     tau_in = np.empty_like(w_in)
-    for k0 in range(0, w_in.size, REPLAY_CHUNK):
+    chunks = None if located is None else located.setdefault(
+        (w_in.size, tuple(m._lw), m._w_low), [])
+    for c, k0 in enumerate(range(0, w_in.size, REPLAY_CHUNK)):
         sl = slice(k0, k0 + REPLAY_CHUNK)
-        tau_in[sl] = m.input_torque_arrays(w_in[sl], tau_out[sl])
+        loc = None
+        if chunks is not None:
+            if c == len(chunks):       # (compact: grid index and sign fit 4 and 1 bytes)
+                j, fw, low, sgn = m.locate_speeds(w_in[sl])
+                chunks.append((j.astype(np.int32), fw, low, sgn.astype(np.int8)))
+            loc = chunks[c]
+        tau_in[sl] = m.input_torque_arrays(w_in[sl], tau_out[sl], loc)
     lossless = -tau_out * m.ratio[m._k]
     return tau_in, tau_in - lossless
 

@@ -92,15 +92,17 @@ def jump_mask(t, w_in, T_model, noise, dt) -> np.ndarray:
     return (c[hi] - c[lo]) == 0
 
 
-def masked_means(x, mask, m):
-    """Block means over the compared samples only (the plain mean where none is)."""
+def masked_means(x, mask, m, counts=None):
+    """Block means over the compared samples only (the plain mean where none is).
+    ``counts``: the compared samples per block (``mask`` summed over each block), where many
+    series share one mask (counting them costs as much as the sum of a series)."""
     from .replay import block_means, _block_sum
     if mask.all():
         return block_means(x, m)
     n = (len(x) // m) * m
     x = x[:n].reshape(-1, m, *x.shape[1:])
     mk = mask[:n].reshape(-1, m)
-    cnt = mk.sum(1)
+    cnt = mk.sum(1) if counts is None else counts
     if x[0, 0].size == 1:    # one column: numpy sums each block's contiguous samples
         s = np.where(mk, x.reshape(mk.shape), 0.0).sum(1).reshape(cnt.shape + x.shape[2:])
     else:   # columns: summed block position by block position (see replay._block_sum)
@@ -167,13 +169,14 @@ def _same_signal(a, b) -> bool:
     return type(a) is type(b) and a == b
 
 
-def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None):
+def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, counts=None):
     """Every candidate's block-mean columns (each shape's basis at sample level, through the
     transducer's low pass, block-averaged over the compared samples) and its Terms. ``reuse``:
     (signals, columns) of an earlier problem with the same samples, mask and block length (the
     re-linearised replay): a column whose basis read only signals equal to that problem's (the
     recording's own speed, angle, time, load) is that problem's column, the same numbers; the
-    ones that read the model (its loss, sensitivities, torque) are computed again. Returns
+    ones that read the model (its loss, sensitivities, torque) are computed again.
+    ``counts``: ``mask``'s compared samples per block (``masked_means``). Returns
     (cols, options, columns) with columns {(effect, shape): (signals read, column)}."""
     cols, options, columns = [], {}, {}
     sig = _Reads(P_sig)
@@ -207,7 +210,8 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None):
                 keys, B = old
             else:
                 sig.read = set()
-                B = masked_means(first_order(eff.basis(sig, shape), dt, bandwidth), mask, m)
+                B = masked_means(first_order(eff.basis(sig, shape), dt, bandwidth), mask, m,
+                                 counts)
                 keys = frozenset(sig.read)
             columns[(eid, shape)] = (keys, B)
             k0 = sum(c.shape[1] for c in cols)
@@ -258,10 +262,11 @@ def build_problem(rec, design, mode, candidates, bandwidth, block,
     mask = jump_mask(t, rec.speed_in, rp.T_model, noise, dt)
     n = (len(t) // m) * m
     mask_b = mask[:n]
-    valid = mask_b.reshape(-1, m).mean(1)
+    counts = mask_b.reshape(-1, m).sum(1)
+    valid = counts / m           # (numpy's mean of the block's booleans, the same numbers)
 
     def mean(x):
-        return masked_means(x[:n], mask_b, m)
+        return masked_means(x[:n], mask_b, m, counts)
     y = mean(rec.torque_in - T_model_f)
     temp = getattr(rec, "temperature", None)
     blocks = {"t": mean(t), "w_in": mean(rec.speed_in), "T_out": mean(rec.torque_out),
@@ -277,7 +282,7 @@ def build_problem(rec, design, mode, candidates, bandwidth, block,
         prior = ({k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == t.shape else v)
                   for k, v in reuse.sig.items()}, reuse.columns)
     cols, options, columns = _candidates(sig_n, candidates, loaded, dt, bandwidth, mask_b, m,
-                                         prior)
+                                         prior, counts)
     if reuse is not None:
         reuse.columns = None       # (views of the earlier problem's X: released with it)
     Gb, groups = R.generic_basis(blocks)
@@ -289,6 +294,9 @@ def build_problem(rec, design, mode, candidates, bandwidth, block,
             keys, B = columns[(eid, term.shape)]
             columns[(eid, term.shape)] = (keys, X[:, list(term.cols)] if not term.cols else
                                           X[:, term.cols[0]:term.cols[-1] + 1])
+    # the replay's temporaries are freed: their heap pages go back before the next stage's peak
+    from ..slaves.heap import release_free_heap
+    release_free_heap()
     return Problem(rp=rp, sig=sig, y=y, X=X, options=options, generic=generic, steady=steady,
                    structure=structure, groups=groups, blocks=blocks, m=m, dt=dt,
                    T_model_f=T_model_f, loaded=loaded, mask=mask, valid=valid,

@@ -189,8 +189,8 @@ def burst_claims(P, r, spikes, rng):
     n = len(r2)
     # the statistic is the mean rank of |r| near the events (a few random spikes move a rank
     # mean by little, a transient at every event by much; no clipping constant needed)
-    from scipy.stats import rankdata
-    rk = rankdata(r2) / n
+    from .twins import average_ranks
+    rk = average_ranks(r2) / n
     shifts = rng.integers(n // 10, n - n // 10, N_TWINS) if n > 20 else np.zeros(0, int)
     alpha = FALSE_ALARM / len(ev)
     taken = np.zeros(n, bool)

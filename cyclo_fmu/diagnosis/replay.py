@@ -49,13 +49,69 @@ SPEED_SMOOTHING = 0.02
 
 def first_order(x, dt, bandwidth):
     """A first-order low pass (the transducer's bandwidth, Hz) along axis 0, started in steady
-    state."""
+    state (``scipy.signal.lfilter``, see ``_linear_filter``)."""
     if bandwidth <= 0:
         return x
-    from scipy.signal import lfilter
     a = math.exp(-2 * math.pi * bandwidth * dt)
     zi = a * x[:1]
-    return lfilter([1 - a], [1, -a], x, axis=0, zi=zi)[0]
+    return _linear_filter()(np.atleast_1d([1 - a]), np.atleast_1d([1, -a]), x, 0, zi)[0]
+
+
+_LINEAR_FILTER = []
+
+
+def _linear_filter():
+    """``(b, a, x, axis, zi) -> (y, zf)`` of ``scipy.signal.lfilter`` (a denominator of two or
+    more coefficients): the compiled kernel lfilter hands its arrays to
+    (``scipy.signal._sigtools._linear_filter``), loaded from its file without the package.
+    Importing scipy.signal imports scipy.stats and most of scipy (0.35-0.45 s of CPU, a tenth
+    of a diagnosis) for this one recursion, which numpy cannot run. The kernel is checked once
+    against the recursion written out; where it is not found or differs (another scipy),
+    scipy.signal.lfilter itself."""
+    if not _LINEAR_FILTER:
+        _LINEAR_FILTER.append(_sigtools_kernel() or _public_lfilter)
+    return _LINEAR_FILTER[0]
+
+
+def _public_lfilter(b, a, x, axis, zi):
+    from scipy.signal import lfilter
+    return lfilter(b, a, x, axis=axis, zi=zi)
+
+
+def _sigtools_kernel():
+    import importlib.machinery
+    import importlib.util
+    import os
+    import sys
+    name = "scipy.signal._sigtools"
+    if "scipy.signal" in sys.modules:            # imported anyway: nothing to save
+        return None
+    try:
+        mod = sys.modules.get(name)
+        if mod is None:
+            import scipy
+            folder = os.path.join(os.path.dirname(scipy.__file__), "signal")
+            path = next(os.path.join(folder, "_sigtools" + sfx)
+                        for sfx in importlib.machinery.EXTENSION_SUFFIXES
+                        if os.path.exists(os.path.join(folder, "_sigtools" + sfx)))
+            loader = importlib.machinery.ExtensionFileLoader(name, path)
+            mod = importlib.util.module_from_spec(
+                importlib.util.spec_from_file_location(name, path, loader=loader))
+            loader.exec_module(mod)
+        kernel = mod._linear_filter
+        # y[n] = a y[n-1] + b0 x[n] from y[-1] = zi / a, in floats as the kernel adds them
+        c = 0.3
+        x = np.array([[1.0, -2.0], [0.5, 4.0], [-3.0, 0.25], [2.0, 1.0]])
+        y, z = np.empty_like(x), c * x[0]
+        for i in range(len(x)):
+            y[i] = z + (1 - c) * x[i]
+            z = c * y[i]
+        got, zf = kernel(np.atleast_1d([1 - c]), np.atleast_1d([1, -c]), x, 0, c * x[:1])
+        if not (np.array_equal(got, y) and np.array_equal(zf, z[None])):
+            return None
+        return kernel
+    except (ImportError, OSError, StopIteration, AttributeError, TypeError, ValueError):
+        return None
 
 
 def block_means(x, m):
@@ -78,11 +134,12 @@ def _block_sum(xb, item):
     return s
 
 
-def calibration_sensitivities(design, mode, w_in, tau_out):
+def calibration_sensitivities(design, mode, w_in, tau_out, located=None):
     """d T_in_model / d mesh_loss_k, / d idle_loss_scale and / d load_loss_scale along a
     recording [N*m], finite differences on SENSITIVITY_GRID (k forward, backward at its upper
     bound; the scales central, one-sided at their bounds); the second None where the
-    design has no load-independent losses (paper profile, losses = "load_dependent")."""
+    design has no load-independent losses (paper profile, losses = "load_dependent").
+    ``located``: ``replay_input_torque``'s look-ups of these speeds, shared."""
     from model_core.design import (IDLE_LOSS_SCALE_BOUNDS, LOAD_LOSS_SCALE_BOUNDS,
                                    MESH_LOSS_K_BOUNDS)
     from dataclasses import replace as _replace
@@ -91,7 +148,7 @@ def calibration_sensitivities(design, mode, w_in, tau_out):
 
     def T(grid=g, **changes):
         d = _replace(design, calibration=_replace(cal, **changes)) if changes else design
-        return replay_input_torque(d, mode, w_in, tau_out, grid)[0]
+        return replay_input_torque(d, mode, w_in, tau_out, grid, located)[0]
     base = T()
     hk = MESH_LOSS_STEP if cal.mesh_loss_k + MESH_LOSS_STEP <= MESH_LOSS_K_BOUNDS[1] \
         else -MESH_LOSS_STEP
@@ -146,7 +203,8 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
     model's torque) are not computed unless given, and are None in the signals."""
     t, w_in, T_out = rec.time, rec.speed_in, rec.torque_out
     tau_out = -T_out
-    T_in, loss = replay_input_torque(design, mode, w_in, tau_out)
+    located = {}      # the speeds' places on the maps' speed grids, looked up once per grid
+    T_in, loss = replay_input_torque(design, mode, w_in, tau_out, located=located)
     h = SENSITIVITY_STEP
     dln = math.log(1 + h) - math.log(1 - h)
     g = SENSITIVITY_GRID
@@ -154,15 +212,17 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
     def diff(**k):
         up = {n: 1 + h for n in k}
         dn = {n: 1 - h for n in k}
-        return (replay_input_torque(_scaled(design, **up), mode, w_in, tau_out, g)[0]
-                - replay_input_torque(_scaled(design, **dn), mode, w_in, tau_out, g)[0]) / dln
+        return (replay_input_torque(_scaled(design, **up), mode, w_in, tau_out, g, located)[0]
+                - replay_input_torque(_scaled(design, **dn), mode, w_in, tau_out, g,
+                                      located)[0]) / dln
     given = tuple(sensitivities) if sensitivities is not None else ()
     sens_mu, sens_nu, sens_k, sens_idle, sens_load = given + (None,) * (5 - len(given))
     # (a sensitivity passed as None is computed at this design)
     sens_mu = diff(mu=1) if sens_mu is None else sens_mu
     sens_nu = diff(nu=1) if sens_nu is None else sens_nu
     if calibration and (sens_k is None or sens_idle is None or sens_load is None):
-        sens_k, sens_idle, sens_load = calibration_sensitivities(design, mode, w_in, tau_out)
+        sens_k, sens_idle, sens_load = calibration_sensitivities(design, mode, w_in, tau_out,
+                                                                 located)
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
     from scipy.ndimage import uniform_filter1d
     w_s = uniform_filter1d(w_in, max(1, int(round(SPEED_SMOOTHING / dt))), mode="nearest")

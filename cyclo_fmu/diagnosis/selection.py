@@ -75,7 +75,10 @@ class GramProblem:
         folds = np.minimum((np.arange(n) * n_folds) // max(n, 1), n_folds - 1)
         w = np.asarray(weights, float)
         # scale columns to unit weighted RMS: the Gram matrices stay well conditioned
-        scale = np.sqrt(np.maximum((w[:, None] * X * X).sum(0) / max(w.sum(), 1e-300), 1e-300))
+        # ((w[:, None] * X * X).sum(0) without its two n x k temporaries: einsum forms the
+        # same products and sums the rows in the same order)
+        scale = np.sqrt(np.maximum(np.einsum("i,ij,ij->j", w, X, X) / max(w.sum(), 1e-300),
+                                   1e-300))
         self.scale = scale
         Xs = X / scale
         self.G, self.c, self.yy, self.sw = [], [], [], []

@@ -459,6 +459,7 @@ def _read_arrow(path, d, keys, idx, unit_map, block, loc, chunk_bytes):
                 arrs.append(_to_float(t.column(names[j]).chunks))
                 t = t.drop_columns([names[j]])
             del t
+            _release_arrow_pool(pa)
             _check_inf(arrs, keys, loc)
             data = _convert(dict(zip(keys, arrs)), unit_map)
             return data, len(arrs[0]), []
@@ -471,11 +472,22 @@ def _read_arrow(path, d, keys, idx, unit_map, block, loc, chunk_bytes):
             _check_inf(arrs, keys, loc)
             acc.add(_convert(dict(zip(keys, arrs)), unit_map))
         bar.close()
+        reader = batch = None            # (the last batch's buffers too)
+        _release_arrow_pool(pa)
         return acc.result()
     except (pa.ArrowInvalid, UnicodeDecodeError, ValueError) as exc:
         if isinstance(exc, RecordingError):
             raise
         raise _fail(loc, exc) from None
+
+
+def _release_arrow_pool(pa):
+    """Hand the pages pyarrow's memory pool (mimalloc, jemalloc) keeps after a parse back to
+    the kernel: the parse is done and numpy never reuses them (66 MB kept after a 30 MB CSV of
+    600 000 samples, the diagnosis's peak memory raised by as much)."""
+    release = getattr(pa.default_memory_pool(), "release_unused", None)
+    if release is not None:
+        release()
 
 
 #: [bytes] a progress bar (stderr, terminals only) for block reads of files larger than this

@@ -11,8 +11,9 @@ paper profile took 80 ms early in a process and 40 ms with the settings below; t
 in a new process had 17 500 minor page faults and 30 ms of 90.
 
 The settings are what that dynamic rule would reach: the mmap threshold :data:`MMAP_THRESHOLD`
-(4 MiB, above the largest temporary of the maps) and the trim threshold :data:`TRIM_THRESHOLD`
-(64 MiB), so the temporaries are recycled on the heap.
+(32 MiB, glibc's own ceiling of that rule: above the largest temporary of the maps and above a
+sample-level array of a recording up to 4 million samples) and the trim threshold
+:data:`TRIM_THRESHOLD` (64 MiB), so the temporaries are recycled on the heap.
 
 ``keep_temporaries_on_heap`` sets them for the whole process: for processes of our own (the
 ``cyclo-fmu`` command; the sweep's dask workers get them as environment variables,
@@ -22,7 +23,7 @@ allocator (docs/explanation/fmu-safety.md; the map of an FMU solves with glibc's
 ``benchmarks/bench_fmu_heap.py`` measures what that costs).
 
 A program using ``model_core`` directly gets the same with the environment variables
-``MALLOC_MMAP_THRESHOLD_=4194304 MALLOC_TRIM_THRESHOLD_=67108864`` or by calling
+``MALLOC_MMAP_THRESHOLD_=33554432 MALLOC_TRIM_THRESHOLD_=67108864`` or by calling
 ``keep_temporaries_on_heap()``. Elsewhere than on glibc (macOS, Windows, musl) nothing is
 changed; the environment variable ``CYCLO_FMU_KEEP_MALLOC`` (any non-empty value) leaves the
 allocator alone.
@@ -34,9 +35,13 @@ import os
 
 #: glibc's mallopt parameters (malloc.h)
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
-#: bytes, blocks at least this large are mapped from the kernel (above the map's largest
-#: temporary, 1.4 MB for the default grid; glibc's dynamic rule would raise it that far itself)
-MMAP_THRESHOLD = 4 << 20
+#: bytes, blocks at least this large are mapped from the kernel: 32 MiB, the ceiling glibc's
+#: dynamic rule raises it to itself on 64-bit systems (DEFAULT_MMAP_THRESHOLD_MAX). Above the
+#: map's largest temporary (1.4 MB for the default grid) and above the diagnosis's
+#: sample-level arrays (4.8 MB at 600 000 samples: with 4 MiB every one of its hundreds of
+#: such temporaries was mapped and faulted in afresh, 1.0 s of system time of a 4.4 s
+#: diagnosis; 0.5 s with 32 MiB, benchmarks/bench_diagnosis.py)
+MMAP_THRESHOLD = 32 << 20
 #: bytes of free heap top kept (the temporaries alive at once stay below it)
 TRIM_THRESHOLD = 64 << 20
 
@@ -74,3 +79,17 @@ def keep_temporaries_on_heap() -> bool:
 def _keep(libc):
     libc.mallopt(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)
     libc.mallopt(_M_TRIM_THRESHOLD, TRIM_THRESHOLD)
+
+
+def release_free_heap() -> bool:
+    """Give the heap's free pages back to the kernel (glibc's ``malloc_trim``: whole free pages
+    anywhere in the heap, not only at its top), between the stages of a long computation whose
+    temporaries :func:`keep_temporaries_on_heap` keeps: the next stage's peak then starts from
+    what is alive, not from the last stage's. A few ms; False where nothing was done (not
+    glibc, or ``CYCLO_FMU_KEEP_MALLOC``)."""
+    libc = _glibc()
+    if libc is None:
+        return False
+    libc.malloc_trim(0)
+    return True
+

@@ -170,7 +170,7 @@ def worker_environ() -> dict:
     0.1-1.4 MB) is mapped fresh from the kernel and page-faulted in again. A worker then took
     0.42-0.45 s for a task of 25 designs that takes 0.35 s in a plain process, which held a
     2-worker LocalCluster on 2 idle cores at 1.2-1.6x the serial speed. The threshold of
-    ``cyclo_fmu.slaves.heap`` (4 MiB, the FMU's setting while it solves its map) keeps those
+    ``cyclo_fmu.slaves.heap`` (32 MiB; 4 MiB when this was measured) keeps those
     arrays on the heap: the task takes 0.35 s in a worker too (benchmarks/bench_sweep.py).
     Workers of an existing scheduler (``--scheduler``) are started by their owner: the same
     variable belongs in their environment. (The local pool's forked workers inherit the
