@@ -227,7 +227,8 @@ def _running_median(P, width):
     c = np.arange(0, n, step)
     if c[-1] != n - 1:
         c = np.append(c, n - 1)
-    m = np.median(np.lib.stride_tricks.sliding_window_view(pad, width, axis=-1)[..., c, :], -1)
+    win = np.lib.stride_tricks.sliding_window_view(pad, width, axis=-1)[..., c, :]
+    m = np.partition(win, h, -1)[..., h] if width % 2 else np.median(win, -1)
     if c.size == 1:
         return np.repeat(m, n, -1)
     i = np.arange(n)
@@ -268,11 +269,15 @@ def _normal_score(Z, h):
     return (np.cbrt(Z) - (1.0 - v)) / np.sqrt(v)
 
 
+def _ratios(Q, level):
+    """The mean of ``Q`` over each bin and its two neighbours (where a line's power lies, 98 %
+    of it wherever the line sits between bins) over the level (bins 1 .. n-2)."""
+    return (Q[..., :-2] + Q[..., 1:-1] + Q[..., 2:]) / (3.0 * level[..., 1:-1])
+
+
 def _heights(Q, level, h3):
-    """Normal scores of the mean of ``Q`` over each bin and its two neighbours (where a line's
-    power lies, 98 % of it wherever the line sits between bins) over the level."""
-    Z = (Q[..., :-2] + Q[..., 1:-1] + Q[..., 2:]) / (3.0 * level[..., 1:-1])
-    return _normal_score(Z, h3[1:-1])
+    """Normal scores of ``_ratios``: the heights compared across bins and with the twins."""
+    return _normal_score(_ratios(Q, level), h3[1:-1])
 
 
 def _twin_heights(Lq, h, h3, ok, width, n_twins, rng):
@@ -354,17 +359,25 @@ def peak_claims(r, dt, min_amplitude=1e-3, f_min=2.5, speed=None, orders=(),
         return np.where(K > 0, np.einsum("ij,ij->i", A, M) / np.maximum(K, 1), A.mean(1))
     P = mean_over(S)
     base = np.maximum(_running_median(P, width), 1e-300)
-    # each segment's own level in its band (the median of its periodogram over the smooth
-    # level; mean one over the segments)
+    # each segment's own level in its bands (the median of its periodogram over the smooth
+    # level; mean one over the segments), interpolated linearly between the bands' centres
+    # (a step at a band's edge would make an edge in the spectrum)
     nb = max(1, int(round(PEAK_BAND_HZ / df)))
     n_bands = max(1, nf // nb)
-    band = np.minimum(np.arange(nf) // nb, n_bands - 1)
+    edges = np.append(np.arange(n_bands) * nb, nf)
     lev = np.empty((n_bands, n_seg))
+    Rt = (S / base[:, None]).T.copy()          # segments x bins: the bands contiguous
     for b in range(n_bands):
-        lev[b] = np.median(S[b * nb:(b + 1) * nb if b < n_bands - 1 else nf]
-                           / base[b * nb:(b + 1) * nb if b < n_bands - 1 else nf, None], 0)
+        m = (edges[b + 1] - edges[b]) // 2   # the (upper) median
+        lev[b] = np.partition(Rt[:, edges[b]:edges[b + 1]], m, 1)[:, m]
+    del Rt
     lev /= np.maximum(lev.mean(1, keepdims=True), 1e-300)
-    N = S / np.maximum(lev[band], 1e-12)
+    centre = 0.5 * (edges[:-1] + edges[1:] - 1)
+    pos = np.interp(np.arange(nf), centre, np.arange(n_bands))
+    b0 = np.minimum(pos.astype(int), n_bands - 1)
+    b1 = np.minimum(b0 + 1, n_bands - 1)
+    wb = (pos - b0)[:, None]
+    N = S / np.maximum(lev[b0] * (1 - wb) + lev[b1] * wb, 1e-12)
     Q = mean_over(N)
     Lq, Lp = _line_free_level(Q, width), _line_free_level(P, width)
     # the Gamma shape of a bin's mean over its K segments (Welch's equivalent degrees of
@@ -378,21 +391,28 @@ def peak_claims(r, dt, min_amplitude=1e-3, f_min=2.5, speed=None, orders=(),
     if not ok.any():
         return [], None, {}
     z = np.full(nf, -np.inf)
-    z[1:-1] = np.where(ok[1:-1], _heights(Q, np.where(ok, Lq, 1.0), h3), -np.inf)
+    ratio = np.full(nf, -np.inf)
+    ratio[1:-1] = np.where(ok[1:-1], _ratios(Q, np.where(ok, Lq, 1.0)), -np.inf)
+    z[1:-1] = np.where(ok[1:-1], _normal_score(ratio[1:-1], h3[1:-1]), -np.inf)
     # the twins' spectrum: the running median of the recording's, narrow lines removed (a
     # line fills 3 of its 21 bins); not the flank level, which stands high beside a line
     twins = _twin_heights(_running_median(Q, width), h, h3, ok, width, n_twins,
                           rng or np.random.default_rng(20261128))
     thr = gumbel_tail(twins, 0.0, alpha)[0]
     peaks, checks, spectra = [], {}, {}
-    zp = np.concatenate([np.full(2, -np.inf), z, np.full(2, -np.inf)])
-    top = np.max(np.lib.stride_tricks.sliding_window_view(zp, 5), -1)
-    cand = (z > thr) & (z >= top)
-    # the family's statistic: the largest height of a line (a bin beyond the threshold counts
-    # through the highest bin within +-2 of it, its line's centre)
-    stat = float(np.max(np.where(z <= thr, z, -np.inf)))
+    # a line's centre: the bin of the largest ratio within +-2 bins (not of the largest score:
+    # a neighbour averaged over more segments has a larger score for a smaller ratio)
+    def near_max(a):
+        ap = np.concatenate([np.full(2, -np.inf), a, np.full(2, -np.inf)])
+        return np.max(np.lib.stride_tricks.sliding_window_view(ap, 5), -1)
+    z_line = near_max(z)                # a line's score: the largest within +-2 of its centre
+    cand = (z_line > thr) & (ratio >= near_max(ratio)) & ok
+    # the family's statistic: the largest height of a line (the bins within +-2 of a
+    # candidate line's centre count through it, as judged on its own segments)
+    away = ok & ~(near_max(cand.astype(float)) > 0)
+    stat = float(np.max(z[away])) if away.any() else -np.inf
     for i in np.flatnonzero(cand):
-        zi = float(z[i])
+        zi = float(z_line[i])
         if M is not None:
             # judged again on the spectrum of the bin's own segments at every bin: an order
             # excluded from some segments next to the bin leaves a low band there, and its
@@ -417,6 +437,7 @@ def peak_claims(r, dt, min_amplitude=1e-3, f_min=2.5, speed=None, orders=(),
             peaks.append((float(f[i]), amp))
             checks[float(f[i])] = Check(zi, thr, gumbel_tail(twins, zi, alpha)[1],
                                         float(alpha), int(n_twins), True)
+    stat = stat if np.isfinite(stat) else float(np.min(z[ok]))
     search = Check(stat, thr, gumbel_tail(twins, stat, alpha)[1], float(alpha),
                    int(n_twins), bool(stat > thr))
     return sorted(peaks, key=lambda x: -x[1]), search, checks
