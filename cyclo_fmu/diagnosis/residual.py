@@ -11,6 +11,7 @@ diagnosis says where it sits and what it follows instead of naming the nearest l
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -299,42 +300,47 @@ def _twin_heights(Lq, h, h3, ok, width, n_twins, rng):
     return np.max(np.where(ok[1:-1], z, -np.inf), 1)
 
 
-def peak_claims(r, dt, min_amplitude=1e-3, f_min=2.5, speed=None, orders=(),
-                alpha=FALSE_ALARM, n_twins=N_TWINS, rng=None):
-    """Narrow peaks of the residual's spectrum at fixed frequencies, judged against twins.
+@dataclass
+class _LineSpectrum:
+    """The residual's Welch spectrogram ``S`` (bins x segments) at frequencies ``f``, each
+    segment divided by its own level (``N``); the segments each bin may use (``M``, None: all;
+    ``K`` of them); the mean spectra over them, plain (``P``, for amplitudes) and of ``N``
+    (``Q``, for heights); the Gamma shape ``h`` of a bin's mean; the level's ``width``."""
+    f: np.ndarray
+    S: np.ndarray
+    N: np.ndarray
+    M: object
+    K: np.ndarray
+    P: np.ndarray
+    Q: np.ndarray
+    h: np.ndarray
+    width: int
 
-    The spectrum: Welch, ``PEAK_SEGMENT_S`` Hann segments, half overlapping. Shaft orders are
-    left to the order analysis: with ``speed`` (sample-level input speed, rad/s) and
-    ``orders`` (orders of it), a bin is averaged over the segments in which none of these
-    orders comes within ``ORDER_EXCLUSION_HZ`` of it or its neighbours (``_order_coverage``);
-    a bin that every segment's orders reach is not judged. So a fixed frequency is found
-    where an order at one held speed shares it, from the segments at the other speeds.
 
-    The statistic of a bin is the height of its three bins' mean over the null spectrum
-    (``_line_free_level``: smooth coloured noise, no line within the main lobe), in the
-    spectrum of the segments each divided by its own noise level in its band of
-    ``PEAK_BAND_HZ`` (a loud stretch of the recording does not make a line), as a normal score
-    (``_normal_score``). The claim "a line somewhere" takes the largest over the bins searched
-    (f >= ``f_min``); its twins are ``n_twins`` spectra of Gaussian noise with the recording's
-    null spectrum (``_twin_heights``: drawn as Welch spectra, the cost of a spectrum, not of
-    a recording), the same maximum taken; a Gumbel tail (the maximum of many exponential-
-    tailed heights) fitted to them gives the threshold at ``alpha``, the family-wise rate of
-    any line reported in a recording without one. Every bin beyond it that is the highest
-    within +-2 bins is a peak; reported when its amplitude (from the power of its three bins
-    above the level) is at least ``min_amplitude`` N*m.
+def _segment_levels(S, base, nb):
+    """Each segment's own level (bins x segments): the median of its periodogram over
+    ``base`` in bands of ``nb`` bins, mean one over the segments, interpolated linearly
+    between the bands' centres (a step at a band's edge would make an edge in the spectrum)."""
+    nf, n_seg = S.shape
+    n_bands = max(1, nf // nb)
+    edges = np.append(np.arange(n_bands) * nb, nf)
+    lev = np.empty((n_bands, n_seg))
+    Rt = (S / base[:, None]).T.copy()          # segments x bins: the bands contiguous
+    for b in range(n_bands):
+        m = (edges[b + 1] - edges[b]) // 2     # the (upper) median
+        lev[b] = np.partition(Rt[:, edges[b]:edges[b + 1]], m, 1)[:, m]
+    del Rt
+    lev /= np.maximum(lev.mean(1, keepdims=True), 1e-300)
+    pos = np.interp(np.arange(nf), 0.5 * (edges[:-1] + edges[1:] - 1), np.arange(n_bands))
+    b0 = np.minimum(pos.astype(int), n_bands - 1)
+    b1 = np.minimum(b0 + 1, n_bands - 1)
+    wb = (pos - b0)[:, None]
+    return lev[b0] * (1 - wb) + lev[b1] * wb
 
-    Returns ([(frequency Hz, amplitude N*m)] largest first, ``Check`` of the largest height or
-    None, {frequency Hz: ``Check``} of the peaks reported)."""
+
+def _line_spectrum(r, fs, nper, speed, orders) -> _LineSpectrum:
+    """The spectra ``peak_claims`` judges (``_LineSpectrum``)."""
     from scipy.signal import spectrogram
-    r = np.asarray(r, float)
-    orders = list(orders)
-    n = len(r)
-    fs = 1.0 / dt
-    nper = int(round(PEAK_SEGMENT_S * fs))
-    if n < 8 * nper or nper < 64:
-        return [], None, {}
-    if speed is not None and len(speed) < n:
-        raise ValueError(f"speed: {len(speed)} samples for a residual of {n}")
     f, _, S = spectrogram(r - np.mean(r), fs=fs, window="hann", nperseg=nper,
                           noverlap=nper // 2, detrend="constant", scaling="density")
     df = f[1] - f[0]
@@ -359,85 +365,115 @@ def peak_claims(r, dt, min_amplitude=1e-3, f_min=2.5, speed=None, orders=(),
         return np.where(K > 0, np.einsum("ij,ij->i", A, M) / np.maximum(K, 1), A.mean(1))
     P = mean_over(S)
     base = np.maximum(_running_median(P, width), 1e-300)
-    # each segment's own level in its bands (the median of its periodogram over the smooth
-    # level; mean one over the segments), interpolated linearly between the bands' centres
-    # (a step at a band's edge would make an edge in the spectrum)
-    nb = max(1, int(round(PEAK_BAND_HZ / df)))
-    n_bands = max(1, nf // nb)
-    edges = np.append(np.arange(n_bands) * nb, nf)
-    lev = np.empty((n_bands, n_seg))
-    Rt = (S / base[:, None]).T.copy()          # segments x bins: the bands contiguous
-    for b in range(n_bands):
-        m = (edges[b + 1] - edges[b]) // 2   # the (upper) median
-        lev[b] = np.partition(Rt[:, edges[b]:edges[b + 1]], m, 1)[:, m]
-    del Rt
-    lev /= np.maximum(lev.mean(1, keepdims=True), 1e-300)
-    centre = 0.5 * (edges[:-1] + edges[1:] - 1)
-    pos = np.interp(np.arange(nf), centre, np.arange(n_bands))
-    b0 = np.minimum(pos.astype(int), n_bands - 1)
-    b1 = np.minimum(b0 + 1, n_bands - 1)
-    wb = (pos - b0)[:, None]
-    N = S / np.maximum(lev[b0] * (1 - wb) + lev[b1] * wb, 1e-12)
-    Q = mean_over(N)
-    Lq, Lp = _line_free_level(Q, width), _line_free_level(P, width)
+    N = S / np.maximum(_segment_levels(S, base, max(1, int(round(PEAK_BAND_HZ / df)))), 1e-12)
     # the Gamma shape of a bin's mean over its K segments (Welch's equivalent degrees of
     # freedom / 2: half-overlapping neighbours share HANN_OVERLAP_RHO2 of their variance)
     Ka = np.where(K > 0, K, n_seg)
     h = Ka * Ka / (Ka + 2 * HANN_OVERLAP_RHO2 * np.where(K > 0, adj, n_seg - 1.0))
-    h3 = 9.0 * h / (3.0 + 4.0 * HANN_ADJACENT_RHO2)      # of the mean of three adjacent bins
+    return _LineSpectrum(f, S, N, M, K, P, mean_over(N), h, width)
+
+
+def _near_max(a):
+    """The largest of ``a`` within +-2 bins."""
+    ap = np.concatenate([np.full(2, -np.inf), a, np.full(2, -np.inf)])
+    return np.max(np.lib.stride_tricks.sliding_window_view(ap, 5), -1)
+
+
+def _lines(sp, z, ratio, ok, thr, h3):
+    """{bin of a line's centre: its score} beyond ``thr``, and the family's statistic (the
+    largest score of a line). A line's centre is the bin of the largest ratio within +-2 bins
+    (not of the largest score: a neighbour averaged over more segments has a larger score for
+    a smaller ratio); its score the largest within +-2 of it."""
+    z_line = _near_max(z)
+    cand = (z_line > thr) & (ratio >= _near_max(ratio)) & ok
+    # the bins within +-2 of a candidate's centre count through it, as judged on its segments
+    away = ok & ~(_near_max(cand.astype(float)) > 0)
+    stat = float(np.max(z[away])) if away.any() else -np.inf
+    spectra, out = {}, {}
+    for i in np.flatnonzero(cand):
+        zi = float(z_line[i])
+        if sp.M is not None:
+            # judged again on the spectrum of the bin's own segments at every bin: an order
+            # excluded from some segments next to the bin leaves a low band there, and its
+            # skirt in the others, beside that band, would stand over a flank taken without it
+            cols = np.flatnonzero(sp.M[i] > 0)
+            key = cols.tobytes()
+            if key not in spectra:
+                Qc = sp.N[:, cols].mean(1)
+                spectra[key] = (Qc, _line_free_level(Qc, sp.width))
+            Qc, Lc = spectra[key]
+            zc = _heights(Qc[i - 1:i + 2], Lc[i - 1:i + 2], h3[i - 1:i + 2])[0]
+            zi = min(zi, float(zc)) if np.isfinite(zc) else -np.inf
+        stat = max(stat, zi)
+        if zi > thr:
+            out[i] = zi
+    return out, (stat if np.isfinite(stat) else float(np.min(z[ok])))
+
+
+def peak_claims(r, dt, min_amplitude=1e-3, f_min=2.5, speed=None, orders=(),
+                alpha=FALSE_ALARM, n_twins=N_TWINS, rng=None):
+    """Narrow peaks of the residual's spectrum at fixed frequencies, judged against twins.
+
+    The spectrum: Welch, ``PEAK_SEGMENT_S`` Hann segments, half overlapping. Shaft orders are
+    left to the order analysis: with ``speed`` (sample-level input speed, rad/s) and
+    ``orders`` (orders of it), a bin is averaged over the segments in which none of these
+    orders comes within ``ORDER_EXCLUSION_HZ`` of it or its neighbours (``_order_coverage``);
+    a bin that every segment's orders reach is not judged. So a fixed frequency is found
+    where an order at one held speed shares it, from the segments at the other speeds.
+
+    The statistic of a bin is the height of its three bins' mean over the null spectrum
+    (``_line_free_level``: smooth coloured noise, no line within the main lobe), in the
+    spectrum of the segments each divided by its own noise level in its band of
+    ``PEAK_BAND_HZ`` (a loud stretch of the recording does not make a line), as a normal score
+    (``_normal_score``). The claim "a line somewhere" takes the largest over the bins searched
+    (f >= ``f_min``); its twins are ``n_twins`` spectra of Gaussian noise with the recording's
+    null spectrum (``_twin_heights``: drawn as Welch spectra, the cost of a spectrum, not of
+    a recording), the same maximum taken; a Gumbel tail (the maximum of many exponential-
+    tailed heights) fitted to them gives the threshold at ``alpha``, the family-wise rate of
+    any line reported in a recording without one. Every line centre beyond it (``_lines``) is
+    a peak; reported when its amplitude (from the power of its three bins above the level) is
+    at least ``min_amplitude`` N*m.
+
+    Returns ([(frequency Hz, amplitude N*m)] largest first, ``Check`` of the largest height or
+    None, {frequency Hz: ``Check``} of the peaks reported)."""
+    r = np.asarray(r, float)
+    orders = list(orders)
+    n = len(r)
+    nper = int(round(PEAK_SEGMENT_S / dt))
+    if n < 8 * nper or nper < 64:
+        return [], None, {}
+    if speed is not None and len(speed) < n:
+        raise ValueError(f"speed: {len(speed)} samples for a residual of {n}")
+    sp = _line_spectrum(r, 1.0 / dt, nper, speed, orders)
+    f, K = sp.f, sp.K
+    Lq, Lp = _line_free_level(sp.Q, sp.width), _line_free_level(sp.P, sp.width)
+    h3 = 9.0 * sp.h / (3.0 + 4.0 * HANN_ADJACENT_RHO2)    # of the mean of three adjacent bins
     ok = (f >= f_min) & np.isfinite(Lq) & np.isfinite(Lp)
     ok[[0, -1]] = False
     ok[1:-1] &= (K[:-2] > 0) & (K[1:-1] > 0) & (K[2:] > 0)
     if not ok.any():
         return [], None, {}
-    z = np.full(nf, -np.inf)
-    ratio = np.full(nf, -np.inf)
-    ratio[1:-1] = np.where(ok[1:-1], _ratios(Q, np.where(ok, Lq, 1.0)), -np.inf)
+    ratio = np.full(f.size, -np.inf)
+    ratio[1:-1] = np.where(ok[1:-1], _ratios(sp.Q, np.where(ok, Lq, 1.0)), -np.inf)
+    z = np.full(f.size, -np.inf)
     z[1:-1] = np.where(ok[1:-1], _normal_score(ratio[1:-1], h3[1:-1]), -np.inf)
     # the twins' spectrum: the running median of the recording's, narrow lines removed (a
     # line fills 3 of its 21 bins); not the flank level, which stands high beside a line
-    twins = _twin_heights(_running_median(Q, width), h, h3, ok, width, n_twins,
+    twins = _twin_heights(_running_median(sp.Q, sp.width), sp.h, h3, ok, sp.width, n_twins,
                           rng or np.random.default_rng(20261128))
     thr = gumbel_tail(twins, 0.0, alpha)[0]
-    peaks, checks, spectra = [], {}, {}
-    # a line's centre: the bin of the largest ratio within +-2 bins (not of the largest score:
-    # a neighbour averaged over more segments has a larger score for a smaller ratio)
-    def near_max(a):
-        ap = np.concatenate([np.full(2, -np.inf), a, np.full(2, -np.inf)])
-        return np.max(np.lib.stride_tricks.sliding_window_view(ap, 5), -1)
-    z_line = near_max(z)                # a line's score: the largest within +-2 of its centre
-    cand = (z_line > thr) & (ratio >= near_max(ratio)) & ok
-    # the family's statistic: the largest height of a line (the bins within +-2 of a
-    # candidate line's centre count through it, as judged on its own segments)
-    away = ok & ~(near_max(cand.astype(float)) > 0)
-    stat = float(np.max(z[away])) if away.any() else -np.inf
-    for i in np.flatnonzero(cand):
-        zi = float(z_line[i])
-        if M is not None:
-            # judged again on the spectrum of the bin's own segments at every bin: an order
-            # excluded from some segments next to the bin leaves a low band there, and its
-            # skirt in the others, beside that band, would stand over a flank taken without it
-            cols = np.flatnonzero(M[i] > 0)
-            key = cols.tobytes()
-            if key not in spectra:
-                Qc = N[:, cols].mean(1)
-                spectra[key] = (Qc, _line_free_level(Qc, width))
-            Qc, Lc = spectra[key]
-            zc = _heights(Qc[i - 1:i + 2], Lc[i - 1:i + 2], h3[i - 1:i + 2])[0]
-            zi = min(zi, float(zc)) if np.isfinite(zc) else -np.inf
-        stat = max(stat, zi)
-        if not zi > thr:
-            continue
+    lines, stat = _lines(sp, z, ratio, ok, thr, h3)
+    peaks, checks = [], {}
+    df = f[1] - f[0]
+    for i, zi in lines.items():
         # amplitude of a sinusoid from the power in its three bins: with a Hann window a
         # sinusoid at a bin's centre puts 2/3 of its power A^2/2 in that bin and 1/6 in each
         # neighbour (the density's peak is A^2/2 over the window's noise bandwidth, 1.5 bins)
-        power = (P[i - 1:i + 2].sum() - 3 * Lp[i]) * df
-        amp = math.sqrt(max(2 * power, 0.0))
+        amp = math.sqrt(max(2 * (sp.P[i - 1:i + 2].sum() - 3 * Lp[i]) * df, 0.0))
         if amp >= min_amplitude:
             peaks.append((float(f[i]), amp))
             checks[float(f[i])] = Check(zi, thr, gumbel_tail(twins, zi, alpha)[1],
                                         float(alpha), int(n_twins), True)
-    stat = stat if np.isfinite(stat) else float(np.min(z[ok]))
     search = Check(stat, thr, gumbel_tail(twins, stat, alpha)[1], float(alpha),
                    int(n_twins), bool(stat > thr))
     return sorted(peaks, key=lambda x: -x[1]), search, checks
