@@ -241,8 +241,11 @@ def _running_median(P, width):
 def _line_free_level(P, width):
     """The null spectrum (no narrow line) of the spectra ``P`` (last axis: frequency bins): at
     each bin the larger of the running median over ``width`` bins and the medians of its two
-    flanks (the three bins from ``PEAK_FLANK_BINS`` away on each side). NaN where the lower
-    flank would reach the DC bin: a line there cannot be told from a low-frequency rise."""
+    flanks (the three bins from ``PEAK_FLANK_BINS`` away on each side). NaN where a flank
+    would reach the DC or the Nyquist bin (real-valued, of half the degrees of freedom): a
+    line there cannot be told from the rise of the spectrum's edge (measured: lines of
+    0.1 mN*m 2 bins below the Nyquist frequency of three independent recordings stood beyond
+    their twins when the upper flank was not required)."""
     base = _running_median(P, width)
     nf = P.shape[-1]
     k = PEAK_FLANK_BINS
@@ -251,9 +254,9 @@ def _line_free_level(P, width):
     flank = np.full((2,) + P.shape, np.nan)
     low_ok = i - k - 2 >= 1
     flank[0][..., low_ok] = m3[..., i[low_ok] - k - 2]
-    high_ok = i + k + 2 <= nf - 1
+    high_ok = i + k + 2 <= nf - 2
     flank[1][..., high_ok] = m3[..., i[high_ok] + k]
-    return np.where(low_ok, np.fmax(base, np.fmax(flank[0], flank[1])), np.nan)
+    return np.where(low_ok & high_ok, np.fmax(base, np.fmax(flank[0], flank[1])), np.nan)
 
 
 def _level(S, cols, width):
