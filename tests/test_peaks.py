@@ -60,7 +60,7 @@ def test_the_family_wise_false_alarm_rate_holds_on_fresh_noise():
     """300 recordings without a line (one minute at 1 kHz): white, red, flicker, and noise
     that is three times louder in one stretch of five with a 50 mN*m transient every 3 s (the
     segments' own levels): a line is claimed in at most 2 % of them (binomial at 1 %: 7 or
-    more of 300 has a probability of 3 %). Measured: 2 of 300 at the stated 1 %."""
+    more of 300 has a probability of 3 %). Measured: 1 of 300 at the stated 1 %."""
     fs, n = 1000.0, 60000
     hits = 0
     for k in range(300):
