@@ -441,7 +441,8 @@ def test_peak_level_flanks_and_dc_rule():
     height 100: the flanks are the three bins PEAK_FLANK_BINS (2) to 4 away on each side, so a
     plateau of half-width 2 (5 bins) stands on a level of 1, one of half-width 3 (7 bins) has
     two of each flank's three bins on it and its level is 100 (not narrow); a bin whose lower
-    flank would reach the DC bin (index < 5) is not judged (NaN)."""
+    flank would reach the DC bin (index < 5), or whose upper flank the Nyquist bin (index >
+    95 of 0..100), is not judged (NaN)."""
     from cyclo_fmu.diagnosis.residual import PEAK_FLANK_BINS, _level
     assert PEAK_FLANK_BINS == 2
     for half, want in ((0, 1.0), (2, 1.0), (3, 100.0)):
@@ -450,7 +451,8 @@ def test_peak_level_flanks_and_dc_rule():
         got, level = _level(P[:, None], slice(None), 21)
         np.testing.assert_array_equal(got, P)
         assert level[50] == want, half
-        assert np.all(np.isnan(level[:5])) and np.all(np.isfinite(level[5:]))
+        assert np.all(np.isnan(level[:5])) and np.all(np.isfinite(level[5:96]))
+        assert np.all(np.isnan(level[96:]))
     # the median over the width (21 bins, 40-60 for bin 50), outside the centre's flanks: 11 of
     # them at 100 (40-45, 55-59) lift its level to 100 (of 23 bins they would not); 10 of them
     # (41-45, 55-59) do not (of 19 bins they would)

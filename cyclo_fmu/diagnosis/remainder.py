@@ -21,8 +21,12 @@ Claims and their statistics (``twins`` for the false-alarm rate and the fitted t
   of the squared block residual within ``residual.EVENT_WINDOW`` of the events; twins: the recording's own block residual shifted in time by ``N_TWINS`` random
   offsets (colour, spikes and tails kept, only the tie to the events broken), a normal tail
   (a mean over many blocks); judged at FALSE_ALARM over the event kinds.
-- *fixed-frequency peaks*: ``residual.spectral_peaks`` (its height over the local level of the
-  residual's spectrum, in the whole recording and in its quarters).
+- *fixed-frequency peaks*: ``residual.peak_claims``: the height of a bin's three bins over the
+  residual's null spectrum (its running median and flanks: smooth coloured noise, no line
+  within the Hann main lobe), a normal score; twins: ``N_TWINS`` Welch spectra of Gaussian
+  noise with that null spectrum, the same largest height over the frequencies searched, a
+  Gumbel tail; judged at FALSE_ALARM for "a line somewhere" (family-wise). Shaft orders are
+  excluded from the segments they reach; a line is reported from ``PEAK_MIN_AMPLITUDE_NM``.
 """
 from __future__ import annotations
 
@@ -40,7 +44,8 @@ from .selection import Term, explained
 from .twins import FALSE_ALARM, N_TWINS, Check, mixes, normal_tail, with_mixes
 
 #: [N*m] the smallest amplitude of a narrow spectral peak reported as unexplained: 1 mN*m (RMS
-#: 0.7 mN*m, above MIN_EXPLAINED_NM)
+#: 0.7 mN*m, above MIN_EXPLAINED_NM). A size, not a significance: a long recording makes a
+#: 0.3 mN*m line stand beyond its twins
 PEAK_MIN_AMPLITUDE_NM = 1e-3
 #: [1] an effect that the generic basis could stand in for (its statistic beside the basis
 #: within its twins) keeps its name when it explains at least this many times the RMS the
@@ -287,9 +292,10 @@ def _burst_parts(b, claims, P):
 
 
 def _lines(P, S, r, design, mode, rng):
-    """Shaft orders (judged against their off-order twins) and fixed-frequency peaks of the
-    sample-level residual ``r``: (statement parts, library orders left, other orders, peaks,
-    {order: (amplitude, Check)})."""
+    """Shaft orders (judged against their off-order twins) and fixed-frequency peaks (against
+    twins of the residual's null spectrum) of the sample-level residual ``r``: (statement
+    parts, library orders left, other orders, peaks, {order: (amplitude, Check)}, the peaks'
+    claims for the JSON)."""
     orders = _orders(design, mode, P.sig)
     k = P.sig["order_roller"]
     lib = ("1x", f"order {k:g} (roller pass)")
@@ -305,12 +311,15 @@ def _lines(P, S, r, design, mode, rng):
     if outside or inside:
         parts.append("the residual holds shaft orders: " + ", ".join(
             f"{n} ({1e3 * a:.2f} mN*m)" for n, a in {**inside, **outside}.items()))
-    peaks = R.spectral_peaks(r, P.dt, min_amplitude=PEAK_MIN_AMPLITUDE_NM,
-                             speed=P.sig["w_in"], orders=list(orders.values()))
+    peaks, search, pc = R.peak_claims(r, P.dt, min_amplitude=PEAK_MIN_AMPLITUDE_NM,
+                                      speed=P.sig["w_in"], orders=list(orders.values()))
     if peaks:
         parts.append("the residual spectrum peaks at " + ", ".join(
-            f"{f:.2f} Hz ({1e3 * a:.2f} mN*m)" for f, a in peaks))
-    return parts, inside, outside, peaks, oc
+            f"{f:.2f} Hz ({1e3 * a:.2f} mN*m)" for f, a in peaks)
+            + " (narrow lines at fixed frequencies, beyond its twins)")
+    claims = {} if search is None else dict(
+        {"search": search.to_json()}, **{f"{f:.2f} Hz": c.to_json() for f, c in pc.items()})
+    return parts, inside, outside, peaks, oc, claims
 
 
 def remainder(P, sel, J, rec, design, mode) -> Remainder:
@@ -334,7 +343,7 @@ def remainder(P, sel, J, rec, design, mode) -> Remainder:
     parts, follows = _smooth_part(P, prob, S, with_g, present, rms, dominant, sel.min_expl)
     smooth = present
     r_raw, r, _ = _sample_residual(P, S, with_g, rec)
-    lparts, inside, outside, peaks, oc = _lines(P, S, r, design, mode, rng)
+    lparts, inside, outside, peaks, oc, claims["peaks"] = _lines(P, S, r, design, mode, rng)
     claims["orders"] = {n: c.to_json() for n, (a, c) in oc.items() if c is not None}
     present = present or bool(lparts)
     parts += lparts

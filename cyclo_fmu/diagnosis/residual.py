@@ -11,8 +11,11 @@ diagnosis says where it sits and what it follows instead of naming the nearest l
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
+
+from .twins import FALSE_ALARM, N_TWINS, Check, gumbel_tail
 
 #: Huber's tuning constant (95 % efficiency under Gaussian noise), in robust standard deviations
 HUBER_C = 1.345
@@ -159,15 +162,33 @@ def folded(f, fs):
     return np.abs((np.asarray(f, float) + fs / 2) % fs - fs / 2)
 
 
-#: [1] a fixed-frequency peak stands in at least this share of the recording's quarters (a shaft
-#: order held at one speed appears in one quarter only)
-PEAK_PERSISTENCE = 0.75
-#: [bins] a narrow peak also stands ``factor`` times above the spectrum on each side of it, in
-#: the three bins from this many bins away: a sinusoid's power under the Hann
-#: window stays within about 1.5 bins of it (at 1.5 bins 3 % of its peak, at 2.5 bins 0.06 %),
-#: while the edge of a broad rise (the low-frequency plateau of coloured noise, a resonance's
-#: skirt) stands over a median of the falling side only
+#: [s] Welch segments of the peak analysis (Hann window, half overlapping): 0.5 Hz bins. A
+#: sinusoid's power stays within the Hann main lobe, +-1 Hz (+-2 bins): the resolution that
+#: "narrow" refers to. Long enough to tell 50 Hz pick-up from an order 1 Hz away, short enough
+#: that a held speed wandering by a few r/min keeps an order within its excluded band
+PEAK_SEGMENT_S = 2.0
+#: [bins] a narrow line lies within the main lobe; the null spectrum at a bin (no narrow line
+#: there) is at least the spectrum on each side of it, in the three bins from this many bins
+#: away: a sinusoid's power under the Hann window stays within about 1.5 bins of it (at 1.5
+#: bins 3 % of its peak, at 2.5 bins 0.06 %), while the edge of a broad rise (the
+#: low-frequency plateau of coloured noise, a resonance wider than the main lobe) stands over a
+#: median of its falling side only
 PEAK_FLANK_BINS = 2
+#: [Hz] the null spectrum's running median spans this width (21 bins, five main lobes): a
+#: line fills 3 of its bins, and the median ignores up to 10 (three lines within 10 Hz)
+PEAK_LEVEL_HZ = 10.0
+#: [Hz] each segment's own noise level is measured in bands this wide (128 bins of 2 s
+#: segments: the median of 128 bins gives it to about 15 %, and one line changes it by less
+#: than 1 %): a residual whose noise changes over the recording (transients at reversals,
+#: noise that grows with load) has each segment weighed by its own level
+PEAK_BAND_HZ = 64.0
+#: [1] squared correlation of the Hann periodograms of two half-overlapping segments (Welch
+#: 1967; Percival & Walden 1993, eq. 292b: c(1/2) = 1/6): Welch's equivalent degrees of
+#: freedom
+HANN_OVERLAP_RHO2 = 1.0 / 36.0
+#: [1] correlation of the Hann periodogram at adjacent bins of one segment: the windowed DFT
+#: is 0.5 Y_k - 0.25 (Y_k-1 + Y_k+1) of independent Y, a complex correlation of -2/3
+HANN_ADJACENT_RHO2 = 4.0 / 9.0
 #: [Hz] a spectral peak this close to a shaft order of the input speed is left to the order
 #: analysis (the Welch bins are 0.5 Hz wide; a held speed wanders by a few r/min)
 ORDER_EXCLUSION_HZ = 1.0
@@ -214,22 +235,51 @@ def _order_coverage(speed, orders, fs, freqs, n_seg, nper):
     return (half[:-1] | half[1:]).T
 
 
-def _level(S, cols, width):
-    """Mean spectrum over the segments ``cols`` of the spectrogram ``S`` and its local level:
-    the larger of the median over ``width`` bins (+-5 Hz) and the medians of the two flanks
-    (NaN where the lower flank would reach the DC bin)."""
-    from scipy.ndimage import median_filter
-    P = S[:, cols].mean(1)
-    base = median_filter(P, size=width, mode="nearest")
-    m3 = np.median(np.lib.stride_tricks.sliding_window_view(P, 3), axis=-1)  # P[j:j+3]
-    flank = np.full((2, P.size), np.nan)
+def _med3(a, b, c):
+    """Elementwise median of three arrays."""
+    return np.maximum(np.minimum(a, b), np.minimum(np.maximum(a, b), c))
+
+
+def _running_median(P, width):
+    """Running median over ``width`` (odd) bins of the last axis of ``P``, the ends padded with
+    the edge values; taken every ``width // 4`` bins and interpolated linearly between (the
+    level is smooth over its window; a quarter of the cost of the full filter)."""
+    n = P.shape[-1]
+    h = width // 2
+    step = max(1, width // 4)
+    pad = np.concatenate([np.repeat(P[..., :1], h, -1), P, np.repeat(P[..., -1:], h, -1)], -1)
+    c = np.arange(0, n, step)
+    if c[-1] != n - 1:
+        c = np.append(c, n - 1)
+    win = np.lib.stride_tricks.sliding_window_view(pad, width, axis=-1)[..., c, :]
+    m = np.partition(win, h, -1)[..., h] if width % 2 else np.median(win, -1)
+    if c.size == 1:
+        return np.repeat(m, n, -1)
+    i = np.arange(n)
+    j = np.minimum(np.searchsorted(c, i, "right") - 1, c.size - 2)
+    frac = (i - c[j]) / (c[j + 1] - c[j])
+    return m[..., j] * (1 - frac) + m[..., j + 1] * frac
+
+
+def _line_free_level(P, width):
+    """The null spectrum (no narrow line) of the spectra ``P`` (last axis: frequency bins): at
+    each bin the larger of the running median over ``width`` bins and the medians of its two
+    flanks (the three bins from ``PEAK_FLANK_BINS`` away on each side). NaN where a flank
+    would reach the DC or the Nyquist bin (real-valued, of half the degrees of freedom): a
+    line there cannot be told from the rise of the spectrum's edge (measured: lines of
+    0.1 mN*m 2 bins below the Nyquist frequency of three independent recordings stood beyond
+    their twins when the upper flank was not required)."""
+    base = _running_median(P, width)
+    nf = P.shape[-1]
     k = PEAK_FLANK_BINS
-    i = np.arange(P.size)
+    m3 = _med3(P[..., :-2], P[..., 1:-1], P[..., 2:])       # median of P[j:j+3] at j
+    i = np.arange(nf)
+    flank = np.full((2,) + P.shape, np.nan)
     low_ok = i - k - 2 >= 1
-    flank[0, low_ok] = m3[i[low_ok] - k - 2]
-    high_ok = i + k + 2 <= P.size - 1
-    flank[1, high_ok] = m3[i[high_ok] + k]
-    return P, np.where(low_ok, np.fmax(base, np.fmax(flank[0], flank[1])), np.nan)
+    flank[0][..., low_ok] = m3[..., i[low_ok] - k - 2]
+    high_ok = i + k + 2 <= nf - 2
+    flank[1][..., high_ok] = m3[..., i[high_ok] + k]
+    return np.where(low_ok & high_ok, np.fmax(base, np.fmax(flank[0], flank[1])), np.nan)
 
 
 def hann_spectrogram(x, fs, nper):
@@ -258,78 +308,231 @@ def hann_spectrogram(x, fs, nper):
     return sp_fft.rfftfreq(nper, 1 / fs), np.moveaxis(P.real, -1, -2)
 
 
-def spectral_peaks(r, dt, factor=4.0, min_amplitude=1e-3, f_min=2.5, speed=None,
-                   orders=()) -> list:
-    """Narrow peaks of the residual's spectrum at fixed frequencies (Welch: 2 s Hann segments,
-    half overlapping): bins standing ``factor`` times above the local median level (+-5 Hz)
-    over the recording, with an amplitude of at least ``min_amplitude`` N*m, that also stand
-    at least half as high in ``PEAK_PERSISTENCE`` of the recording's quarters (a fixed
-    frequency persists; a shaft order moves with the speed). Shaft orders are left to the order
-    analysis: with ``speed`` (sample-level input speed, rad/s) and ``orders`` (orders of it), a
-    peak of the whole recording's spectrum is judged again on the segments in which none of
-    these orders comes within ``ORDER_EXCLUSION_HZ`` of it (its height over the local level of
-    their mean spectrum, its persistence over the quarters and its amplitude, all from that one
-    set of segments). So a fixed frequency is found where an order at one held speed shares it
-    (50 Hz mains and the fifth order at 600 r/min), from the segments at the other speeds, and
-    a peak of the orders checked is not taken for one.
+def _level(S, cols, width):
+    """Mean spectrum over the segments ``cols`` of the spectrogram ``S`` and its line-free
+    level (``_line_free_level``)."""
+    P = S[:, cols].mean(1)
+    return P, _line_free_level(P, width)
 
-    The local level of a bin is the larger of the median over +-5 Hz and the medians of its two
-    flanks (the three bins from ``PEAK_FLANK_BINS`` away on each side): a peak must be narrow.
-    A bin whose lower flank would reach the DC bin (below 2.5 Hz with 2 s segments) is not
-    judged: a line there cannot be told from a low-frequency rise at this resolution.
 
-    Returns [(frequency Hz, amplitude N*m)], largest first."""
+def _normal_score(Z, h):
+    """Wilson-Hilferty normal score of ``Z``, a mean-one Gamma variable of shape ``h``: the
+    heights of bins averaged over different numbers of segments made comparable."""
+    v = 1.0 / (9.0 * h)
+    return (np.cbrt(Z) - (1.0 - v)) / np.sqrt(v)
+
+
+def _ratios(Q, level):
+    """The mean of ``Q`` over each bin and its two neighbours (where a line's power lies, 98 %
+    of it wherever the line sits between bins) over the level (bins 1 .. n-2)."""
+    return (Q[..., :-2] + Q[..., 1:-1] + Q[..., 2:]) / (3.0 * level[..., 1:-1])
+
+
+def _heights(Q, level, h3):
+    """Normal scores of ``_ratios``: the heights compared across bins and with the twins."""
+    return _normal_score(_ratios(Q, level), h3[1:-1])
+
+
+def _twin_heights(Lq, h, h3, ok, width, n_twins, rng):
+    """Per twin, the largest height (``_heights``) over the bins ``ok`` of a spectrum whose
+    expected level is ``Lq``: the Welch spectrum of Gaussian noise without a line, drawn
+    directly (a mean of ``h`` periodograms is a Gamma variable of shape ``h``; adjacent bins
+    share ``HANN_ADJACENT_RHO2`` of it, as the Hann window makes them), then the same level
+    and heights as the recording's."""
+    e = HANN_ADJACENT_RHO2 * np.minimum(h[:-1], h[1:])     # shape shared by bins i, i+1
+    own = h.copy()
+    own[1:] -= e
+    own[:-1] -= e
+    T = rng.standard_gamma(own, size=(n_twins, h.size))
+    sh = rng.standard_gamma(e, size=(n_twins, e.size))
+    T[:, 1:] += sh
+    T[:, :-1] += sh
+    T *= Lq / h
+    z = _heights(T, _line_free_level(T, width), h3)
+    return np.max(np.where(ok[1:-1], z, -np.inf), 1)
+
+
+@dataclass
+class _LineSpectrum:
+    """The residual's Welch spectrogram ``S`` (bins x segments) at frequencies ``f``, each
+    segment divided by its own level (``N``); the segments each bin may use (``M``, None: all;
+    ``K`` of them); the mean spectra over them, plain (``P``, for amplitudes) and of ``N``
+    (``Q``, for heights); the Gamma shape ``h`` of a bin's mean; the level's ``width``."""
+    f: np.ndarray
+    S: np.ndarray
+    N: np.ndarray
+    M: object
+    K: np.ndarray
+    P: np.ndarray
+    Q: np.ndarray
+    h: np.ndarray
+    width: int
+
+
+def _segment_levels(S, base, nb):
+    """Each segment's own level (bins x segments): the median of its periodogram over
+    ``base`` in bands of ``nb`` bins, mean one over the segments, interpolated linearly
+    between the bands' centres (a step at a band's edge would make an edge in the spectrum)."""
+    nf, n_seg = S.shape
+    n_bands = max(1, nf // nb)
+    edges = np.append(np.arange(n_bands) * nb, nf)
+    lev = np.empty((n_bands, n_seg))
+    Rt = (S / base[:, None]).T.copy()          # segments x bins: the bands contiguous
+    for b in range(n_bands):
+        m = (edges[b + 1] - edges[b]) // 2     # the (upper) median
+        lev[b] = np.partition(Rt[:, edges[b]:edges[b + 1]], m, 1)[:, m]
+    del Rt
+    lev /= np.maximum(lev.mean(1, keepdims=True), 1e-300)
+    pos = np.interp(np.arange(nf), 0.5 * (edges[:-1] + edges[1:] - 1), np.arange(n_bands))
+    b0 = np.minimum(pos.astype(int), n_bands - 1)
+    b1 = np.minimum(b0 + 1, n_bands - 1)
+    wb = (pos - b0)[:, None]
+    return lev[b0] * (1 - wb) + lev[b1] * wb
+
+
+def _line_spectrum(r, fs, nper, speed, orders) -> _LineSpectrum:
+    """The spectra ``peak_claims`` judges (``_LineSpectrum``)."""
+    f, S = hann_spectrogram(r - np.mean(r), fs, nper)
+    df = f[1] - f[0]
+    nf, n_seg = S.shape
+    width = max(3, int(round(PEAK_LEVEL_HZ / df)) | 1)
+    if speed is not None and orders:
+        cov = _order_coverage(speed, orders, fs, f, n_seg, nper)
+        near = cov.copy()
+        near[1:] |= cov[:-1]
+        near[:-1] |= cov[1:]
+        M = (~near).astype(float)
+        K = M.sum(1)
+        adj = np.einsum("ij,ij->i", M[:, 1:], M[:, :-1])
+    else:
+        M = None
+        K = np.full(nf, float(n_seg))
+        adj = np.full(nf, n_seg - 1.0)
+
+    def mean_over(A):       # over the segments each bin may use (all where none may)
+        if M is None:
+            return A.mean(1)
+        return np.where(K > 0, np.einsum("ij,ij->i", A, M) / np.maximum(K, 1), A.mean(1))
+    P = mean_over(S)
+    base = np.maximum(_running_median(P, width), 1e-300)
+    N = S / np.maximum(_segment_levels(S, base, max(1, int(round(PEAK_BAND_HZ / df)))), 1e-12)
+    # the Gamma shape of a bin's mean over its K segments (Welch's equivalent degrees of
+    # freedom / 2: half-overlapping neighbours share HANN_OVERLAP_RHO2 of their variance)
+    Ka = np.where(K > 0, K, n_seg)
+    h = Ka * Ka / (Ka + 2 * HANN_OVERLAP_RHO2 * np.where(K > 0, adj, n_seg - 1.0))
+    return _LineSpectrum(f, S, N, M, K, P, mean_over(N), h, width)
+
+
+def _near_max(a):
+    """The largest of ``a`` within +-2 bins."""
+    ap = np.concatenate([np.full(2, -np.inf), a, np.full(2, -np.inf)])
+    return np.max(np.lib.stride_tricks.sliding_window_view(ap, 5), -1)
+
+
+def _lines(sp, z, ratio, ok, thr, h3):
+    """{bin of a line's centre: its score} beyond ``thr``, and the family's statistic (the
+    largest score of a line). A line's centre is the bin of the largest ratio within +-2 bins
+    (not of the largest score: a neighbour averaged over more segments has a larger score for
+    a smaller ratio); its score the largest within +-2 of it."""
+    z_line = _near_max(z)
+    cand = (z_line > thr) & (ratio >= _near_max(ratio)) & ok
+    # the bins within +-2 of a candidate's centre count through it, as judged on its segments
+    away = ok & ~(_near_max(cand.astype(float)) > 0)
+    stat = float(np.max(z[away])) if away.any() else -np.inf
+    spectra, out = {}, {}
+    for i in np.flatnonzero(cand):
+        zi = float(z_line[i])
+        if sp.M is not None:
+            # judged again on the spectrum of the bin's own segments at every bin: an order
+            # excluded from some segments next to the bin leaves a low band there, and its
+            # skirt in the others, beside that band, would stand over a flank taken without it
+            cols = np.flatnonzero(sp.M[i] > 0)
+            key = cols.tobytes()
+            if key not in spectra:
+                Qc = sp.N[:, cols].mean(1)
+                spectra[key] = (Qc, _line_free_level(Qc, sp.width))
+            Qc, Lc = spectra[key]
+            zc = _heights(Qc[i - 1:i + 2], Lc[i - 1:i + 2], h3[i - 1:i + 2])[0]
+            zi = min(zi, float(zc)) if np.isfinite(zc) else -np.inf
+        stat = max(stat, zi)
+        if zi > thr:
+            out[i] = zi
+    return out, (stat if np.isfinite(stat) else float(np.min(z[ok])))
+
+
+def peak_claims(r, dt, min_amplitude=1e-3, f_min=2.5, speed=None, orders=(),
+                alpha=FALSE_ALARM, n_twins=N_TWINS, rng=None):
+    """Narrow peaks of the residual's spectrum at fixed frequencies, judged against twins.
+
+    The spectrum: Welch, ``PEAK_SEGMENT_S`` Hann segments, half overlapping. Shaft orders are
+    left to the order analysis: with ``speed`` (sample-level input speed, rad/s) and
+    ``orders`` (orders of it), a bin is averaged over the segments in which none of these
+    orders comes within ``ORDER_EXCLUSION_HZ`` of it or its neighbours (``_order_coverage``);
+    a bin that every segment's orders reach is not judged. So a fixed frequency is found
+    where an order at one held speed shares it, from the segments at the other speeds.
+
+    The statistic of a bin is the height of its three bins' mean over the null spectrum
+    (``_line_free_level``: smooth coloured noise, no line within the main lobe), in the
+    spectrum of the segments each divided by its own noise level in its band of
+    ``PEAK_BAND_HZ`` (a loud stretch of the recording does not make a line), as a normal score
+    (``_normal_score``). The claim "a line somewhere" takes the largest over the bins searched
+    (f >= ``f_min``); its twins are ``n_twins`` spectra of Gaussian noise with the recording's
+    null spectrum (``_twin_heights``: drawn as Welch spectra, the cost of a spectrum, not of
+    a recording), the same maximum taken; a Gumbel tail (the maximum of many exponential-
+    tailed heights) fitted to them gives the threshold at ``alpha``, the family-wise rate of
+    any line reported in a recording without one. Every line centre beyond it (``_lines``) is
+    a peak; reported when its amplitude (from the power of its three bins above the level) is
+    at least ``min_amplitude`` N*m.
+
+    Returns ([(frequency Hz, amplitude N*m)] largest first, ``Check`` of the largest height or
+    None, {frequency Hz: ``Check``} of the peaks reported)."""
     r = np.asarray(r, float)
     orders = list(orders)
     n = len(r)
-    fs = 1.0 / dt
-    nper = int(round(2.0 * fs))
+    nper = int(round(PEAK_SEGMENT_S / dt))
     if n < 8 * nper or nper < 64:
-        return []
+        return [], None, {}
     if speed is not None and len(speed) < n:
         raise ValueError(f"speed: {len(speed)} samples for a residual of {n}")
-    f, S = hann_spectrogram(r - np.mean(r), fs, nper)
+    sp = _line_spectrum(r, 1.0 / dt, nper, speed, orders)
+    f, K = sp.f, sp.K
+    Lq, Lp = _line_free_level(sp.Q, sp.width), _line_free_level(sp.P, sp.width)
+    h3 = 9.0 * sp.h / (3.0 + 4.0 * HANN_ADJACENT_RHO2)    # of the mean of three adjacent bins
+    ok = (f >= f_min) & np.isfinite(Lq) & np.isfinite(Lp)
+    ok[[0, -1]] = False
+    ok[1:-1] &= (K[:-2] > 0) & (K[1:-1] > 0) & (K[2:] > 0)
+    if not ok.any():
+        return [], None, {}
+    ratio = np.full(f.size, -np.inf)
+    ratio[1:-1] = np.where(ok[1:-1], _ratios(sp.Q, np.where(ok, Lq, 1.0)), -np.inf)
+    z = np.full(f.size, -np.inf)
+    z[1:-1] = np.where(ok[1:-1], _normal_score(ratio[1:-1], h3[1:-1]), -np.inf)
+    # the twins' spectrum: the running median of the recording's, narrow lines removed (a
+    # line fills 3 of its 21 bins); not the flank level, which stands high beside a line
+    twins = _twin_heights(_running_median(sp.Q, sp.width), sp.h, h3, ok, sp.width, n_twins,
+                          rng or np.random.default_rng(20261128))
+    thr = gumbel_tail(twins, 0.0, alpha)[0]
+    lines, stat = _lines(sp, z, ratio, ok, thr, h3)
+    peaks, checks = [], {}
     df = f[1] - f[0]
-    n_seg = S.shape[1]
-    width = max(3, int(round(10.0 / df)) | 1)
-    # the quarter of each segment, by its centre
-    centres = np.arange(n_seg) * (nper - nper // 2) + nper / 2
-    quarter_of = np.minimum(centres * 4 // n, 3).astype(int)
-    judged = speed is not None and len(orders) > 0
-    usable = _order_coverage(speed, orders, fs, f, n_seg, nper) if judged else None
-
-    def level(cols):
-        return _level(S, cols, width)
-
-    def stands(P, base, i, share):
-        return bool(np.max(P[i - 1:i + 2]) > share * factor * base[i])
-    P_all, base_all = level(slice(None))
-    spectra = {}   # the spectra of one set of segments (peaks often share it)
-    peaks = []
-    for i in range(1, len(f) - 1):
-        if f[i] < f_min or not (P_all[i] >= P_all[i - 1] and P_all[i] >= P_all[i + 1]):
-            continue
-        if not P_all[i] > factor * base_all[i]:
-            continue
-        cols = np.flatnonzero(~usable[i - 1:i + 2].any(0)) if judged else np.arange(n_seg)
-        if cols.size == 0:
-            continue
-        key = cols.tobytes()
-        if key not in spectra:
-            by_quarter = [cols[quarter_of[cols] == q] for q in range(4)]
-            spectra[key] = (level(cols), [level(c) if c.size else None for c in by_quarter])
-        (P, base), quarters = spectra[key]
-        if not stands(P, base, i, 1.0):
-            continue
-        seen = np.mean([q is not None and stands(q[0], q[1], i, 0.5) for q in quarters])
-        # amplitude of a sinusoid from the power in the peak's bins: with a Hann window a
+    for i, zi in lines.items():
+        # amplitude of a sinusoid from the power in its three bins: with a Hann window a
         # sinusoid at a bin's centre puts 2/3 of its power A^2/2 in that bin and 1/6 in each
         # neighbour (the density's peak is A^2/2 over the window's noise bandwidth, 1.5 bins)
-        power = (P[i - 1:i + 2].sum() - 3 * base[i]) * df
-        amp = math.sqrt(max(2 * power, 0.0))
-        if amp >= min_amplitude and seen >= PEAK_PERSISTENCE:
+        amp = math.sqrt(max(2 * (sp.P[i - 1:i + 2].sum() - 3 * Lp[i]) * df, 0.0))
+        if amp >= min_amplitude:
             peaks.append((float(f[i]), amp))
-    return sorted(peaks, key=lambda p: -p[1])[:5]
+            checks[float(f[i])] = Check(zi, thr, gumbel_tail(twins, zi, alpha)[1],
+                                        float(alpha), int(n_twins), True)
+    search = Check(stat, thr, gumbel_tail(twins, stat, alpha)[1], float(alpha),
+                   int(n_twins), bool(stat > thr))
+    return sorted(peaks, key=lambda x: -x[1]), search, checks
+
+
+def spectral_peaks(r, dt, min_amplitude=1e-3, f_min=2.5, speed=None, orders=()) -> list:
+    """[(frequency Hz, amplitude N*m)] of the fixed-frequency peaks that stand against their
+    twins (``peak_claims``), largest first."""
+    return peak_claims(r, dt, min_amplitude, f_min, speed, orders)[0]
 
 
 #: [s] a residual burst within this time of an event (a reversal, a step) belongs to it: the

@@ -116,6 +116,20 @@ def average_ranks(a) -> np.ndarray:
     return ranks
 
 
+def gumbel_tail(samples, stat, alpha) -> tuple:
+    """(threshold, p-value) of a Gumbel distribution fitted by moments to ``samples`` (the
+    largest of many statistics with exponential tails, as a spectrum's highest bin is:
+    Fisher-Tippett); scale sd sqrt(6)/pi, location mean - 0.5772 scale."""
+    s = np.asarray(samples, float)
+    mu, sd = float(np.mean(s)), float(np.std(s, ddof=1)) if len(s) > 1 else 0.0
+    if sd <= 0:
+        return mu, (0.0 if stat > mu else 1.0)
+    beta = sd * math.sqrt(6.0) / math.pi
+    loc = mu - 0.5772156649 * beta
+    return (float(loc - beta * math.log(-math.log1p(-alpha))),
+            float(-math.expm1(-math.exp(-(stat - loc) / beta))))
+
+
 def noise_spectrum(x, tapers=TAPERS) -> np.ndarray:
     """Sine-multitaper estimate of the power of ``x`` at the frequencies of its real FFT,
     scaled as |FFT|^2 (a white series of variance s2 has the value N s2 at every frequency);
