@@ -55,6 +55,11 @@ PEAK_MIN_AMPLITUDE_NM = 1e-3
 #: at which the library's shape is taken for the answer and the rest for a remainder: the
 #: twins cannot decide which of two explanations of the same residual to name
 DOMINANCE = 3.0
+#: [1] held-out errors of two structure groups within this relative difference are a tie:
+#: float64 least squares on 1e4-1e6 blocks round at about 1e-12 relative (two groups whose
+#: columns coincide, e.g. the reading's terms and the loss's where the speed never reverses,
+#: measured equal to 12 digits), while a difference of evidence is many orders larger
+TIE_REL = 1e-9
 #: relative offsets of the off-order twins of an order k (k (1 + d)): wider than the order
 #: resolution of a 5 s hold at 10 Hz shaft speed (2 %), inside the neighbourhood whose noise
 #: level the order shares
@@ -92,7 +97,11 @@ def structure(P, prob, S, tw, mix=None):
     fits = [prob.fit(base + (b,)) for b in P.structure]
     stat = S0.rss - min(f.rss for f in fits)
     chk = tw.check(stat, tw.gain(base, [(b,) for b in P.structure]), FALSE_ALARM)
-    best = min(fits, key=lambda f: f.cv_mse)
+    lo = min(f.cv_mse for f in fits)
+    # equal held-out errors (two groups holding the same columns) go to the smaller group,
+    # then the first listed: not to whichever the BLAS's rounding happens to favour
+    best = min((f for f in fits if f.cv_mse <= lo * (1 + TIE_REL)),
+               key=lambda f: len(f.terms[-1].cols))
     rms = fit_rms(prob, S0, best)
     if len(base) > len(S.terms):    # the fit reported: the selection and the group alone
         best = prob.fit(S.terms + (best.terms[-1],))
