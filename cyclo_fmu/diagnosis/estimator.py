@@ -43,6 +43,7 @@ from .remainder import PEAK_MIN_AMPLITUDE_NM, remainder
 from .replay import Replay, block_means, first_order, replay
 from .result import Diagnosis, DiagnosisError, report, zeta_d
 from .select_effects import MIN_EXPLAINED_NM, select
+from .selection import DELTA_BIC
 from .twins import FALSE_ALARM, N_TWINS, judge
 
 #: [1] re-linearise the friction level (replay again at the corrected mu) beyond this error
@@ -364,7 +365,8 @@ class Diagnoser:
         ``offsets`` {effect: change applied to the design}: the reported value is the offset
         plus the last pass's change."""
         from model_core.design import scale_friction_level
-        design = scale_friction_level(self.design, 1 + rel1) if rel1 else self.design
+        base = scale_friction_level(self.design, 1 + rel1) if rel1 else self.design
+        design = base
         values = self._calibration_values(rem.S)
         dropped = set(self._calibration_values(sel.S)) - set(values)
         candidates = tuple(c for c in self.candidates if c not in dropped)
@@ -391,7 +393,52 @@ class Diagnoser:
                       if e in offsets}
             if not any(abs(v) > CAL_RELINEARISE[e] for e, v in values.items()):
                 break
+        gone = self._whole_change_unsupported(sel, offsets)
+        if gone:
+            # the replay at the corrected calibration does not support these changes: the
+            # design goes back to its own value of them, and they are no candidates any more
+            offsets = {e: v for e, v in offsets.items() if e not in gone}
+            design = base
+            for eid, v in offsets.items():
+                design, _ = EFFECTS[eid].apply(design, {EFFECTS[eid].parameters[0].name: v})
+            candidates = tuple(c for c in candidates if c not in gone)
+            P.X, sel.prob.Xs = None, None
+            P = build_problem(rec, design, self.mode, candidates, self.bandwidth, self.block,
+                              (P.sig["sens_mu"], None) if P.sig.get("sens_mu") is not None
+                              else None)
+            forced = tuple(f for f in dict.fromkeys(tuple(sel.forced) + tuple(offsets))
+                           if f not in gone)
+            sel = select(P, self.n_folds, forced=forced)
+            self._notes.append(
+                f"{', '.join(gone)} not named: at the corrected calibration (the replay "
+                "re-linearised there) the whole change it was given no longer earns its place "
+                "(BIC and the explained RMS, as any effect must to be proposed); it held what "
+                "the first linearisation of the other effects left")
         return P, sel, offsets
+
+    @staticmethod
+    def _whole_change_unsupported(sel, offsets):
+        """The re-linearised calibration effects (``offsets``: their changes applied to the
+        design) whose whole change, the offset plus the last pass's correction, the recording
+        does not support at the corrected linearisation. A claim made at the first
+        linearisation may have held what that linearisation got wrong of the others (a
+        run-in scales the model's losses, a mesh loss among them: their product is second
+        order and appears once the mesh loss is in the replay); so the whole change is judged
+        there by the rule every effect meets to be proposed (``selection.DELTA_BIC`` against
+        the fit with the effect at the design's own value, the correction ``-offset``, and at
+        least ``select_effects.MIN_EXPLAINED_NM`` explained). Returns the effect ids."""
+        prob, S = sel.prob, sel.S
+        gone = []
+        for t in S.terms:
+            if t.effect not in offsets or len(t.cols) != 1:
+                continue
+            rss0 = prob.rss_fixed(S.terms, t, -offsets[t.effect])
+            n = max(prob.n, 3)
+            gain = n * math.log(rss0 / S.rss) - math.log(n)
+            rms = math.sqrt(max(rss0 - S.rss, 0.0) / max(prob.swt, 1e-300))
+            if gain < DELTA_BIC or rms < sel.min_expl:
+                gone.append(t.effect)
+        return gone
 
     def _discover(self, rec, P, sel, rem, rel1):
         """Stage ``discover``: a sparse closed form fitted to a confirmed smooth remainder by
