@@ -59,6 +59,14 @@ CAL_RELINEARISE = {"mesh_loss": 0.002, "idle_loss_scale": 0.1, "load_loss_scale"
 #: calibration effect may have stood in for must hold one of them (a form of speed alone is a
 #: drag, a library effect the selection weighs against the idle-loss scale itself)
 LOAD_FAMILIES = ("load", "speed*load")
+#: the dictionary's families (discover.Library) a free loss scale can stand in for: a
+#: calibration effect scales the model's own losses, a steady function of the operating
+#: point (speed, load and, through the viscosity, temperature) with the sign of the motion.
+#: It cannot make a shaft-order ripple, a drift of the reading or in time at a fixed
+#: operating point, or an inertia torque; a closed form put against it holds these families
+#: only (a form with the roller-pass ripple that the selection's mesh_ripple already
+#: carries won on BIC against the mesh loss it did not replace)
+STAND_IN_FAMILIES = ("coulomb", "speed", "load", "speed*load", "temperature")
 #: re-linearisation passes of the calibration at most (Gauss-Newton on the replay; the
 #: preset mackic-rig from the default design, k 0 -> 0.027 and the idle scale 1 -> 0.03,
 #: settles in two)
@@ -283,10 +291,13 @@ class Diagnoser:
         if not cal or rem.residual_raw is None:
             return
         try:
-            from .discover import discover
+            from .discover import Library, discover
         except ImportError:
             return
         from .selection import DELTA_BIC, GramProblem, Term
+        temperature = getattr(rec, "temperature", None)
+        library = Library([f for f in Library.default(temperature is not None).features
+                           if f.family in STAND_IN_FAMILIES])
         other = [t for t in S.terms if t not in cal]
         fr = sel.opts.get("friction_miscalibrated")
         if fr and "friction_miscalibrated" not in S.ids:
@@ -301,10 +312,10 @@ class Diagnoser:
                                 self.bandwidth) @ v
         resid = rem.residual_raw + back
         d = discover(resid, rec.time, rec.speed_in, rec.torque_out, samples_per_block=P.m,
-                     weights=sel.weights, temperature=getattr(rec, "temperature", None),
+                     weights=sel.weights, temperature=temperature,
                      mode=self.mode, z1=self.design.z1, bandwidth=self.bandwidth,
                      n_folds=self.n_folds, min_explained=sel.min_expl,
-                     noise=P.noise_sample / math.sqrt(P.m),
+                     noise=P.noise_sample / math.sqrt(P.m), library=library,
                      nuisance=P.X[:, ocols] if ocols else None,
                      # without the feature in proportion to the model's input torque: it is a
                      # library effect (torque_sensor_gain, the calibration's look-alike where
