@@ -55,18 +55,15 @@ FRICTION_RELINEARISE = 0.02
 #: linearly but share their speed laws with the gear's flow direction: 0.1 of the scale; the
 #: load-loss scale enters through the fixed point (nearly linear, replay.LOAD_SCALE_STEP): 0.05
 CAL_RELINEARISE = {"mesh_loss": 0.002, "idle_loss_scale": 0.1, "load_loss_scale": 0.05}
-#: the dictionary's families (discover.Library) whose forms grow with the load: a form that a
-#: calibration effect may have stood in for must hold one of them (a form of speed alone is a
-#: drag, a library effect the selection weighs against the idle-loss scale itself)
+#: the dictionary's families (discover.Library) a closed form put against the calibration
+#: effects holds (``_calibration_against_forms``): the laws that grow with the load. The
+#: other families are effects of the library: a law of speed alone is the load-independent
+#: loss (the idle-loss scale or a drag, which the selection already weighed on the
+#: recording's BIC), a law of temperature or time a drift, a shaft order the mesh ripple, an
+#: acceleration the inertia. A form holding them beat a calibration effect by doing its work
+#: (the model's idle losses removed as a negative speed law beside a load-cubed term; a
+#: roller-pass ripple the selection's mesh_ripple already carried beside a load term)
 LOAD_FAMILIES = ("load", "speed*load")
-#: the dictionary's families (discover.Library) a free loss scale can stand in for: a
-#: calibration effect scales the model's own losses, a steady function of the operating
-#: point (speed, load and, through the viscosity, temperature) with the sign of the motion.
-#: It cannot make a shaft-order ripple, a drift of the reading or in time at a fixed
-#: operating point, or an inertia torque; a closed form put against it holds these families
-#: only (a form with the roller-pass ripple that the selection's mesh_ripple already
-#: carries won on BIC against the mesh loss it did not replace)
-STAND_IN_FAMILIES = ("coulomb", "speed", "load", "speed*load", "temperature")
 #: re-linearisation passes of the calibration at most (Gauss-Newton on the replay; the
 #: preset mackic-rig from the default design, k 0 -> 0.027 and the idle scale 1 -> 0.03,
 #: settles in two)
@@ -297,7 +294,7 @@ class Diagnoser:
         from .selection import DELTA_BIC, GramProblem, Term
         temperature = getattr(rec, "temperature", None)
         library = Library([f for f in Library.default(temperature is not None).features
-                           if f.family in STAND_IN_FAMILIES])
+                           if f.family in LOAD_FAMILIES])
         other = [t for t in S.terms if t not in cal]
         fr = sel.opts.get("friction_miscalibrated")
         if fr and "friction_miscalibrated" not in S.ids:
