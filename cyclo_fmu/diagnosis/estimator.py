@@ -55,15 +55,24 @@ FRICTION_RELINEARISE = 0.02
 #: linearly but share their speed laws with the gear's flow direction: 0.1 of the scale; the
 #: load-loss scale enters through the fixed point (nearly linear, replay.LOAD_SCALE_STEP): 0.05
 CAL_RELINEARISE = {"mesh_loss": 0.002, "idle_loss_scale": 0.1, "load_loss_scale": 0.05}
-#: the dictionary's families (discover.Library) a closed form put against the calibration
-#: effects holds (``_calibration_against_forms``): the laws that grow with the load. The
-#: other families are effects of the library: a law of speed alone is the load-independent
-#: loss (the idle-loss scale or a drag, which the selection already weighed on the
-#: recording's BIC), a law of temperature or time a drift, a shaft order the mesh ripple, an
-#: acceleration the inertia. A form holding them beat a calibration effect by doing its work
-#: (the model's idle losses removed as a negative speed law beside a load-cubed term; a
-#: roller-pass ripple the selection's mesh_ripple already carried beside a load term)
+#: the dictionary's families (discover.Library) whose forms grow with the load: a form that a
+#: calibration effect may have stood in for must hold one of them (a form of speed alone is a
+#: drag, a library effect the selection weighs against the idle-loss scale itself)
 LOAD_FAMILIES = ("load", "speed*load")
+#: the dictionary's families (discover.Library) a closed form put against the calibration
+#: effects holds: what a free loss scale can stand in for. A calibration effect scales the
+#: model's own losses, a steady function of the operating point (speed, load and, through the
+#: viscosity, temperature) with the sign of the motion. It cannot make a shaft-order ripple, a
+#: drift of the reading or in time at a fixed operating point, or an inertia torque (a form
+#: with the roller-pass ripple that the selection's mesh_ripple already carried won on BIC
+#: against the mesh loss it did not replace)
+STAND_IN_FAMILIES = ("coulomb", "speed", "load", "speed*load", "temperature")
+#: the families of laws of speed alone: the load-independent losses. Held to the sign of a
+#: loss in a form put against the calibration effects: a negative law of speed alone removes
+#: load-independent loss the model has, which is the idle-loss scale's own physics (its change
+#: below zero), not a loss outside the library (the model's idle losses removed as a negative
+#: Coulomb and speed law beside a load-cubed term beat a true idle-loss scale of -1)
+SPEED_FAMILIES = ("coulomb", "speed")
 #: re-linearisation passes of the calibration at most (Gauss-Newton on the replay; the
 #: preset mackic-rig from the default design, k 0 -> 0.027 and the idle scale 1 -> 0.03,
 #: settles in two)
@@ -293,8 +302,7 @@ class Diagnoser:
             return
         from .selection import DELTA_BIC, GramProblem, Term
         temperature = getattr(rec, "temperature", None)
-        library = Library([f for f in Library.default(temperature is not None).features
-                           if f.family in LOAD_FAMILIES])
+        features = Library.default(temperature is not None).features
         other = [t for t in S.terms if t not in cal]
         fr = sel.opts.get("friction_miscalibrated")
         if fr and "friction_miscalibrated" not in S.ids:
@@ -308,16 +316,23 @@ class Diagnoser:
             back += first_order(EFFECTS[t.effect].basis(P.sig, t.shape), P.dt,
                                 self.bandwidth) @ v
         resid = rem.residual_raw + back
-        d = discover(resid, rec.time, rec.speed_in, rec.torque_out, samples_per_block=P.m,
-                     weights=sel.weights, temperature=temperature,
-                     mode=self.mode, z1=self.design.z1, bandwidth=self.bandwidth,
-                     n_folds=self.n_folds, min_explained=sel.min_expl,
-                     noise=P.noise_sample / math.sqrt(P.m), library=library,
-                     nuisance=P.X[:, ocols] if ocols else None,
-                     # without the feature in proportion to the model's input torque: it is a
-                     # library effect (torque_sensor_gain, the calibration's look-alike where
-                     # power flows one way: LOOKALIKE_GROUPS), not a form outside the library
-                     model_T_in=None)
+
+        def closed_form(families):
+            # without the feature in proportion to the model's input torque: it is a library
+            # effect (torque_sensor_gain, the calibration's look-alike where power flows one
+            # way: LOOKALIKE_GROUPS), not a form outside the library
+            return discover(resid, rec.time, rec.speed_in, rec.torque_out,
+                            samples_per_block=P.m, weights=sel.weights,
+                            temperature=temperature, mode=self.mode, z1=self.design.z1,
+                            bandwidth=self.bandwidth, n_folds=self.n_folds,
+                            min_explained=sel.min_expl, noise=P.noise_sample / math.sqrt(P.m),
+                            library=Library([f for f in features if f.family in families]),
+                            nuisance=P.X[:, ocols] if ocols else None, model_T_in=None)
+
+        d = closed_form(STAND_IN_FAMILIES)
+        if d.proposed and any(t["family"] in SPEED_FAMILIES and t["coefficient"] < 0
+                              for t in d.terms):
+            d = closed_form(tuple(f for f in STAND_IN_FAMILIES if f not in SPEED_FAMILIES))
         if not d.proposed or d.prediction is None:
             return
         if not {t["family"] for t in d.terms} & set(LOAD_FAMILIES):
