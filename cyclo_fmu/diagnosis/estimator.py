@@ -21,7 +21,8 @@ typed result:
    BIC): where the form wins, the calibration effects stood in for a loss of another law and
    stages 2-5 run again without them; the calibration effects that stand and moved far are
    then re-linearised (``_relinearise_calibration``: replay at the corrected calibration,
-   stages 2-5 again with them forced, Gauss-Newton);
+   stages 2-5 again with them forced, Gauss-Newton; a whole change that does not earn its
+   place there is taken back, ``_whole_change_unsupported``);
 6. ``report`` (``result.report`` -> ``Diagnosis``).
 """
 from __future__ import annotations
@@ -290,7 +291,9 @@ class Diagnoser:
         ("very strong" evidence; its parameters counted as two per coefficient, a value and a
         shape chosen on a grid, so that a tie keeps the library's physical effect). The
         calibration effects are then withdrawn, the remainder is reported as unexplained and
-        the discovery stage proposes the form."""
+        the discovery stage proposes the form. The dictionary holds only what a loss scale
+        can stand in for (``STAND_IN_FAMILIES``), its laws of speed alone with the sign of a
+        loss (``SPEED_FAMILIES``: a negative one is fitted again without them)."""
         from dataclasses import replace as _replace
         S = rem.S
         cal = [t for t in S.terms if t.effect in CALIBRATION_EFFECTS]
@@ -384,7 +387,9 @@ class Diagnoser:
         (its sensitivities with it) and the selection run again with them forced (their claim
         was judged at the first linearisation; here they carry the correction); repeated
         while a change exceeds ``CAL_RELINEARISE`` (at most ``CAL_PASSES``). A calibration
-        effect the stages withdrew is no candidate any more. Returns ``(P, sel, offsets)``,
+        effect the stages withdrew is no candidate any more; one whose whole change does not
+        earn its place at the corrected linearisation (``_whole_change_unsupported``) is taken
+        back out of the design and the selection run once more. Returns ``(P, sel, offsets)``,
         ``offsets`` {effect: change applied to the design}: the reported value is the offset
         plus the last pass's change."""
         from model_core.design import scale_friction_level
@@ -394,6 +399,10 @@ class Diagnoser:
         dropped = set(self._calibration_values(sel.S)) - set(values)
         candidates = tuple(c for c in self.candidates if c not in dropped)
         offsets = {}
+        # the selection is taken at the design that carries ``offsets`` (else the whole
+        # changes cannot be judged there: a change clipped at its bounds ends the passes
+        # before the replay)
+        at_offsets = False
         for _ in range(CAL_PASSES):
             moved = False
             for eid, v in values.items():
@@ -404,6 +413,7 @@ class Diagnoser:
                 if abs(applied) > 0:
                     offsets[eid] = offsets.get(eid, 0.0) + applied
                     moved = moved or abs(applied) > CAL_RELINEARISE[eid]
+                    at_offsets = False
             if not moved:
                 break
             sens = (P.sig["sens_mu"], None) if P.sig.get("sens_mu") is not None else None
@@ -412,11 +422,12 @@ class Diagnoser:
                               self.block, sens)
             forced = tuple(dict.fromkeys(tuple(sel.forced) + tuple(offsets)))
             sel = select(P, self.n_folds, forced=forced)
+            at_offsets = True
             values = {e: v for e, v in self._calibration_values(sel.S).items()
                       if e in offsets}
             if not any(abs(v) > CAL_RELINEARISE[e] for e, v in values.items()):
                 break
-        gone = self._whole_change_unsupported(sel, offsets)
+        gone = self._whole_change_unsupported(sel, offsets) if at_offsets else []
         if gone:
             # the replay at the corrected calibration does not support these changes: the
             # design goes back to its own value of them, and they are no candidates any more
