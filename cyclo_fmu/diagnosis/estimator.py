@@ -21,7 +21,8 @@ typed result:
    BIC): where the form wins, the calibration effects stood in for a loss of another law and
    stages 2-5 run again without them; the calibration effects that stand and moved far are
    then re-linearised (``_relinearise_calibration``: replay at the corrected calibration,
-   stages 2-5 again with them forced, Gauss-Newton);
+   stages 2-5 again with them forced, Gauss-Newton; a whole change that does not earn its
+   place there is taken back, ``_whole_change_unsupported``);
 6. ``report`` (``result.report`` -> ``Diagnosis``).
 """
 from __future__ import annotations
@@ -43,6 +44,7 @@ from .remainder import PEAK_MIN_AMPLITUDE_NM, remainder
 from .replay import Replay, block_means, first_order, replay
 from .result import Diagnosis, DiagnosisError, report, zeta_d
 from .select_effects import MIN_EXPLAINED_NM, select
+from .selection import DELTA_BIC
 from .twins import FALSE_ALARM, N_TWINS, judge
 
 #: [1] re-linearise the friction level (replay again at the corrected mu) beyond this error
@@ -58,6 +60,20 @@ CAL_RELINEARISE = {"mesh_loss": 0.002, "idle_loss_scale": 0.1, "load_loss_scale"
 #: calibration effect may have stood in for must hold one of them (a form of speed alone is a
 #: drag, a library effect the selection weighs against the idle-loss scale itself)
 LOAD_FAMILIES = ("load", "speed*load")
+#: the dictionary's families (discover.Library) a closed form put against the calibration
+#: effects holds: what a free loss scale can stand in for. A calibration effect scales the
+#: model's own losses, a steady function of the operating point (speed, load and, through the
+#: viscosity, temperature) with the sign of the motion. It cannot make a shaft-order ripple, a
+#: drift of the reading or in time at a fixed operating point, or an inertia torque (a form
+#: with the roller-pass ripple that the selection's mesh_ripple already carried won on BIC
+#: against the mesh loss it did not replace)
+STAND_IN_FAMILIES = ("coulomb", "speed", "load", "speed*load", "temperature")
+#: the families of laws of speed alone: the load-independent losses. Held to the sign of a
+#: loss in a form put against the calibration effects: a negative law of speed alone removes
+#: load-independent loss the model has, which is the idle-loss scale's own physics (its change
+#: below zero), not a loss outside the library (the model's idle losses removed as a negative
+#: Coulomb and speed law beside a load-cubed term beat a true idle-loss scale of -1)
+SPEED_FAMILIES = ("coulomb", "speed")
 #: re-linearisation passes of the calibration at most (Gauss-Newton on the replay; the
 #: preset mackic-rig from the default design, k 0 -> 0.027 and the idle scale 1 -> 0.03,
 #: settles in two)
@@ -299,17 +315,21 @@ class Diagnoser:
         ("very strong" evidence; its parameters counted as two per coefficient, a value and a
         shape chosen on a grid, so that a tie keeps the library's physical effect). The
         calibration effects are then withdrawn, the remainder is reported as unexplained and
-        the discovery stage proposes the form."""
+        the discovery stage proposes the form. The dictionary holds only what a loss scale
+        can stand in for (``STAND_IN_FAMILIES``), its laws of speed alone with the sign of a
+        loss (``SPEED_FAMILIES``: a negative one is fitted again without them)."""
         from dataclasses import replace as _replace
         S = rem.S
         cal = [t for t in S.terms if t.effect in CALIBRATION_EFFECTS]
         if not cal or rem.residual_raw is None:
             return
         try:
-            from .discover import discover
+            from .discover import Library, discover
         except ImportError:
             return
         from .selection import DELTA_BIC, GramProblem, Term
+        temperature = getattr(rec, "temperature", None)
+        features = Library.default(temperature is not None).features
         other = [t for t in S.terms if t not in cal]
         fr = sel.opts.get("friction_miscalibrated")
         if fr and "friction_miscalibrated" not in S.ids:
@@ -323,16 +343,23 @@ class Diagnoser:
             back += first_order(EFFECTS[t.effect].basis(P.sig, t.shape), P.dt,
                                 self.bandwidth) @ v
         resid = rem.residual_raw + back
-        d = discover(resid, rec.time, rec.speed_in, rec.torque_out, samples_per_block=P.m,
-                     weights=sel.weights, temperature=getattr(rec, "temperature", None),
-                     mode=self.mode, z1=self.design.z1, bandwidth=self.bandwidth,
-                     n_folds=self.n_folds, min_explained=sel.min_expl,
-                     noise=P.noise_sample / math.sqrt(P.m),
-                     nuisance=P.X[:, ocols] if ocols else None,
-                     # without the feature in proportion to the model's input torque: it is a
-                     # library effect (torque_sensor_gain, the calibration's look-alike where
-                     # power flows one way: LOOKALIKE_GROUPS), not a form outside the library
-                     model_T_in=None)
+
+        def closed_form(families):
+            # without the feature in proportion to the model's input torque: it is a library
+            # effect (torque_sensor_gain, the calibration's look-alike where power flows one
+            # way: LOOKALIKE_GROUPS), not a form outside the library
+            return discover(resid, rec.time, rec.speed_in, rec.torque_out,
+                            samples_per_block=P.m, weights=sel.weights,
+                            temperature=temperature, mode=self.mode, z1=self.design.z1,
+                            bandwidth=self.bandwidth, n_folds=self.n_folds,
+                            min_explained=sel.min_expl, noise=P.noise_sample / math.sqrt(P.m),
+                            library=Library([f for f in features if f.family in families]),
+                            nuisance=P.X[:, ocols] if ocols else None, model_T_in=None)
+
+        d = closed_form(STAND_IN_FAMILIES)
+        if d.proposed and any(t["family"] in SPEED_FAMILIES and t["coefficient"] < 0
+                              for t in d.terms):
+            d = closed_form(tuple(f for f in STAND_IN_FAMILIES if f not in SPEED_FAMILIES))
         if not d.proposed or d.prediction is None:
             return
         if not {t["family"] for t in d.terms} & set(LOAD_FAMILIES):
@@ -485,15 +512,22 @@ class Diagnoser:
         (its sensitivities with it) and the selection run again with them forced (their claim
         was judged at the first linearisation; here they carry the correction); repeated
         while a change exceeds ``CAL_RELINEARISE`` (at most ``CAL_PASSES``). A calibration
-        effect the stages withdrew is no candidate any more. Returns ``(P, sel, offsets)``,
+        effect the stages withdrew is no candidate any more; one whose whole change does not
+        earn its place at the corrected linearisation (``_whole_change_unsupported``) is taken
+        back out of the design and the selection run once more. Returns ``(P, sel, offsets)``,
         ``offsets`` {effect: change applied to the design}: the reported value is the offset
         plus the last pass's change."""
         from model_core.design import scale_friction_level
-        design = scale_friction_level(self.design, 1 + rel1) if rel1 else self.design
+        base = scale_friction_level(self.design, 1 + rel1) if rel1 else self.design
+        design = base
         values = self._calibration_values(rem.S)
         dropped = set(self._calibration_values(sel.S)) - set(values)
         candidates = tuple(c for c in self.candidates if c not in dropped)
         offsets = {}
+        # the selection is taken at the design that carries ``offsets`` (else the whole
+        # changes cannot be judged there: a change clipped at its bounds ends the passes
+        # before the replay)
+        at_offsets = False
         for _ in range(CAL_PASSES):
             moved = False
             for eid, v in values.items():
@@ -504,6 +538,7 @@ class Diagnoser:
                 if abs(applied) > 0:
                     offsets[eid] = offsets.get(eid, 0.0) + applied
                     moved = moved or abs(applied) > CAL_RELINEARISE[eid]
+                    at_offsets = False
             if not moved:
                 break
             sens = (P.sig["sens_mu"], None) if P.sig.get("sens_mu") is not None else None
@@ -512,11 +547,57 @@ class Diagnoser:
                               self.block, sens)
             forced = tuple(dict.fromkeys(tuple(sel.forced) + tuple(offsets)))
             sel = select(P, self.n_folds, forced=forced)
+            at_offsets = True
             values = {e: v for e, v in self._calibration_values(sel.S).items()
                       if e in offsets}
             if not any(abs(v) > CAL_RELINEARISE[e] for e, v in values.items()):
                 break
+        gone = self._whole_change_unsupported(sel, offsets) if at_offsets else []
+        if gone:
+            # the replay at the corrected calibration does not support these changes: the
+            # design goes back to its own value of them, and they are no candidates any more
+            offsets = {e: v for e, v in offsets.items() if e not in gone}
+            design = base
+            for eid, v in offsets.items():
+                design, _ = EFFECTS[eid].apply(design, {EFFECTS[eid].parameters[0].name: v})
+            candidates = tuple(c for c in candidates if c not in gone)
+            P.X, sel.prob.Xs = None, None
+            P = build_problem(rec, design, self.mode, candidates, self.bandwidth, self.block,
+                              (P.sig["sens_mu"], None) if P.sig.get("sens_mu") is not None
+                              else None)
+            forced = tuple(f for f in dict.fromkeys(tuple(sel.forced) + tuple(offsets))
+                           if f not in gone)
+            sel = select(P, self.n_folds, forced=forced)
+            self._notes.append(
+                f"{', '.join(gone)} not named: at the corrected calibration (the replay "
+                "re-linearised there) the whole change it was given no longer earns its place "
+                "(BIC and the explained RMS, as any effect must to be proposed); it held what "
+                "the first linearisation of the other effects left")
         return P, sel, offsets
+
+    @staticmethod
+    def _whole_change_unsupported(sel, offsets):
+        """The re-linearised calibration effects (``offsets``: their changes applied to the
+        design) whose whole change, the offset plus the last pass's correction, the recording
+        does not support at the corrected linearisation. A claim made at the first
+        linearisation may have held what that linearisation got wrong of the others (a
+        run-in scales the model's losses, a mesh loss among them: their product is second
+        order and appears once the mesh loss is in the replay); so the whole change is judged
+        there by the rule every effect meets to be proposed (``selection.DELTA_BIC`` against
+        the fit with the effect at the design's own value, the correction ``-offset``, and at
+        least ``select_effects.MIN_EXPLAINED_NM`` explained). Returns the effect ids."""
+        prob, S = sel.prob, sel.S
+        gone = []
+        for t in S.terms:
+            if t.effect not in offsets or len(t.cols) != 1:
+                continue
+            rss0 = prob.rss_fixed(S.terms, t, -offsets[t.effect])
+            n = max(prob.n, 3)
+            gain = n * math.log(rss0 / S.rss) - math.log(n)
+            rms = math.sqrt(max(rss0 - S.rss, 0.0) / max(prob.swt, 1e-300))
+            if gain < DELTA_BIC or rms < sel.min_expl:
+                gone.append(t.effect)
+        return gone
 
     def _discover(self, rec, P, sel, rem, rel1):
         """Stage ``discover``: a sparse closed form fitted to a confirmed smooth remainder by

@@ -209,6 +209,11 @@ def _notes(sel, rem, P, effects, close_first):
                      "library's term does not quite have, or a small unknown; "
                      + ("reported as unexplained)" if rem.smooth else
                         "not beyond its twins)"))
+    if getattr(sel, "reshaped", None):
+        notes.append(f"{' and '.join(sel.reshaped)} not named: the recording wanted these "
+                     "free scales of the gear's load-dependent losses together, which reshapes "
+                     "the model's loss law instead of setting its level (the loss follows a "
+                     "law other than the model's; either scale alone would stand in for it)")
     for c in dict.fromkeys(sel.confounded):
         notes.append(f"{c} not named: a steady function of the operating point explains the "
                      "same change over time (the recording does not return to its operating "

@@ -139,6 +139,23 @@ class GramProblem:
         return Fit(tuple(terms), coef, se, float(rss), cv_mse, float(bic), admissible)
 
 
+    def rss_fixed(self, terms, fixed, value: float) -> float:
+        """Weighted residual sum of squares of the fit of ``terms`` with the one coefficient of
+        ``fixed`` (a term of ``terms`` with one column) held at ``value`` (in its own unit) and
+        the others fitted: the same Gram matrices, ``y - value x`` regressed on the rest."""
+        (j,) = fixed.cols
+        idx = np.array([i for t in terms if t != fixed for i in t.cols], int)
+        b = value * self.scale[j]                 # in the scaled columns
+        G, c = self.Gt, self.ct
+        yy = self.yyt - 2 * b * c[j] + b * b * G[j, j]
+        if not len(idx):
+            return max(float(yy), 1e-300)
+        cr = c[idx] - b * G[idx, j]
+        Gr = G[np.ix_(idx, idx)]
+        br = self._solve(Gr, cr)
+        return max(float(yy - 2 * br @ cr + br @ Gr @ br), 1e-300)
+
+
 def explained(before: Fit, after: Fit) -> float:
     """Held-out RMS (N*m) a change of the model explains: sqrt(cv_mse before - after)."""
     return math.sqrt(max(before.cv_mse - after.cv_mse, 0.0))
