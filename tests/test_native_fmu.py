@@ -614,7 +614,9 @@ def test_bad_input_gives_fmi2error_with_a_message(native):
                                ("mode_number", 9, "mode_number = 9"),
                                ("drag_torque", -0.5, "drag_torque = -0.5"),
                                ("stribeck_speed", 0.0, "stribeck_speed = 0"),
-                               ("thermal_tau", float("nan"), "thermal_tau")):
+                               ("thermal_tau", float("nan"), "thermal_tau"),
+                               ("ripple_out_1x_load", -0.01, "ripple_out_1x_load = -0.01"),
+                               ("ripple_2x_phase", float("inf"), "ripple_2x_phase")):
         fresh.messages.clear()
         with pytest.raises(FMICallException) as exc:
             fresh.set(**{name: value})
