@@ -174,22 +174,28 @@ def ripple_orders(s) -> tuple:
 
 
 def _ripple(s, shape):
-    th = s["theta_in"]
-    cols = []
-    for k in ripple_orders(s):
-        cols += [np.sin(k * th), np.cos(k * th)]
-    return np.stack(cols, -1)
+    return _mesh_ripple(s, None)
 
 
 def _mesh_ripple(s, shape):
     """Ripple at the shaft orders (RIPPLE_ORDERS), amplitude a (``shape`` 0 or None) or
-    a + b |tau_out| / T_REF (``shape`` 1: a transmission error times the mesh stiffness)."""
-    base = _ripple(s, shape)
-    if not shape:
-        return base
-    from .discovered import T_REF
-    v = np.abs(s["tau_out"]) / T_REF
-    return np.hstack([base, base * v[:, None]])
+    a + b |tau_out| / T_REF (``shape`` 1: a transmission error times the mesh stiffness):
+    columns sin(k th), cos(k th) per order, then (law 1) the same times |tau_out|/T_REF.
+    Filled in place (a long recording's basis is its largest array: no stacked copies)."""
+    th = s["theta_in"]
+    ks = ripple_orders(s)
+    m = 2 * len(ks)
+    B = np.empty((len(th), 2 * m if shape else m))
+    arg = np.empty(len(th))
+    for i, k in enumerate(ks):
+        np.multiply(k, th, out=arg)
+        np.sin(arg, out=B[:, 2 * i])
+        np.cos(arg, out=B[:, 2 * i + 1])
+    if shape:
+        from .discovered import T_REF
+        v = np.abs(s["tau_out"]) / T_REF
+        np.multiply(B[:, :m], v[:, None], out=B[:, m:])
+    return B
 
 
 def _stribeck(s, shape):
