@@ -35,6 +35,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .design import SHAFT_ORDER_RIPPLES
 from .kinematics import parse_mode, shaft_speeds
 
 W_REF = 300.0   # rad/s, reference input speed of the drag law (about 2860 r/min)
@@ -169,8 +170,8 @@ def ripple_orders(s) -> tuple:
     the roller pass, 2x, and 1x and 2x of the driven shaft (k_out r, r = w_out/w_in of the
     mode, signed: the driven shaft's own angle r theta; design.SHAFT_ORDER_RIPPLES)."""
     r = s["ratio_out"]
-    return tuple(s["order_roller"] if k == "roller" else k_in + k_out * r
-                 for _, k, k_in, k_out in RIPPLE_ORDERS)
+    return tuple(s["order_roller"] if k_in is None else k_in + k_out * r
+                 for _, _, k_in, k_out in RIPPLE_ORDERS)
 
 
 def _ripple(s, shape):
@@ -286,17 +287,17 @@ STRIBECK_SPEEDS = (15.0, 20.0, 30.0, 40.0, 60.0, 80.0, 150.0)
 #: amplitude growing with the transmitted load; issue 18 item 3). Scanned as a shape so that a
 #: constant ripple is not charged the BIC of four load terms it does not have
 RIPPLE_LOAD_LAWS = (0.0, 1.0)
-#: the mesh ripple's orders (parameter suffix, order, k_in, k_out): the driving shaft's 1x
-#: (the eccentric), the roller pass, 2x of the driving shaft, 1x and 2x of the driven shaft
-#: (runout of the output flange, an eccentric or oval pin circle); the order of the driving
-#: angle is k_in + k_out r (r = w_out/w_in of the mode), the roller pass the mode's
-#: roller_pass_order. The design fields: ripple_1x, ripple_roller and
-#: design.SHAFT_ORDER_RIPPLES (ripple_2x, ripple_out_1x, ripple_out_2x)
-RIPPLE_ORDERS = (("1", 1.0, 1.0, 0.0), ("z", "roller", 0.0, 0.0), ("2", 2.0, 2.0, 0.0),
-                 ("o1", "out1", 0.0, 1.0), ("o2", "out2", 0.0, 2.0))
-#: the design field of each of RIPPLE_ORDERS (its _phase, _load and _load_phase companions)
-RIPPLE_FIELDS = {"1": "ripple_1x", "z": "ripple_roller", "2": "ripple_2x",
-                 "o1": "ripple_out_1x", "o2": "ripple_out_2x"}
+#: the mesh ripple's orders (parameter suffix, design field, k_in, k_out): the driving shaft's
+#: 1x (the eccentric), the roller pass (k_in None: the mode's roller_pass_order), then
+#: design.SHAFT_ORDER_RIPPLES: 2x of the driving shaft, 1x and 2x of the driven shaft (runout
+#: of the output flange, an eccentric or oval pin circle); the order of the driving angle is
+#: k_in + k_out r (r = w_out/w_in of the mode, signed). Each design field has ``_phase``,
+#: ``_load`` and ``_load_phase`` companions
+_SUFFIX = {"ripple_2x": "2", "ripple_out_1x": "o1", "ripple_out_2x": "o2"}
+RIPPLE_ORDERS = (("1", "ripple_1x", 1.0, 0.0), ("z", "ripple_roller", None, None)) + tuple(
+    (_SUFFIX[f], f, k_in, k_out) for f, k_in, k_out in SHAFT_ORDER_RIPPLES)
+#: the design field of each of RIPPLE_ORDERS' suffixes
+RIPPLE_FIELDS = {k: f for k, f, _, _ in RIPPLE_ORDERS}
 _RIPPLE_TEXT = {"1": "1x ripple", "z": "roller-pass ripple", "2": "2x ripple",
                 "o1": "output 1x ripple", "o2": "output 2x ripple"}
 
@@ -308,8 +309,9 @@ def _ripple_parameters():
     for part, what in (("A", ""), ("B", "'s growth per 10 N*m load")):
         for k, *_ in RIPPLE_ORDERS:
             for trig in ("sin", "cos"):
+                name = "sine" if trig == "sin" else "cosine"
                 par.append(Parameter(f"{part}{k}_{trig}", "N*m", -0.5, 0.5,
-                                     f"{_RIPPLE_TEXT[k]}{what}, {'sine' if trig == 'sin' else 'cosine'}"))
+                                     f"{_RIPPLE_TEXT[k]}{what}, {name}"))
     return tuple(par)
 
 EFFECTS = {
@@ -589,7 +591,6 @@ def extra_torque(extra, s: dict) -> np.ndarray:
                                       s["t"] - s["t"][0], s["loss_in"])
     if extra.ripple_1x_load or extra.ripple_roller_load:
         total += extra.load_ripple_torque(s["theta_in"], s["order_roller"], s["tau_out"])
-    from .design import SHAFT_ORDER_RIPPLES
     if any(getattr(extra, f) or getattr(extra, f + "_load") for f, _, _ in SHAFT_ORDER_RIPPLES):
         total += extra.shaft_order_ripple_torque(s["theta_in"], s["ratio_out"],
                                                  s.get("tau_out"))
