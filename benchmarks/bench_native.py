@@ -59,6 +59,8 @@ double cd_housing_step(double T, double P, double dt, double T_amb, double C, do
 double cd_run_in_torque(const CDExtra *x, double d, double l) { (void)x; (void)d; (void)l; return 0.0; }
 double cd_load_ripple_torque(const CDExtra *x, double t, double o, double q)
 { (void)x; (void)t; (void)o; (void)q; return 0.0; }
+double cd_shaft_order_ripple_torque(const CDExtra *x, double t, double r, double q)
+{ (void)x; (void)t; (void)r; (void)q; return 0.0; }
 double cd_discovered_torque(const CDTerm *t, int n, double w, double q)
 { (void)t; (void)n; (void)w; (void)q; return 0.0; }
 """

@@ -164,6 +164,15 @@ class Friction:
                          "Harris & Kotzalas, Rolling Bearing Analysis, 5th ed., ch. 10).")
 
 
+#: the mesh ripple's shaft orders beyond the driving shaft's 1x and the roller pass
+#: (ExtraPhysics.shaft_order_ripple_torque): (field prefix, k_in, k_out), the order of the
+#: driving shaft's angle theta k = k_in + k_out r with r = w_out/w_in of the mode: 2x the
+#: driving shaft, 1x and 2x the driven shaft. Each field has ``_phase``, ``_load`` and
+#: ``_load_phase`` companions
+SHAFT_ORDER_RIPPLES = (("ripple_2x", 2.0, 0.0), ("ripple_out_1x", 0.0, 1.0),
+                       ("ripple_out_2x", 0.0, 2.0))
+
+
 @dataclass(frozen=True)
 class ExtraPhysics:
     """Physics beyond the paper's load-dependent losses, switched on by a diagnosis
@@ -250,6 +259,37 @@ class ExtraPhysics:
     stribeck_exponent: float = _f(2.0, "1", "shape exponent delta of the Stribeck decay "
                                   "exp(-(|w|/w_s)^delta): 1 Tustin's exponential, 2 the Gaussian "
                                   "(1 to 2)")
+    # -- the mesh ripple at 2x of the driving shaft and at 1x and 2x of the driven shaft
+    # (SHAFT_ORDER_RIPPLES): amplitude a + b |tau_out|/10 N*m, each part with its phase ------
+    ripple_2x: float = _f(0.0, "N*m", "torque ripple amplitude at 2x the driving speed "
+                          "(an oval eccentric bearing race, a cycloid disc's second harmonic "
+                          "runout; dynamic): A sin(2 theta + phase); 0 or more")
+    ripple_2x_phase: float = _f(0.0, "rad", "phase of the 2x ripple")
+    ripple_2x_load: float = _f(0.0, "N*m", "part of the 2x ripple's amplitude that grows with "
+                               "the load: amplitude at 10 N*m of |tau_out|, in proportion "
+                               "(dynamic); 0 or more")
+    ripple_2x_load_phase: float = _f(0.0, "rad", "phase of the load-scaled 2x ripple")
+    ripple_out_1x: float = _f(0.0, "N*m", "torque ripple amplitude at 1x the driven shaft's "
+                              "speed, referred to the driving shaft (runout of the output "
+                              "flange, an eccentric pin circle; dynamic): A sin(theta_out + "
+                              "phase), theta_out = theta r the driven shaft's angle, r = "
+                              "w_out/w_in of the mode (signed); 0 or more")
+    ripple_out_1x_phase: float = _f(0.0, "rad", "phase of the output 1x ripple (against the "
+                                    "driven shaft's angle)")
+    ripple_out_1x_load: float = _f(0.0, "N*m", "part of the output 1x ripple's amplitude that "
+                                   "grows with the load: amplitude at 10 N*m of |tau_out| "
+                                   "(dynamic); 0 or more")
+    ripple_out_1x_load_phase: float = _f(0.0, "rad", "phase of the load-scaled output 1x "
+                                         "ripple")
+    ripple_out_2x: float = _f(0.0, "N*m", "torque ripple amplitude at 2x the driven shaft's "
+                              "speed (an oval pin circle, a coupling's misalignment; dynamic): "
+                              "A sin(2 theta_out + phase); 0 or more")
+    ripple_out_2x_phase: float = _f(0.0, "rad", "phase of the output 2x ripple")
+    ripple_out_2x_load: float = _f(0.0, "N*m", "part of the output 2x ripple's amplitude that "
+                                   "grows with the load: amplitude at 10 N*m of |tau_out| "
+                                   "(dynamic); 0 or more")
+    ripple_out_2x_load_phase: float = _f(0.0, "rad", "phase of the load-scaled output 2x "
+                                         "ripple")
 
     #: fields no FMU carries: the diagnosis's replay uses them. Where the same physics has a
     #: form the FMUs carry, the diagnosis writes that too (model_core.effects): a viscosity
@@ -298,6 +338,46 @@ class ExtraPhysics:
         return (_np.abs(tau_out) / T_REF) * (
             self.ripple_1x_load * _np.sin(theta + self.ripple_1x_load_phase)
             + self.ripple_roller_load * _np.sin(order * theta + self.ripple_roller_load_phase))
+
+    def shaft_order_ripple_torque(self, theta, ratio_out, tau_out):
+        """Ripple at 2x the driving shaft and at 1x and 2x the driven shaft (N*m):
+        sum over k of (A_k sin(k theta + phi_k) + |tau_out|/T_ref B_k sin(k theta + psi_k)),
+        k = 2, r, 2 r with r = w_out/w_in of the mode (signed: k theta is the driven shaft's
+        angle; in S2 it turns against the driving shaft) and T_ref = 10 N*m
+        (model_core.discovered.T_REF). A transmission error times the mesh stiffness gives
+        the load-scaled part B (model_core.effects 'mesh_ripple'); zero mean over a turn of
+        the shaft at a held load: the FMUs count it as stored power, not a loss. ``theta``
+        [rad] the driving shaft's angle, ``tau_out`` [N*m] the load torque (None where the
+        load-scaled parts are zero); scalars or arrays."""
+        import numpy as _np
+        from .discovered import T_REF
+        theta = _np.asarray(theta, float)
+        total = _np.zeros(theta.shape)
+        load = None
+        for prefix, k_in, k_out in SHAFT_ORDER_RIPPLES:
+            a, b = getattr(self, prefix), getattr(self, prefix + "_load")
+            if not (a or b):
+                continue
+            angle = (k_in + k_out * ratio_out) * theta
+            if a:
+                total = total + a * _np.sin(angle + getattr(self, prefix + "_phase"))
+            if b:
+                if load is None:
+                    if tau_out is None:
+                        raise ValueError("extra." + prefix + "_load: the load-scaled ripple "
+                                         "needs the load torque tau_out")
+                    load = _np.abs(tau_out) / T_REF
+                total = total + load * b * _np.sin(angle + getattr(self, prefix
+                                                                   + "_load_phase"))
+        return total if total.ndim else float(total)
+
+    @property
+    def has_ripple(self) -> bool:
+        """Any ripple term (1x, roller pass, 2x, output 1x/2x; constant or load-scaled)."""
+        return bool(self.ripple_1x or self.ripple_roller or self.ripple_1x_load
+                    or self.ripple_roller_load or any(
+                        getattr(self, p) or getattr(self, p + "_load")
+                        for p, _, _ in SHAFT_ORDER_RIPPLES))
 
     def run_in_torque(self, distance, loss_in):
         """Run-in torque at the driving shaft (N*m): c exp(-distance/s0) loss_in, with the
@@ -635,7 +715,8 @@ def validate_design(d: DriveDesign) -> None:
     if not 0.0 <= d.extra.drag_exponent <= 2.0:
         raise CycloidInputError("extra.drag_exponent", d.extra.drag_exponent,
                                 "must lie between 0 and 2")
-    for name in ("drag_torque", "stribeck_torque", "input_inertia"):
+    for name in ("drag_torque", "stribeck_torque", "input_inertia") + tuple(
+            p + sfx for p, _, _ in SHAFT_ORDER_RIPPLES for sfx in ("", "_load")):
         if getattr(d.extra, name) < 0:
             raise CycloidInputError("extra." + name, getattr(d.extra, name),
                                     "must not be negative")

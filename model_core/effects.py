@@ -21,7 +21,9 @@ Signals ``s`` (numpy arrays over samples, SI), built by :func:`effect_signals`: 
 ``w_in`` (rad/s), ``alpha_in`` (rad/s^2), ``theta_in`` (rad, integral of w_in),
 ``distance_in`` (rad, integral of |w_in|: the distance run), ``loss_in``
 (the model's loss torque referred to the input, N*m), ``T_in_model`` (the model's input
-torque, N*m), ``order_roller`` (roller-pass order of the input speed), ``temperature`` (degC
+torque, N*m), ``order_roller`` (roller-pass order of the input speed), ``ratio_out``
+(w_out/w_in of the mode, signed: the driven shaft's angle is ``ratio_out * theta_in``),
+``temperature`` (degC
 or None), ``sens_mu`` and ``sens_nu`` (d T_in_model / d ln mu_boundary and / d ln nu, N*m),
 ``sens_k``, ``sens_idle`` and ``sens_load`` (d T_in_model / d mesh_loss_k, / d idle_loss_scale
 and / d load_loss_scale, N*m; ``sens_idle`` only where the design has load-independent losses);
@@ -33,6 +35,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .design import SHAFT_ORDER_RIPPLES
 from .kinematics import parse_mode, shaft_speeds
 
 W_REF = 300.0   # rad/s, reference input speed of the drag law (about 2860 r/min)
@@ -83,9 +86,9 @@ class Effect:
 
     def parameters_for(self, shape=None) -> tuple:
         """The linear parameters the basis has at ``shape`` (the mesh ripple's constant
-        amplitude law has the first four of its eight)."""
+        amplitude law has the first half of its parameters, the a parts)."""
         if self.id == "mesh_ripple" and not shape:
-            return self.parameters[:4]
+            return self.parameters[:len(RIPPLE_ORDERS) * 2]
         return self.parameters
 
     def basis(self, s: dict, shape=None) -> np.ndarray:
@@ -181,21 +184,38 @@ def _inertia(s, shape):
     return s["alpha_in"][:, None]
 
 
+def ripple_orders(s) -> tuple:
+    """The mesh ripple's orders of the driving shaft's angle, in RIPPLE_ORDERS' order: 1x,
+    the roller pass, 2x, and 1x and 2x of the driven shaft (k_out r, r = w_out/w_in of the
+    mode, signed: the driven shaft's own angle r theta; design.SHAFT_ORDER_RIPPLES)."""
+    r = s["ratio_out"]
+    return tuple(s["order_roller"] if k_in is None else k_in + k_out * r
+                 for _, _, k_in, k_out in RIPPLE_ORDERS)
+
+
 def _ripple(s, shape):
-    th = s["theta_in"]
-    k = s["order_roller"]
-    return np.stack([np.sin(th), np.cos(th), np.sin(k * th), np.cos(k * th)], -1)
+    return _mesh_ripple(s, None)
 
 
 def _mesh_ripple(s, shape):
-    """Ripple at 1x and the roller pass, amplitude a (``shape`` 0 or None) or a + b |tau_out|
-    / T_REF (``shape`` 1: a transmission error times the mesh stiffness)."""
-    base = _ripple(s, shape)
-    if not shape:
-        return base
-    from .discovered import T_REF
-    v = np.abs(s["tau_out"]) / T_REF
-    return np.hstack([base, base * v[:, None]])
+    """Ripple at the shaft orders (RIPPLE_ORDERS), amplitude a (``shape`` 0 or None) or
+    a + b |tau_out| / T_REF (``shape`` 1: a transmission error times the mesh stiffness):
+    columns sin(k th), cos(k th) per order, then (law 1) the same times |tau_out|/T_REF.
+    Filled in place (a long recording's basis is its largest array: no stacked copies)."""
+    th = s["theta_in"]
+    ks = ripple_orders(s)
+    m = 2 * len(ks)
+    B = np.empty((len(th), 2 * m if shape else m))
+    arg = np.empty(len(th))
+    for i, k in enumerate(ks):
+        np.multiply(k, th, out=arg)
+        np.sin(arg, out=B[:, 2 * i])
+        np.cos(arg, out=B[:, 2 * i + 1])
+    if shape:
+        from .discovered import T_REF
+        v = np.abs(s["tau_out"]) / T_REF
+        np.multiply(B[:, :m], v[:, None], out=B[:, m:])
+    return B
 
 
 def _stribeck(s, shape):
@@ -286,6 +306,32 @@ STRIBECK_SPEEDS = (15.0, 20.0, 30.0, 40.0, 60.0, 80.0, 150.0)
 #: amplitude growing with the transmitted load; issue 18 item 3). Scanned as a shape so that a
 #: constant ripple is not charged the BIC of four load terms it does not have
 RIPPLE_LOAD_LAWS = (0.0, 1.0)
+#: the mesh ripple's orders (parameter suffix, design field, k_in, k_out): the driving shaft's
+#: 1x (the eccentric), the roller pass (k_in None: the mode's roller_pass_order), then
+#: design.SHAFT_ORDER_RIPPLES: 2x of the driving shaft, 1x and 2x of the driven shaft (runout
+#: of the output flange, an eccentric or oval pin circle); the order of the driving angle is
+#: k_in + k_out r (r = w_out/w_in of the mode, signed). Each design field has ``_phase``,
+#: ``_load`` and ``_load_phase`` companions
+_SUFFIX = {"ripple_2x": "2", "ripple_out_1x": "o1", "ripple_out_2x": "o2"}
+RIPPLE_ORDERS = (("1", "ripple_1x", 1.0, 0.0), ("z", "ripple_roller", None, None)) + tuple(
+    (_SUFFIX[f], f, k_in, k_out) for f, k_in, k_out in SHAFT_ORDER_RIPPLES)
+#: the design field of each of RIPPLE_ORDERS' suffixes
+RIPPLE_FIELDS = {k: f for k, f, _, _ in RIPPLE_ORDERS}
+_RIPPLE_TEXT = {"1": "1x ripple", "z": "roller-pass ripple", "2": "2x ripple",
+                "o1": "output 1x ripple", "o2": "output 2x ripple"}
+
+
+def _ripple_parameters():
+    """A{k}_sin, A{k}_cos for every order (the constant part a), then B{k}_sin, B{k}_cos (the
+    load-scaled part b, per 10 N*m of |tau_out|)."""
+    par = []
+    for part, what in (("A", ""), ("B", "'s growth per 10 N*m load")):
+        for k, *_ in RIPPLE_ORDERS:
+            for trig in ("sin", "cos"):
+                name = "sine" if trig == "sin" else "cosine"
+                par.append(Parameter(f"{part}{k}_{trig}", "N*m", -0.5, 0.5,
+                                     f"{_RIPPLE_TEXT[k]}{what}, {name}"))
+    return tuple(par)
 
 EFFECTS = {
     "friction_miscalibrated": Effect(
@@ -391,19 +437,12 @@ EFFECTS = {
         separating_run="slow and fast ramps up and down",
         synth_default=({"J": 1.5e-4}, None)),
     "mesh_ripple": Effect(
-        "mesh_ripple", "torque ripple at orders of the shaft speed: eccentric (1x) and roller "
-        "pass, amplitude a + b |tau_out|/10 N*m (a transmission error times the mesh "
-        "stiffness grows with the load; load_law 0: constant amplitude a alone)",
-        (Parameter("A1_sin", "N*m", -0.5, 0.5, "1x ripple, sine"),
-         Parameter("A1_cos", "N*m", -0.5, 0.5, "1x ripple, cosine"),
-         Parameter("Az_sin", "N*m", -0.5, 0.5, "roller-pass ripple, sine"),
-         Parameter("Az_cos", "N*m", -0.5, 0.5, "roller-pass ripple, cosine"),
-         Parameter("B1_sin", "N*m", -0.5, 0.5, "1x ripple's growth per 10 N*m load, sine"),
-         Parameter("B1_cos", "N*m", -0.5, 0.5, "1x ripple's growth per 10 N*m load, cosine"),
-         Parameter("Bz_sin", "N*m", -0.5, 0.5, "roller-pass ripple's growth per 10 N*m load, "
-                   "sine"),
-         Parameter("Bz_cos", "N*m", -0.5, 0.5, "roller-pass ripple's growth per 10 N*m load, "
-                   "cosine")),
+        "mesh_ripple", "torque ripple at orders of the shaft speeds: 1x and 2x of the driving "
+        "shaft (eccentric), the roller pass, 1x and 2x of the driven shaft (runout of the "
+        "output flange, pin-circle errors), amplitude a + b |tau_out|/10 N*m (a transmission "
+        "error times the mesh stiffness grows with the load; load_law 0: constant amplitude "
+        "a alone)",
+        _ripple_parameters(),
         shape=RIPPLE_LOAD_LAWS, shape_name="load_law", shape_unit="1",
         separating_run="an order analysis at several constant speeds, and at several loads at "
                        "one speed (the load-scaled part b)",
@@ -514,6 +553,13 @@ SENSOR_EFFECTS = ("torque_sensor_offset", "torque_sensor_gain", "torque_sensor_d
 
 
 # -- signals ----------------------------------------------------------------------------------
+def output_ratio(mode: str, z1: int) -> float:
+    """w_out/w_in of a mode (signed; 1/speed_ratio): the driven shaft's angle per radian of
+    the driving shaft's."""
+    a, b, _ = parse_mode(mode)
+    return float(shaft_speeds(mode, 1.0, z1)[b])
+
+
 def roller_pass_order(mode: str, z1: int) -> float:
     """Roller-pass order of the driving speed: z1 passes per turn of the ring relative to the
     carrier, per turn of the driving shaft."""
@@ -535,7 +581,8 @@ def effect_signals(t, w_in, loss_in, mode, z1, temperature=None, T_in_model=None
     distance = np.concatenate([[0.0], np.cumsum(0.5 * (aw[1:] + aw[:-1]) * np.diff(t))])
     return {"t": t, "w_in": w_in, "alpha_in": alpha, "theta_in": theta, "loss_in": loss_in,
             "distance_in": distance,
-            "order_roller": roller_pass_order(mode, z1), "temperature": temperature,
+            "order_roller": roller_pass_order(mode, z1), "ratio_out": output_ratio(mode, z1),
+            "temperature": temperature,
             "T_in_model": T_in_model, "sens_mu": sens_mu, "sens_nu": sens_nu,
             "sens_k": sens_k, "sens_idle": sens_idle, "sens_load": sens_load,
             "tau_out": None if tau_out is None else np.asarray(tau_out, float)}
@@ -563,6 +610,9 @@ def extra_torque(extra, s: dict) -> np.ndarray:
                                       s["t"] - s["t"][0], s["loss_in"])
     if extra.ripple_1x_load or extra.ripple_roller_load:
         total += extra.load_ripple_torque(s["theta_in"], s["order_roller"], s["tau_out"])
+    if any(getattr(extra, f) or getattr(extra, f + "_load") for f, _, _ in SHAFT_ORDER_RIPPLES):
+        total += extra.shaft_order_ripple_torque(s["theta_in"], s["ratio_out"],
+                                                 s.get("tau_out"))
     if extra.discovered:
         if s.get("tau_out") is None:
             raise ValueError("the design's discovered terms need the load torque (signals "
@@ -715,19 +765,21 @@ def _apply_drag(design, v, shape, temperature):
 
 
 def _apply_ripple(design, v, shape, temperature):
-    """The ripple's a part onto ``ripple_1x``/``ripple_roller``, its load-scaled b part (the
-    ``B*`` values, present with load law 1) onto ``ripple_1x_load``/``ripple_roller_load``:
-    A sin(th + phi) = A cos(phi) sin(th) + A sin(phi) cos(th)."""
-    kw = dict(ripple_1x=float(np.hypot(v["A1_sin"], v["A1_cos"])),
-              ripple_1x_phase=float(np.arctan2(v["A1_cos"], v["A1_sin"])),
-              ripple_roller=float(np.hypot(v["Az_sin"], v["Az_cos"])),
-              ripple_roller_phase=float(np.arctan2(v["Az_cos"], v["Az_sin"])))
-    if any(n in v for n in ("B1_sin", "B1_cos", "Bz_sin", "Bz_cos")):
-        b = {n: float(v.get(n, 0.0)) for n in ("B1_sin", "B1_cos", "Bz_sin", "Bz_cos")}
-        kw.update(ripple_1x_load=float(np.hypot(b["B1_sin"], b["B1_cos"])),
-                  ripple_1x_load_phase=float(np.arctan2(b["B1_cos"], b["B1_sin"])),
-                  ripple_roller_load=float(np.hypot(b["Bz_sin"], b["Bz_cos"])),
-                  ripple_roller_load_phase=float(np.arctan2(b["Bz_cos"], b["Bz_sin"])))
+    """The ripple's a part (``A*``) onto ``ripple_1x``, ``ripple_roller``, ``ripple_2x``,
+    ``ripple_out_1x``, ``ripple_out_2x`` (RIPPLE_FIELDS), its load-scaled b part (the ``B*``
+    values, present with load law 1) onto their ``_load`` fields, each with its phase:
+    A sin(th + phi) = A cos(phi) sin(th) + A sin(phi) cos(th). An order absent from ``v``
+    (a diagnosis of an earlier version) is set to 0; the b parts are left as they are where
+    no ``B*`` value is given."""
+    kw = {}
+    with_b = any(n.startswith("B") for n in v)
+    for k, field in RIPPLE_FIELDS.items():
+        for part, sfx in (("A", ""), ("B", "_load")):
+            if part == "B" and not with_b:
+                continue
+            s_, c_ = float(v.get(f"{part}{k}_sin", 0.0)), float(v.get(f"{part}{k}_cos", 0.0))
+            kw[field + sfx] = float(np.hypot(s_, c_))
+            kw[field + sfx + "_phase"] = float(np.arctan2(c_, s_))
     return _with_extra(design, **kw), []
 
 

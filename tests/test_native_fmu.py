@@ -301,13 +301,21 @@ EXTRA = dict(drag_torque=0.12, stribeck_torque=0.3, stribeck_speed=25.0, input_i
              thermal_loss_change=-0.15, thermal_tau=0.05, drag_exponent=0.5,
              stribeck_exponent=1.5, run_in_change=0.2, run_in_distance=40.0,
              ripple_1x_load=0.02, ripple_1x_load_phase=0.7, ripple_roller_load=0.01,
-             ripple_roller_load_phase=-0.3)
+             ripple_roller_load_phase=-0.3,
+             # the ripple at 2x the driving shaft, 1x and 2x the driven shaft
+             ripple_2x=0.015, ripple_2x_phase=0.25, ripple_2x_load=0.012,
+             ripple_2x_load_phase=-0.6, ripple_out_1x=0.04, ripple_out_1x_phase=1.3,
+             ripple_out_1x_load=0.018, ripple_out_1x_load_phase=-2.0, ripple_out_2x=0.01,
+             ripple_out_2x_phase=-0.4, ripple_out_2x_load=0.007, ripple_out_2x_load_phase=2.2)
 
 
-def test_agrees_with_python_fmu_with_extra_physics(native, fmu):
-    """Drag, Stribeck, inertia, ripple and warm-up switched on: a run-up and reversal."""
-    n = Inst(native, mode="S2", **EXTRA)
-    p = Inst(fmu, mode="S2", **EXTRA)
+@pytest.mark.parametrize("mode", ["S2", "S1"])
+def test_agrees_with_python_fmu_with_extra_physics(native, fmu, mode):
+    """Drag, Stribeck, inertia, every ripple order (S2: the driven shaft turns against the
+    driving one, S1 with it) and warm-up switched on: a run-up and reversal through the four
+    quadrants."""
+    n = Inst(native, mode=mode, **EXTRA)
+    p = Inst(fmu, mode=mode, **EXTRA)
     for k in range(150):
         w = 250.0 * math.sin(0.03 * k) + 5.0
         t = -6.0 * math.cos(0.05 * k) + 0.5
@@ -361,6 +369,21 @@ def test_c_steady_and_dynamic_torque_equal_python(model_lib):
         assert model_lib.cd_dynamic_torque(ctypes.byref(cx), alpha, theta, order, elapsed,
                                            loss) == pytest.approx(
             float(ex.dynamic_torque(alpha, theta, order, elapsed, loss)), rel=1e-12, abs=1e-12)
+
+
+def test_c_shaft_order_ripple_equals_python(model_lib):
+    """cd_shaft_order_ripple_torque against ExtraPhysics.shaft_order_ripple_torque (2x, output
+    1x and 2x, constant and load-scaled), both signs of the driven shaft's ratio."""
+    ex = ExtraPhysics(**EXTRA)
+    cx = CExtra(**EXTRA)
+    f = model_lib.cd_shaft_order_ripple_torque
+    f.restype = ctypes.c_double
+    f.argtypes = [ctypes.POINTER(CExtra)] + [ctypes.c_double] * 3
+    rng = np.random.default_rng(4)
+    for theta, tau in rng.normal(0, 40, (20, 2)):
+        for r in (1 / 15, -1 / 14, 15.0 / 14.0):
+            assert f(ctypes.byref(cx), theta, r, tau) == pytest.approx(
+                ex.shaft_order_ripple_torque(theta, r, tau), rel=1e-12, abs=1e-12)
 
 
 def test_c_map_solve_equals_model_core(model_lib):
@@ -563,8 +586,9 @@ def test_build_design_changes_every_reducer_fmu(calibrated_fmus, native, fmu):
     # the existing variables keep their value references; the new parameters come last, in
     # the order they were added (cycloid_drive.LATE_DESIGN_PARAMETERS)
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    assert vr["thermal_T_ref"] == max(vr.values())
-    assert vr["nu_100"] < vr["load_loss_scale"] < vr["thermal_loss_per_10K"] < vr["thermal_T_ref"]
+    assert vr["ripple_out_2x_load_phase"] == max(vr.values())
+    assert (vr["nu_100"] < vr["load_loss_scale"] < vr["thermal_loss_per_10K"]
+            < vr["thermal_T_ref"] < vr["ripple_2x"] < vr["ripple_out_1x"] < vr["ripple_out_2x"])
 
 
 def test_bad_input_gives_fmi2error_with_a_message(native):
@@ -590,7 +614,9 @@ def test_bad_input_gives_fmi2error_with_a_message(native):
                                ("mode_number", 9, "mode_number = 9"),
                                ("drag_torque", -0.5, "drag_torque = -0.5"),
                                ("stribeck_speed", 0.0, "stribeck_speed = 0"),
-                               ("thermal_tau", float("nan"), "thermal_tau")):
+                               ("thermal_tau", float("nan"), "thermal_tau"),
+                               ("ripple_out_1x_load", -0.01, "ripple_out_1x_load = -0.01"),
+                               ("ripple_2x_phase", float("inf"), "ripple_2x_phase")):
         fresh.messages.clear()
         with pytest.raises(FMICallException) as exc:
             fresh.set(**{name: value})

@@ -307,14 +307,15 @@ def _lines(P, S, r, design, mode, rng):
     claims for the JSON)."""
     orders = _orders(design, mode, P.sig)
     k = P.sig["order_roller"]
-    lib = ("1x", f"order {k:g} (roller pass)")
+    # the orders the library's mesh_ripple fits (model_core.effects.RIPPLE_ORDERS): 1x, 2x,
+    # the roller pass, 1x and 2x of the driven shaft
+    lib = ("1x", "2x", f"order {k:g} (roller pass)") + tuple(
+        n for n in orders if n.startswith("output "))
     oc = order_claims(r, P.sig, orders, P.dt, rng)
     standing = {n: a for n, (a, c) in oc.items() if c is not None and c.stands}
     outside = {n: a for n, a in standing.items() if n not in lib}
     inside = {n: a for n, a in standing.items() if n in lib}
-    ex = design.extra
-    if ({"mesh_ripple"} & set(S.ids) or ex.ripple_1x or ex.ripple_roller
-            or ex.ripple_1x_load or ex.ripple_roller_load):
+    if {"mesh_ripple"} & set(S.ids) or design.extra.has_ripple:
         inside = {}       # the library's orders, fitted: what is left is phase tracking
     parts = []
     if outside or inside:

@@ -225,7 +225,10 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
                                                                  located)
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
     from scipy.ndimage import uniform_filter1d
-    w_s = uniform_filter1d(w_in, max(1, int(round(SPEED_SMOOTHING / dt))), mode="nearest")
+    # an odd window, centred: an even one (20 samples at 1 kHz) is centred half a sample late,
+    # and the angle integrated from it lags by w dt/2 (0.06 rad at the 2x order of 600 r/min,
+    # 0.2 rad at the roller pass of 300 r/min: a ripple's phase rotated)
+    w_s = uniform_filter1d(w_in, 2 * int(round(SPEED_SMOOTHING / (2 * dt))) + 1, mode="nearest")
     sig = effect_signals(t, w_s, loss, mode, design.z1, getattr(rec, "temperature", None),
                          T_in_model=T_in, sens_mu=sens_mu, sens_nu=sens_nu, sens_k=sens_k,
                          sens_idle=sens_idle, tau_out=tau_out, sens_load=sens_load)

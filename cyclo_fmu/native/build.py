@@ -107,7 +107,28 @@ EXTRA = (
     ("thermal_T_ref", "K", "ThermodynamicTemperature", 173.15, True, "temperature the "
      "per-10 K loss change is referred to (a diagnosis: the recording's first temperature; "
      "173.15 to 473.15 K)"),
-)
+) + tuple(
+    # the mesh ripple at 2x the driving shaft, 1x and 2x the driven shaft
+    # (ExtraPhysics.shaft_order_ripple_torque); value references from EXTRA_VR1
+    (prefix + sfx, unit, quantity, lo, False, f"{what}: {text}")
+    for prefix, what in (("ripple_2x", "ripple at 2x the driving speed"),
+                         ("ripple_out_1x", "ripple at 1x the driven shaft's speed (its angle "
+                                           "theta w_out/w_in)"),
+                         ("ripple_out_2x", "ripple at 2x the driven shaft's speed"))
+    for sfx, unit, quantity, lo, text in (
+        ("", "N.m", "Torque", 0.0, "amplitude (>= 0)"), ("_phase", "rad", "Angle", None, "phase"),
+        ("_load", "N.m", "Torque", 0.0, "load-scaled amplitude at 10 N.m of |tau_out|, in "
+         "proportion (>= 0)"),
+        ("_load_phase", "rad", "Angle", None, "phase of the load-scaled part")))
+#: value references of EXTRA: its first EXTRA_FIRST at 30.., the others at EXTRA_VR1..
+#: (50..59 were taken when they came; fmi2_cycloid.c's extra_index)
+EXTRA_FIRST = 20
+EXTRA_VR1 = 60
+
+
+def extra_vr(k: int) -> int:
+    """The value reference of EXTRA[k]."""
+    return 30 + k if k < EXTRA_FIRST else EXTRA_VR1 + k - EXTRA_FIRST
 
 #: Outputs, in the order of the C state's out[] (value references 10..29), then ``locked``.
 OUTPUTS = (
@@ -435,7 +456,7 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
        "set String parameters: 0 = use mode, 1..6 = 12, 21, 1S, S1, 2S, S2",
        '<Integer min="0" max="6" start="0"/>', "exact")
     for k, (name, unit, quantity, lo, _excl, desc) in enumerate(EXTRA):
-        sv(name, 30 + k, "parameter", "fixed", desc + " (design [extra])",
+        sv(name, extra_vr(k), "parameter", "fixed", desc + " (design [extra])",
            f'<Real {_real_attrs(unit, quantity, getattr(design.extra, name), min_=lo)}/>',
            "exact")
     from ..slaves.cycloid_drive import ALPHA_REF
@@ -481,7 +502,8 @@ def model_description(design, constants, guid, torque_max, speed_max, descriptio
     steady = ["drag_torque", "stribeck_torque", "stribeck_speed", "stribeck_exponent",
               "drag_exponent", "run_in_change", "run_in_distance", "ripple_1x_load",
               "ripple_1x_load_phase", "ripple_roller_load", "ripple_roller_load_phase",
-              "ripple_1x", "ripple_1x_phase", "ripple_roller", "ripple_roller_phase"]
+              "ripple_1x", "ripple_1x_phase", "ripple_roller", "ripple_roller_phase"] + [
+                  e[0] for e in EXTRA[EXTRA_FIRST:]]
     # alpha_in acts through J_out (0 by default); declared, so that the dependencies hold for
     # every parameter value
     both = ["w_in", "tau_out", "alpha_in", "T_oil_in"]

@@ -178,6 +178,32 @@ double cd_load_ripple_torque(const CDExtra *x, double theta, double order, doubl
               + x->ripple_roller_load * sin(order * theta + x->ripple_roller_load_phase));
 }
 
+/* one order k of ExtraPhysics.shaft_order_ripple_torque, in its order of operations */
+static double order_ripple(double a, double phase, double b, double load_phase, double k,
+                           double theta, double load, double total)
+{
+    double angle;
+    if (a == 0.0 && b == 0.0) return total;
+    angle = k * theta;
+    if (a != 0.0) total = total + a * sin(angle + phase);
+    if (b != 0.0) total = total + load * b * sin(angle + load_phase);
+    return total;
+}
+
+double cd_shaft_order_ripple_torque(const CDExtra *x, double theta, double ratio_out,
+                                    double tau_out)
+{
+    double load = fabs(tau_out) / CD_T_REF, total = 0.0;
+    /* model_core.design.SHAFT_ORDER_RIPPLES: k = k_in + k_out r */
+    total = order_ripple(x->ripple_2x, x->ripple_2x_phase, x->ripple_2x_load,
+                         x->ripple_2x_load_phase, 2.0 + 0.0 * ratio_out, theta, load, total);
+    total = order_ripple(x->ripple_out_1x, x->ripple_out_1x_phase, x->ripple_out_1x_load,
+                         x->ripple_out_1x_load_phase, 0.0 + 1.0 * ratio_out, theta, load, total);
+    total = order_ripple(x->ripple_out_2x, x->ripple_out_2x_phase, x->ripple_out_2x_load,
+                         x->ripple_out_2x_load_phase, 0.0 + 2.0 * ratio_out, theta, load, total);
+    return total;
+}
+
 double cd_discovered_torque(const CDTerm *terms, int n, double w, double tau_out)
 {
     double total = 0.0;

@@ -53,9 +53,15 @@ typedef struct {
     double ripple_1x_load, ripple_1x_load_phase, ripple_roller_load, ripple_roller_load_phase;
     /* the warm-up per 10 K: c (T_oil - T_ref)/10 K loss_in */
     double thermal_loss_per_10K, thermal_T_ref;
+    /* the mesh ripple at 2x the driving shaft, 1x and 2x the driven shaft
+     * (ExtraPhysics.shaft_order_ripple_torque): amplitude, phase, load-scaled amplitude at
+     * 10 N*m of |tau_out|, its phase */
+    double ripple_2x, ripple_2x_phase, ripple_2x_load, ripple_2x_load_phase;
+    double ripple_out_1x, ripple_out_1x_phase, ripple_out_1x_load, ripple_out_1x_load_phase;
+    double ripple_out_2x, ripple_out_2x_phase, ripple_out_2x_load, ripple_out_2x_load_phase;
 } CDExtra;
 
-#define CD_N_EXTRA 20
+#define CD_N_EXTRA 32
 
 /* A discovered loss term (design [[extra.discovered]], model_core.discovered): the torque
  * coefficient * sgn(w) (|w|/300 rad/s)^speed_exponent (|tau_out|/10 N*m)^load_exponent. */
@@ -106,6 +112,11 @@ double cd_run_in_torque(const CDExtra *x, double distance, double loss_in);
 
 /* ExtraPhysics.load_ripple_torque: the ripple whose amplitude grows with |tau_out| (N*m). */
 double cd_load_ripple_torque(const CDExtra *x, double theta, double order, double tau_out);
+
+/* ExtraPhysics.shaft_order_ripple_torque: the ripple at 2x the driving shaft and at 1x and 2x
+ * the driven shaft (angle ratio_out * theta), each a + b |tau_out|/10 N*m (N*m). */
+double cd_shaft_order_ripple_torque(const CDExtra *x, double theta, double ratio_out,
+                                    double tau_out);
 
 /* model_core.discovered.discovered_torque: the sum of n terms at driving speed w (rad/s) and
  * load torque tau_out (N*m), N*m. */

@@ -9,7 +9,8 @@
  * cyclo_fmu/native/build.py):
  *   Real     0 w_in, 1 tau_out, 2 alpha_in, 3 T_oil_in (inputs)
  *            10..29 outputs, in the order of OUT_NAMES
- *            30..47 extra physics parameters, in the order of CDExtra
+ *            30..49 extra physics parameters, in the order of CDExtra (its first 20)
+ *            60..71 its fields 20..31 (the ripple at 2x, output 1x and 2x)
  *            50 J_out, 51 alpha_ref (parameters of the output inertia)
  *            52 PL_mesh (output: the calibrated mesh loss; out[O_PL_MESH])
  *            53 T_oil, 54 Q_ambient (outputs of the temperature)
@@ -44,6 +45,8 @@
 #define N_OUT 20               /* outputs at value references 10..29 */
 #define VR_PL_MESH 52          /* one more output, beyond them */
 #define VR_EXTRA0 30
+#define N_EXTRA_FIRST 20       /* CDExtra's fields at 30..49; the others from VR_EXTRA1 */
+#define VR_EXTRA1 60
 #define VR_J_OUT 50
 #define VR_ALPHA_REF 51
 /* rad/s^2, default of alpha_ref (CycloidDrive.ALPHA_REF: 2 pi 25, the regulator's ramp on the
@@ -69,12 +72,25 @@ static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "ripple_1x_phase", "ripple_roller", "ripple_roller_phase", "thermal_loss_change",
     "thermal_tau", "drag_exponent", "stribeck_exponent", "run_in_change", "run_in_distance",
     "ripple_1x_load", "ripple_1x_load_phase", "ripple_roller_load", "ripple_roller_load_phase",
-    "thermal_loss_per_10K", "thermal_T_ref"};
+    "thermal_loss_per_10K", "thermal_T_ref", "ripple_2x", "ripple_2x_phase", "ripple_2x_load",
+    "ripple_2x_load_phase", "ripple_out_1x", "ripple_out_1x_phase", "ripple_out_1x_load",
+    "ripple_out_1x_load_phase", "ripple_out_2x", "ripple_out_2x_phase", "ripple_out_2x_load",
+    "ripple_out_2x_load_phase"};
+
+/* index into CDExtra of a value reference, or -1 */
+static int extra_index(fmi2ValueReference r)
+{
+    if (r >= VR_EXTRA0 && r < VR_EXTRA0 + N_EXTRA_FIRST) return (int)(r - VR_EXTRA0);
+    if (r >= VR_EXTRA1 && r < VR_EXTRA1 + (CD_N_EXTRA - N_EXTRA_FIRST))
+        return N_EXTRA_FIRST + (int)(r - VR_EXTRA1);
+    return -1;
+}
 
 #define STATE_MAGIC 0x43444e53u   /* "CDNS" */
-#define STATE_VERSION 6u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
+#define STATE_VERSION 7u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
                               * load ripple, CDState.distance; 5: the oil temperature;
-                              * 6: CDExtra's warm-up per 10 K */
+                              * 6: CDExtra's warm-up per 10 K; 7: the ripple at 2x, output
+                              * 1x and 2x */
 
 /* Everything that defines the instance's behaviour from here on: inputs, parameters,
  * outputs and the dynamic state. Plain data: copied and serialised as it is. */
@@ -153,7 +169,12 @@ static double *extra_field(CDExtra *x, int i)
     f[12] = &x->run_in_change; f[13] = &x->run_in_distance; f[14] = &x->ripple_1x_load;
     f[15] = &x->ripple_1x_load_phase; f[16] = &x->ripple_roller_load;
     f[17] = &x->ripple_roller_load_phase; f[18] = &x->thermal_loss_per_10K;
-    f[19] = &x->thermal_T_ref;
+    f[19] = &x->thermal_T_ref; f[20] = &x->ripple_2x; f[21] = &x->ripple_2x_phase;
+    f[22] = &x->ripple_2x_load; f[23] = &x->ripple_2x_load_phase; f[24] = &x->ripple_out_1x;
+    f[25] = &x->ripple_out_1x_phase; f[26] = &x->ripple_out_1x_load;
+    f[27] = &x->ripple_out_1x_load_phase; f[28] = &x->ripple_out_2x;
+    f[29] = &x->ripple_out_2x_phase; f[30] = &x->ripple_out_2x_load;
+    f[31] = &x->ripple_out_2x_load_phase;
     return f[i];
 }
 
@@ -163,6 +184,7 @@ static const char *extra_problem(int i, double v)
     if (!isfinite(v)) return "must be a finite number";
     switch (i) {
     case 0: case 1: case 3:
+    case 20: case 22: case 24: case 26: case 28: case 30:   /* the ripples' amplitudes */
         return v < 0 ? "must not be negative" : NULL;
     case 2: case 9:
         return v > 0 ? NULL : "must be positive";
@@ -182,6 +204,13 @@ static const char *extra_problem(int i, double v)
     default:
         return NULL;
     }
+}
+
+/* any ripple at 2x, output 1x or 2x (CycloidDrive._shaft_ripple) */
+static int shaft_ripple(const CDExtra *x)
+{
+    return x->ripple_2x != 0 || x->ripple_2x_load != 0 || x->ripple_out_1x != 0
+           || x->ripple_out_1x_load != 0 || x->ripple_out_2x != 0 || x->ripple_out_2x_load != 0;
 }
 
 /* CycloidDrive._gear_torque (map): the driving-shaft torque of the gear at a load torque */
@@ -247,7 +276,8 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     int dynamic = s->extra.input_inertia != 0 || s->extra.ripple_1x != 0
                   || s->extra.ripple_roller != 0 || s->extra.thermal_loss_change != 0
                   || s->extra.run_in_change != 0 || s->extra.ripple_1x_load != 0
-                  || s->extra.ripple_roller_load != 0 || s->extra.thermal_loss_per_10K != 0;
+                  || s->extra.ripple_roller_load != 0 || s->extra.thermal_loss_per_10K != 0
+                  || shaft_ripple(&s->extra);
     /* CycloidDrive._temperature: the input, or the heat balance stepped with the loss at the
      * step's start held over the step: the step's inputs at the temperature of its start
      * (CycloidDrive._loss_at_start: evaluated without a step of the dynamic terms) */
@@ -324,6 +354,12 @@ static void evaluate(Instance *c, double t, double dt, int commit)
         p_stored = cd_dynamic_torque(&s->extra, alpha, theta, m->order, 0.0, 0.0);
         if (s->extra.ripple_1x_load != 0 || s->extra.ripple_roller_load != 0) {
             double ripple = cd_load_ripple_torque(&s->extra, theta, m->order, tau_out);
+            dyn = dyn + ripple;
+            p_stored = p_stored + ripple;
+        }
+        if (shaft_ripple(&s->extra)) {   /* zero-mean at a held load: stored */
+            double ripple = cd_shaft_order_ripple_torque(&s->extra, theta, m->ratio_out,
+                                                         tau_out);
             dyn = dyn + ripple;
             p_stored = p_stored + ripple;
         }
@@ -436,8 +472,8 @@ FMI2_Export fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference 
             }
             value[i] = c->s.out[r >= VR_PL_MESH ? O_PL_MESH + (int)(r - VR_PL_MESH)
                                                 : (int)(r - VR_OUT0)];
-        } else if (r >= VR_EXTRA0 && r < VR_EXTRA0 + CD_N_EXTRA)
-            value[i] = *extra_field(&c->s.extra, (int)(r - VR_EXTRA0));
+        } else if ((k = extra_index(r)) >= 0)
+            value[i] = *extra_field(&c->s.extra, k);
         else if ((k = const_index_real(r)) >= 0) value[i] = CD_CONST_REAL[k].value;
         else return bad_vr(c, "fmi2GetReal", r);
     }
@@ -564,8 +600,8 @@ FMI2_Export fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference 
             } else {
                 *dst = v;
             }
-        } else if (r >= VR_EXTRA0 && r < VR_EXTRA0 + CD_N_EXTRA) {
-            int k = (int)(r - VR_EXTRA0);
+        } else if (extra_index(r) >= 0) {
+            int k = extra_index(r);
             const char *why = extra_problem(k, v);
             if (!parameters_settable(c)) {
                 logmsg(c, fmi2Error, "%s is a fixed parameter: set it before "

@@ -144,7 +144,18 @@ LATE_DESIGN_PARAMETERS = [
      "losses per 10 K of the grease temperature T_oil from thermal_T_ref: the losses, held at "
      "T_oil_start (one warm-up), times (1 + c (T_oil - thermal_T_ref)/10 K)", Real),
     ("thermal_T_ref", "extra", "thermal_T_ref", "K", "temperature the per-10 K loss change is "
-     "referred to (a diagnosis: the recording's first temperature)", Real)]
+     "referred to (a diagnosis: the recording's first temperature)", Real)] + [
+    # the mesh ripple at 2x the driving shaft and 1x, 2x the driven shaft
+    # (model_core.design.ExtraPhysics.shaft_order_ripple_torque)
+    (prefix + sfx, "extra", prefix + sfx, unit, f"{what}: {text}", Real)
+    for prefix, what in (("ripple_2x", "ripple at 2x the driving speed"),
+                         ("ripple_out_1x", "ripple at 1x the driven shaft's speed (its angle "
+                                           "theta w_out/w_in)"),
+                         ("ripple_out_2x", "ripple at 2x the driven shaft's speed"))
+    for sfx, unit, text in (("", "N.m", "amplitude (>= 0)"), ("_phase", "rad", "phase"),
+                            ("_load", "N.m", "load-scaled amplitude at 10 N.m of |tau_out|, "
+                             "in proportion (>= 0)"),
+                            ("_load_phase", "rad", "phase of the load-scaled part"))]
 ALL_DESIGN_PARAMETERS = DESIGN_PARAMETERS + LATE_DESIGN_PARAMETERS
 #: design parameters of the heat balance only (run-time in both FMUs; not in the loss map)
 THERMAL_PARAMETERS = ("ambient_temperature", "housing_heat_capacity", "housing_heat_transfer",
@@ -184,7 +195,9 @@ PARAMETER_LIMITS = dict(
     nu_100=(0.0, None),
     **{n: (0.0, None) for n in ("e", "d_v1", "d_o1", "b1", "d_v2", "d_o2", "b2", "d_m2", "D_cz",
                                 "D_p", "d_p", "delta_z", "nu", "rho_oil", "pin_roughness",
-                                "drag_torque", "stribeck_torque", "input_inertia")},
+                                "drag_torque", "stribeck_torque", "input_inertia",
+                                "ripple_2x", "ripple_2x_load", "ripple_out_1x",
+                                "ripple_out_1x_load", "ripple_out_2x", "ripple_out_2x_load")},
     # must be positive: FMI's min is inclusive, so the smallest positive normal double
     **{n: (sys.float_info.min, None) for n in ("stribeck_speed", "thermal_tau")},
     mu_boundary=(0.0, 1.0), mu_rolling=(0.0, 1.0), thermal_loss_change=(-1.0, None),
@@ -543,13 +556,14 @@ class CycloidDrive(UnitSlave):
             ex = self._design.extra
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
             self._discovered = bool(ex.discovered)
-            self._dynamic_extra = bool(ex.input_inertia or ex.ripple_1x or ex.ripple_roller
-                                       or ex.run_in_change or ex.ripple_1x_load
-                                       or ex.ripple_roller_load
+            self._dynamic_extra = bool(ex.input_inertia or ex.has_ripple
+                                       or ex.run_in_change
                                        or ex.thermal_loss_change
                                        or ex.thermal_loss_per_10K)
             unit = core.shaft_speeds(self._mode, 1.0, self._design.z1)
             self._ratio_out = float(unit[b])
+            self._shaft_ripple = any(getattr(ex, f) or getattr(ex, f + "_load")
+                                     for f, _, _ in core.design.SHAFT_ORDER_RIPPLES)
             # roller pass: z1 per turn of the ring relative to the carrier, per driving turn
             self._order = self._design.z1 * abs(float(unit["1"] - unit["S"])) / abs(float(unit[a]))
         except (core.CycloidInputError, TypeError, ValueError) as exc:
@@ -745,6 +759,10 @@ class CycloidDrive(UnitSlave):
         self._inertia_torque = ex.input_inertia * alpha
         if ex.ripple_1x_load or ex.ripple_roller_load:   # zero-mean at a held load: stored
             ripple = float(ex.load_ripple_torque(self._theta, self._order, tau_out))
+            torque = torque + ripple
+            stored = stored + ripple
+        if self._shaft_ripple:      # 2x, output 1x and 2x: zero-mean at a held load: stored
+            ripple = float(ex.shaft_order_ripple_torque(self._theta, self._ratio_out, tau_out))
             torque = torque + ripple
             stored = stored + ripple
         self.P_stored = stored * w_in
