@@ -723,13 +723,14 @@ def cmd_diagnose(args) -> int:
     design = _load_design(args.design, args.profile)
     if args.mode.strip().lower() != "auto":
         parse_mode(args.mode)
+    bandwidth = _bandwidth(args.bandwidth)
     if args.out:
         _output_dir("out", args.out, create=False)
     try:
         rec, mode, checks = load_recording(args.recording, args.mode, design,
                                            columns=args.columns, units=args.units)
         d, result = diagnose_recording(rec, mode, checks, design, progress=True,
-                                       calibrate=args.calibrate)
+                                       calibrate=args.calibrate, bandwidth=bandwidth)
     except (RecordingError, DiagnosisError) as exc:
         raise _recording_error(args.recording, exc) from None
     if args.verify:
@@ -907,6 +908,23 @@ def cmd_diagnose_batch(args) -> int:
     return 0
 
 
+#: [Hz] the largest transducer bandwidth ``diagnose --bandwidth`` takes: 1 MHz, far above any
+#: torque transducer (strain-gauge shafts reach a few kHz); a larger value is a unit mistake
+MAX_BANDWIDTH_HZ = 1e6
+
+
+def _bandwidth(value):
+    """``--bandwidth`` checked [Hz]: None (the Diagnoser's default) or a positive finite
+    frequency up to MAX_BANDWIDTH_HZ."""
+    import math
+    if value is None:
+        return None
+    if not math.isfinite(value) or value <= 0 or value > MAX_BANDWIDTH_HZ:
+        raise CycloidInputError("bandwidth", value, "the transducer bandwidth must be a "
+                                f"frequency in Hz above 0 and at most {MAX_BANDWIDTH_HZ:g}")
+    return float(value)
+
+
 def _calibrate_options(p):
     """``--no-calibrate`` (and ``--calibrate``, the default, kept for scripts of earlier
     versions)."""
@@ -1070,6 +1088,12 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--design", help="design file (TOML) or preset name (mackic-rig)")
     dg.add_argument("--out", help="folder for plots, diagnosis.json, design_updated.toml")
     _calibrate_options(dg)
+    dg.add_argument("--bandwidth", type=float, default=None, metavar="HZ",
+                    help="the input torque transducer's bandwidth [Hz] (its data sheet's -3 dB "
+                    "frequency with the amplifier's filter): the model's torque is filtered by "
+                    "a first-order low-pass of this corner before it is compared; default 1000 "
+                    "(an assumption: a strain-gauge shaft transducer with a 1 kHz amplifier "
+                    "filter)")
     dg.add_argument("--columns", help="column mapping, e.g. 'time_s=t,torque_in_Nm=T22'")
     dg.add_argument("--units", help="units of columns, overriding anything detected, e.g. "
                     "'torque_in_Nm=N*mm,time_s=ms' ('-N*m' also negates the column)")

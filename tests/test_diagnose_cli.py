@@ -76,3 +76,30 @@ def test_a_mismatch_outside_the_library_is_not_called_explained(tmp_path):
         in lines, out.stdout
     assert any(s.startswith("unexplained: a mismatch of") for s in lines), out.stdout
     assert "within its noise" not in out.stdout
+
+
+@pytest.mark.parametrize("value", ["0", "-80", "nan", "inf", "2e6"])
+def test_a_transducer_bandwidth_that_is_no_frequency_is_one_line(tmp_path, value):
+    """``diagnose --bandwidth``: zero, negative, not finite or beyond 1 MHz (a unit mistake)
+    ends in one line naming the option and its value, exit 2, no folder written."""
+    rec = tmp_path / "rec.csv"
+    assert run("synth", "--effect", "none", "--size", "tiny", "--out", str(rec)).returncode == 0
+    out = tmp_path / "d"
+    r = run("diagnose", str(rec), "--mode", "S1", "--bandwidth", value, "--out", str(out))
+    assert r.returncode == 2, r.stderr
+    assert "bandwidth" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_the_transducer_bandwidth_given_is_the_one_the_model_is_filtered_with(tmp_path):
+    """``--bandwidth 80``: the JSON says which bandwidth the model's torque was filtered with
+    (80 Hz given, 1000 Hz the stated default, with which the clean recording names nothing)."""
+    rec = tmp_path / "rec.csv"
+    assert run("synth", "--effect", "none", "--size", "tiny", "--out", str(rec)).returncode == 0
+    for args, hz in (([], 1000.0), (["--bandwidth", "80"], 80.0)):
+        r = run("diagnose", str(rec), "--mode", "S1", "--json", *args)
+        assert r.returncode == 0, r.stderr
+        res = json.loads(r.stdout)
+        assert res["transducer_bandwidth_Hz"] == hz
+        if not args:
+            assert res["effects"] == [] and res["unexplained"]["present"] is False

@@ -56,13 +56,16 @@ def calibration_report(design, d) -> dict | None:
     return out
 
 
-def diagnose_recording(rec, mode, checks, design, progress=False, calibrate=True):
+def diagnose_recording(rec, mode, checks, design, progress=False, calibrate=True,
+                       bandwidth=None):
     """Diagnose a loaded recording: ``(diagnosis, result dict)`` with the JSON contract's
     keys (the diagnosis's own, ``mode``, ``checks``, ``read_notes``, ``excluded``, and
     ``calibration_fit`` when a calibration effect is named). ``calibrate`` False leaves the
-    calibration effects out of the candidates (``diagnose --no-calibrate``)."""
+    calibration effects out of the candidates (``diagnose --no-calibrate``); ``bandwidth``
+    [Hz]: the input torque transducer's (None: the Diagnoser's default)."""
     from cyclo_fmu.diagnosis import Diagnoser
-    est = Diagnoser(design, mode, progress=progress, calibrate=calibrate).fit(rec)
+    kw = {} if bandwidth is None else {"bandwidth": float(bandwidth)}
+    est = Diagnoser(design, mode, progress=progress, calibrate=calibrate, **kw).fit(rec)
     d = est.diagnosis_
     d.updated = est.updated_design()      # (design, notes), checked against the recording
     result = d.to_json()
@@ -70,6 +73,7 @@ def diagnose_recording(rec, mode, checks, design, progress=False, calibrate=True
     if fit is not None:
         result["calibration_fit"] = fit
     result["mode"] = mode
+    result["transducer_bandwidth_Hz"] = float(est.bandwidth)
     result["checks"] = list(checks)
     result["read_notes"] = list(rec.notes)
     excluded = [{"reason": e.reason, "count": e.count, "unit": "samples",
