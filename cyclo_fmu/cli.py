@@ -916,7 +916,6 @@ MAX_BANDWIDTH_HZ = 1e6
 def _bandwidth(value):
     """``--bandwidth`` checked [Hz]: None (the Diagnoser's default) or a positive finite
     frequency up to MAX_BANDWIDTH_HZ."""
-    import math
     if value is None:
         return None
     if not math.isfinite(value) or value <= 0 or value > MAX_BANDWIDTH_HZ:

@@ -31,6 +31,28 @@ OUT = ("T_oil", "Q_ambient", "P_loss", "tau_in", "tau_housing", "eta", "eta0", "
 
 
 
+class _HeatLedger:
+    """The heat balance's energy over FMU steps: the loss of each step (held at its value at
+    the step's start, as the FMU integrates it) against the heat stored in the housing and
+    the heat to the ambient (trapezoid of Q_ambient), from the first step's T_oil on."""
+
+    def __init__(self):
+        self.loss = self.to_ambient = 0.0
+        self.T_first = self.P_start = self.Q_prev = None
+
+    def add(self, b, h):
+        if self.P_start is not None:
+            self.loss += self.P_start * h
+            self.to_ambient += 0.5 * (self.Q_prev + b["Q_ambient"]) * h
+        else:
+            self.T_first = b["T_oil"]
+        self.P_start, self.Q_prev = b["P_loss"], b["Q_ambient"]
+
+    def heat(self, capacity, T_last):
+        """[J] heat stored (``capacity`` [J/K]) plus heat to the ambient."""
+        return capacity * (T_last - self.T_first) + self.to_ambient
+
+
 def _oil_trajectory(k):
     """Step ``k`` of a measured-looking trajectory: grease temperature 12 to 85 degC and back
     [K], across every node of the map and between them; driving speed [rad/s] and load
@@ -301,7 +323,7 @@ def test_a_warm_up_in_time_is_counted_once(preset_fmus):
     n, p = Inst(native, **params), Inst(python, **params)
     held = Inst(python, use_T_oil_input=True, T_oil_in=T0)   # the model at T_oil_start
     R = thermal.housing_resistance(DriveDesign())
-    h, t, loss, q, P_start, Q_prev = 10.0, 0.0, 0.0, 0.0, None, None
+    h, t, ledger = 10.0, 0.0, _HeatLedger()
     for k in range(120):
         w, tau_out = 260.0 + 30.0 * math.sin(0.07 * k), -6.0 - 2.0 * math.sin(0.13 * k)
         a, b = advance(n, h, w_in=w, tau_out=tau_out), advance(p, h, w_in=w, tau_out=tau_out)
@@ -314,16 +336,11 @@ def test_a_warm_up_in_time_is_counted_once(preset_fmus):
         assert b["tau_in"] == pytest.approx(m["tau_in"] + warm, rel=1e-12, abs=1e-14), k
         for key in ("PL1", "PL3", "PL6", "PL_support", "PL_churn", "PL_mesh"):
             assert b[key] == m[key], (k, key)       # the gear's losses at T_oil_start
-        if P_start is not None:
-            loss += P_start * h
-            q += 0.5 * (Q_prev + b["Q_ambient"]) * h
-        else:
-            T_first = b["T_oil"]
-        P_start, Q_prev = b["P_loss"], b["Q_ambient"]
+        ledger.add(b, h)
         assert b["Q_ambient"] == pytest.approx((b["T_oil"] - 298.15) / R, rel=1e-12)
     assert b["T_oil"] > T0 + 5                      # the heat balance warmed the grease
     # energy: the loss over the steps = heat stored + heat to the ambient (trapezoid)
-    assert 150.0 * (b["T_oil"] - T_first) + q == pytest.approx(loss, rel=5e-3)
+    assert ledger.heat(150.0, b["T_oil"]) == pytest.approx(ledger.loss, rel=5e-3)
     for x in (n, p, held):
         x.close()
 
@@ -373,21 +390,16 @@ def test_a_warm_up_per_10K_follows_T_oil(preset_fmus):
                   **extra)
     n, p = Inst(native, **params), Inst(python, **params)
     R = thermal.housing_resistance(DriveDesign())
-    h, loss, q, P_start, Q_prev = 20.0, 0.0, 0.0, None, None
+    h, ledger = 20.0, _HeatLedger()
     for k in range(120):
         w, tau_out = 260.0 + 30.0 * math.sin(0.07 * k), -6.0 - 2.0 * math.sin(0.13 * k)
         a, b = advance(n, h, w_in=w, tau_out=tau_out), advance(p, h, w_in=w, tau_out=tau_out)
         for key in OUT:
             assert a[key] == pytest.approx(b[key], rel=RTOL, abs=ATOL), (k, key)
-        if P_start is not None:
-            loss += P_start * h
-            q += 0.5 * (Q_prev + b["Q_ambient"]) * h
-        else:
-            T_first = b["T_oil"]
-        P_start, Q_prev = b["P_loss"], b["Q_ambient"]
+        ledger.add(b, h)
         assert b["Q_ambient"] == pytest.approx((b["T_oil"] - 298.15) / R, rel=1e-12)
     assert b["T_oil"] > T_ref + 5                   # warmed past the reference: losses up
-    assert 300.0 * (b["T_oil"] - T_first) + q == pytest.approx(loss, rel=5e-3)
+    assert ledger.heat(300.0, b["T_oil"]) == pytest.approx(ledger.loss, rel=5e-3)
     for x in (n, p):
         x.close()
 

@@ -42,7 +42,7 @@ from . import residual as R
 from .problem import MIN_LOAD, build_problem
 from .remainder import PEAK_MIN_AMPLITUDE_NM, remainder
 from .replay import Replay, block_means, first_order, replay
-from .result import Diagnosis, DiagnosisError, report, zeta_d
+from .result import Diagnosis, DiagnosisError, headline, report, zeta_d
 from .select_effects import MIN_EXPLAINED_NM, select
 from .selection import DELTA_BIC
 from .twins import FALSE_ALARM, N_TWINS, judge
@@ -434,15 +434,9 @@ class Diagnoser:
         d.effects = [e for e in d.effects if e["id"] not in gone]
         if "friction_miscalibrated" in gone:
             d.calibration = {}
-        best = d.effects[0] if d.effects else None
-        d.effect = best["id"] if best else "none"
-        d.effect_description = EFFECTS[d.effect].description
-        d.parameters = ({**d.calibration, **best["parameters"]} if best and d.calibration
-                        and d.effect != "friction_miscalibrated"
-                        else dict(best["parameters"]) if best else {})
-        d.indistinguishable_from = best.get("indistinguishable_from", []) if best else []
-        if not d.indistinguishable_from:
-            d.suggested_test = ""
+        close = d.effects[0].get("indistinguishable_from", []) if d.effects else []
+        (d.effect, d.effect_description, d.parameters, d.indistinguishable_from,
+         d.suggested_test) = headline(d.effects, d.calibration, close)
         d.withdrawn = list(d.withdrawn) + [e for e in gone if e not in d.withdrawn]
         change = prop.get("library_change") or {}
         prop["library_change"] = {k: v for k, v in change.items() if k not in gone}

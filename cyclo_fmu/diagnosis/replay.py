@@ -47,12 +47,18 @@ LOAD_SCALE_STEP = 0.1
 SPEED_SMOOTHING = 0.02
 
 
+def _pole(bandwidth, dt):
+    """The sampled first-order low pass's pole a = exp(-2 pi f_c dt) (``bandwidth`` f_c Hz,
+    sample interval ``dt`` s): y[k] = a y[k-1] + (1 - a) x[k]."""
+    return math.exp(-2 * math.pi * bandwidth * dt)
+
+
 def first_order(x, dt, bandwidth):
     """A first-order low pass (the transducer's bandwidth, Hz) along axis 0, started in steady
     state (``scipy.signal.lfilter``, see ``_linear_filter``)."""
     if bandwidth <= 0:
         return x
-    a = math.exp(-2 * math.pi * bandwidth * dt)
+    a = _pole(bandwidth, dt)
     zi = a * x[:1]
     return _linear_filter()(np.atleast_1d([1 - a]), np.atleast_1d([1, -a]), x, 0, zi)[0]
 
@@ -65,7 +71,7 @@ def transducer_delay(bandwidth, dt):
     sampled at 200 Hz: 2e-14 s, not 0.16 ms)."""
     if bandwidth <= 0:
         return 0.0
-    a = math.exp(-2 * math.pi * bandwidth * dt)
+    a = _pole(bandwidth, dt)
     return a * dt / (1 - a)
 
 

@@ -236,6 +236,23 @@ def _notes(sel, rem, P, effects, close_first):
     return notes
 
 
+
+def headline(effects, calibration, close) -> tuple:
+    """A diagnosis's headline from its named ``effects`` (largest first) and ``calibration``
+    (the friction level, {} if none): ``(effect, its description, parameters, look-alikes,
+    suggested test)``. The parameters are the first effect's with the calibration beside them
+    (the friction level's own when it is the headline); ``close`` are the headline's
+    look-alikes, and the suggested test is the separating runs of it and of them (none
+    without look-alikes)."""
+    best = effects[0] if effects else None
+    eid = best["id"] if best else "none"
+    params = dict(best["parameters"]) if best else {}
+    if calibration and eid != "friction_miscalibrated":
+        params = {**calibration, **params}
+    test = ("; ".join(EFFECTS[c].separating_run for c in [eid] + list(close)) if close
+            else "")
+    return eid, EFFECTS[eid].description, params, list(close), test
+
 def report(rec, first, sel, J, rem, P, rel1, first_P, cal_offsets=None) -> Diagnosis:
     """Stage ``report``: ``first`` is the first analysis's selection (at the design's own
     friction level and calibration), ``sel``/``P`` the final one's; ``cal_offsets`` the
@@ -257,11 +274,7 @@ def report(rec, first, sel, J, rem, P, rel1, first_P, cal_offsets=None) -> Diagn
     un = rem.unexplained
     if not effects and calibration and not (rem.friction_doubted and un["present"]):
         effects = [cal_entry]
-    best = effects[0] if effects else None
-    eid = best["id"] if best else "none"
-    params = dict(best["parameters"]) if best else {}
-    if calibration and eid != "friction_miscalibrated":
-        params = {**calibration, **params}
+    eid = effects[0]["id"] if effects else "none"
     # look-alikes where the claims were made: at the first linearisation when the calibration
     # was re-linearised (there the forced calibration terms carry only the last correction)
     close = (lookalikes(first.prob, first.S, first.opts) if cal_offsets and first is not sel
@@ -303,15 +316,15 @@ def report(rec, first, sel, J, rem, P, rel1, first_P, cal_offsets=None) -> Diagn
                      P.rp.T_model + fitted, P.m)
     notes = _notes(sel, rem, P, effects, close_first)
     un.pop("_rejected", None)
+    eid, description, params, close_first, test = headline(effects, calibration, close_first)
     return Diagnosis(
         effects=effects, calibration=calibration, unexplained=un, effect=eid,
-        effect_description=EFFECTS[eid].description, parameters=params,
+        effect_description=description, parameters=params,
         evidence=evidence(prob, S, sel.opts), located=located,
         rmse_before_Nm=base0.cv_rmse,
         rmse_after_Nm=S.cv_rmse if eid != "none" or S.terms else base0.cv_rmse,
         zeta_d_before=z_before, zeta_d_after=z_after, indistinguishable_from=close_first,
-        suggested_test="; ".join(EFFECTS[c].separating_run for c in [eid] + close_first)
-        if close_first else "",
+        suggested_test=test,
         whiteness_before=R.ljung_box_p(y_before), whiteness_after=R.ljung_box_p(y_after),
         excluded_blocks=sel.n_spikes, withdrawn=rem.withdrawn, unstable=sel.unstable,
         notes=notes, temperature_form=temp_form,
