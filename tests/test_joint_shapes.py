@@ -41,3 +41,15 @@ def test_an_offset_beside_a_stribeck_friction_is_named_at_both_shapes():
     # the hidden decay is Tustin's exponential (delta 1) at 30 rad/s, both on the grid
     assert st["w_s"]["value"] == 30.0 and st["delta"]["value"] == 1.0
     assert not d.unexplained["present"], d.unexplained["statement"]
+
+
+def test_a_coulomb_plus_viscous_drag_is_the_drag_alone():
+    """The same joint re-choice lets a second effect follow what one effect's single shape
+    misses. A lip seal's Coulomb drag plus a viscous drag, sgn(w) (1 + |w|/150 rad/s), is a
+    sum of two of the drag's own power laws (p = 0 and 1) with the same sign: the twins judge
+    every claim beside such a mix at any two shapes of the grid (``twins.mixes``), so a
+    Stribeck decay at 150 rad/s that bends the single power law is not named beside it
+    (batch 1's ``l03_coulomb_viscous_500``, 12 mN*m RMS, catman dialect)."""
+    d = Diagnoser(None, "S1").fit(_recording("l03_coulomb_viscous_500")).diagnosis_
+    assert [e["id"] for e in d.effects] == ["load_independent_loss"]
+    assert not d.unexplained["present"], d.unexplained["statement"]
