@@ -94,6 +94,7 @@ class GramProblem:
             self.c.append(Xw.T @ yf)
             self.yy.append(float(wf @ (yf * yf)))
             self.sw.append(float(wf.sum()))
+        self._sums = {}
         self.Gt, self.ct = sum(self.G), sum(self.c)
         self.yyt, self.swt = sum(self.yy), sum(self.sw)
         self.n = int(np.count_nonzero(w > 0))
@@ -104,14 +105,24 @@ class GramProblem:
             return np.zeros(0)
         return np.linalg.lstsq(G, c, rcond=1e-12)[0]
 
+    def _totals(self, fs):
+        """(G, c, yy, sw) summed over the folds ``fs``, once per set of folds (a selection
+        fits thousands of subsets on the same folds)."""
+        key = tuple(fs)
+        got = self._sums.get(key)
+        if got is None:
+            got = (sum(self.G[f] for f in fs), sum(self.c[f] for f in fs),
+                   sum(self.yy[f] for f in fs), sum(self.sw[f] for f in fs))
+            self._sums[key] = got
+        return got
+
     def fit(self, terms, folds=None, cv=True) -> Fit:
         """Fit a set of terms; ``folds``: restrict to these folds (stability), else all."""
         idx = np.array([i for t in terms for i in t.cols], int)
         fs = range(self.n_folds) if folds is None else list(folds)
-        G = sum(self.G[f] for f in fs)[np.ix_(idx, idx)] if len(idx) else np.zeros((0, 0))
-        c = sum(self.c[f] for f in fs)[idx] if len(idx) else np.zeros(0)
-        yy = sum(self.yy[f] for f in fs)
-        sw = sum(self.sw[f] for f in fs)
+        Gs, cs, yy, sw = self._totals(fs)
+        G = Gs[np.ix_(idx, idx)] if len(idx) else np.zeros((0, 0))
+        c = cs[idx] if len(idx) else np.zeros(0)
         b = self._solve(G, c)
         rss = max(yy - 2 * b @ c + b @ G @ b, 1e-300)
         k = len(idx) + sum(t.n_shape for t in terms)
@@ -187,10 +198,20 @@ def stepwise(problem: GramProblem, options: dict, min_explained: float, folds=No
         for eid, terms in options.items():
             if eid in cur.ids:
                 continue
+            here = None
             for term in terms:
                 f = problem.fit(cur.terms + (term,), folds, cv=False)
-                if f.admissible and (best is None or f.bic < best.bic):
-                    best = f
+                if f.admissible and (here is None or f.bic < here.bic):
+                    here = f
+            if here is None:
+                continue
+            # each candidate is judged with the shapes of the terms already in re-chosen
+            # beside it: a shape chosen alone may stand in for the newcomer (a Stribeck speed
+            # stretched over a zero offset in a forward-only plan), and the comparison is then
+            # between the wrong shape with and without the newcomer
+            here = _reshape(problem, here, options, folds, cv=False)
+            if best is None or here.bic < best.bic:
+                best = here
         if best is None:
             break
         if cv:
@@ -208,7 +229,11 @@ def stepwise(problem: GramProblem, options: dict, min_explained: float, folds=No
         for t in cur.terms:
             if t in forced:
                 continue
-            rest = problem.fit(tuple(x for x in cur.terms if x != t), folds, cv)
+            rest = problem.fit(tuple(x for x in cur.terms if x != t), folds, cv=False)
+            # the others at their best shapes without it (as a newcomer is judged)
+            rest = _reshape(problem, rest, options, folds, cv=False)
+            if cv:
+                rest = problem.fit(rest.terms, folds, cv=True)
             if rest.admissible and not ok(rest, cur):
                 cur = rest
                 path.append(("drop", t.effect, t.shape, cur.bic, cur.cv_rmse))

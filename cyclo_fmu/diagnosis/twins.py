@@ -281,19 +281,24 @@ def _neighbours(options, t) -> list:
 
 
 def mixes(prob, S, options) -> dict:
-    """{term of ``S``: terms of the same effect at the neighbouring shapes} where the effect
-    fits better as a mix of its own law at adjacent grid shapes with coefficients of the
-    same sign (a shape between the grid's values, or a sum of two such laws: a lip seal's
-    Coulomb drag plus a bearing's viscous drag, a warm-up of two time constants). Such a mix
-    is the named effect's own form, not physics outside the library: the claims are judged
-    beside it (``with_mixes``). Only effects of one linear parameter (the shaped ones)."""
+    """{term of ``S``: terms of the same effect at other shapes} where the effect fits better
+    as a mix of its own law with coefficients of the same sign: at the two grid shapes next to
+    its own (a shape between the grid's values), or at any one other shape of its grid (a sum
+    of two such laws: a lip seal's Coulomb drag plus a bearing's viscous drag, p = 0 and 1; a
+    warm-up of two time constants; two contacts' Stribeck decays). Such a mix is the named
+    effect's own form, not physics outside the library: the claims are judged beside it
+    (``with_mixes``). The same sign keeps it the effect's own: drag laws of one sign all grow
+    with speed and cannot make a Stribeck decay. Only effects of one linear parameter (the
+    shaped ones)."""
     out = {}
     for t in S.terms:
         if len(t.cols) != 1:
             continue
         nb = _neighbours(options, t)
+        other = [o for o in options.get(t.effect, ()) if o.shape is not None and o != t
+                 and len(o.cols) == 1] if t.shape is not None else []
         best = None
-        for sub in [(o,) for o in nb] + ([tuple(nb)] if len(nb) > 1 else []):
+        for sub in [(o,) for o in other] + ([tuple(nb)] if len(nb) > 1 else []):
             f = prob.fit(S.terms + sub, cv=False)
             a = f.of(t)[0][0]
             if all(a * f.of(o)[0][0] > 0 for o in sub) and (best is None or f.rss < best[0]):
