@@ -235,6 +235,14 @@ def test_the_back_driven_blocks_held_out_tell_a_gain_from_a_loss():
         prob = GramProblem(X, made + noise, np.ones(n))
         assert flow_evidence(prob, made + noise, back, (a,), (b,)) > 1000
         assert flow_evidence(prob, made + noise, np.zeros(n, bool), (a,), (b,)) == 0.0
+    # driven back only weakly (1 mN*m of input torque): the two readings differ there by
+    # 2 g |T_in| = 0.05 mN*m against 1 mN*m of noise, and the blocks cannot tell them apart
+    weak = T_in.copy()
+    weak[back] = -1e-3
+    Xw = np.column_stack([weak, np.abs(weak)])
+    y = 0.025 * weak + noise
+    prob = GramProblem(Xw, y, np.ones(n))
+    assert abs(flow_evidence(prob, y, back, (terms[0],), (terms[1],))) < 10
 
 
 @pytest.mark.parametrize("kind, values, named", [
