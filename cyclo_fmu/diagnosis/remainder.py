@@ -153,9 +153,11 @@ def withdraw(P, prob, S, with_g, tw, alpha, forced):
 
 
 def gain_alone(P, sel, S, tw, alpha):
-    """Forward driving only: would the (not selectable) gain error explain what is left?
+    """The gain error not selectable (no back-driven blocks, or they do not tell it from its
+    look-alike losses: ``select_effects.flow_told_apart``): would it explain what is left?
     (gain, held-out RMS it explains, whether structure is left beside it) or None."""
-    if sel.backdriven or "torque_sensor_gain" not in sel.opts or "torque_sensor_gain" in S.ids:
+    if ("torque_sensor_gain" in sel.selectable or "torque_sensor_gain" not in sel.opts
+            or "torque_sensor_gain" in S.ids):
         return None
     prob = sel.prob
     g = sel.opts["torque_sensor_gain"][0]

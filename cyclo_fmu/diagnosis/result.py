@@ -11,8 +11,7 @@ from model_core.effects import EFFECTS, LOOKALIKE_GROUPS, SENSOR_EFFECTS
 from . import residual as R
 from .replay import block_means, first_order
 from .problem import MIN_LOAD
-from .select_effects import fit_rms
-from .select_effects import backdriven
+from .select_effects import backdriven, fit_rms
 from .selection import DELTA_BIC
 
 
@@ -48,6 +47,9 @@ class Diagnosis:
     updated: tuple = field(default=None, repr=False)   # (design, notes) checked by the Diagnoser
     series: dict = field(default_factory=dict, repr=False)
     stages: dict = field(default_factory=dict, repr=False)   # the stages' typed results
+    #: the recording tells a transducer gain from its look-alike losses where the claims were
+    #: made (select_effects.flow_told_apart; the JSON's calibration_fit.back_driven)
+    back_driven: bool = None
 
     def to_json(self) -> dict:
         return {"effects": self.effects, "effect": self.effect,
@@ -227,9 +229,13 @@ def _notes(sel, rem, P, effects, close_first):
         notes.append(f"a transducer gain error of {100 * g:+.2g} % would explain "
                      f"{1e3 * e:.2f} mN*m of what is left"
                      + ("" if left else " and leave nothing structured")
-                     + "; not named: without back-driven segments a gain error cannot be "
-                     "told from a friction law other than the model's (back-driven "
-                     "segments separate them: the losses change side, a gain error does not)")
+                     + "; not named: " + ("its back-driven segments, held out, do not "
+                                          "prefer it to the losses it looks like, so"
+                                          if backdriven(P.blocks) else
+                                          "without back-driven segments")
+                     + " a gain error cannot be told from a friction law other than the "
+                     "model's (back-driven segments separate them: the losses change side, a "
+                     "gain error does not)")
     elif "torque_sensor_gain" in [e["id"] for e in effects] + close_first:
         notes.append("a transducer gain error and a friction level error look alike in "
                      "forward driving; back-driven segments separate them")
@@ -280,11 +286,14 @@ def report(rec, first, sel, J, rem, P, rel1, first_P, cal_offsets=None) -> Diagn
     close = (lookalikes(first.prob, first.S, first.opts) if cal_offsets and first is not sel
              else lookalikes(prob, S, sel.opts))
     close = {k: list(dict.fromkeys(e for e in v if e not in S.ids)) for k, v in close.items()}
-    if not backdriven(first_P.blocks):
-        # power flows one way only (select_effects.backdriven: too few back-driven blocks to
-        # tell a gain from losses): the look-alike groups are alike by physics, whatever the
-        # fit's BIC says (a difference there comes from transients and shapes, not from the
-        # flow reversal that separates them)
+    # where the claims were made: at the first linearisation when the calibration was
+    # re-linearised (the forced calibration terms carry only the last correction there)
+    told = first.backdriven if cal_offsets and first is not sel else sel.backdriven
+    if not told:
+        # the back-driven blocks (none, or, held out, without a preference:
+        # select_effects.flow_told_apart) do not tell a gain from losses: the look-alike groups
+        # are alike by physics, whatever the fit's BIC says (a difference there comes from
+        # transients and shapes, not from the flow reversal that separates them)
         for a, b in LOOKALIKE_GROUPS:
             for mine, other in ((a, b), (b, a)):
                 for t in S.terms:
@@ -324,7 +333,7 @@ def report(rec, first, sel, J, rem, P, rel1, first_P, cal_offsets=None) -> Diagn
         rmse_before_Nm=base0.cv_rmse,
         rmse_after_Nm=S.cv_rmse if eid != "none" or S.terms else base0.cv_rmse,
         zeta_d_before=z_before, zeta_d_after=z_after, indistinguishable_from=close_first,
-        suggested_test=test,
+        suggested_test=test, back_driven=told,
         whiteness_before=R.ljung_box_p(y_before), whiteness_after=R.ljung_box_p(y_after),
         excluded_blocks=sel.n_spikes, withdrawn=rem.withdrawn, unstable=sel.unstable,
         notes=notes, temperature_form=temp_form,

@@ -19,15 +19,14 @@ def calibration_report(design, d) -> dict | None:
     ``mesh_loss``, ``idle_loss_scale``, ``load_loss_scale``; re-linearised until its changes
     settle, ``diagnosis.estimator.CAL_RELINEARISE``), or None when it named none. ``ci95``: the
     95 % half-widths (noise only), ``rms_*``: the held-out RMS of the input torque before and
-    after the diagnosis, ``back_driven``: whether the recording has enough back-driven blocks
-    to tell k from a transducer gain (``select_effects.backdriven``), ``back_driven_share``:
+    after the diagnosis, ``back_driven``: whether the recording's back-driven blocks tell k
+    from a transducer gain (held out, ``select_effects.flow_told_apart``), ``back_driven_share``:
     the share of its moving blocks (above 1 rad/s, the calibration fit's rule) in which the
     input shaft gives power back."""
     from model_core.effects import CALIBRATION_FIELDS
     cal = {e["id"]: e for e in d.effects if e["id"] in CALIBRATION_FIELDS}
     if not cal:
         return None
-    from cyclo_fmu.diagnosis.select_effects import backdriven
     c = design.calibration
     out = {"mesh_loss_k": c.mesh_loss_k, "idle_loss_scale": c.idle_loss_scale,
            "load_loss_scale": c.load_loss_scale, "ci95": {},
@@ -44,7 +43,7 @@ def calibration_report(design, d) -> dict | None:
                                     f"{cal[eid]['separating_run']}")
     stages = getattr(d, "stages", None) or {}
     P = stages.get("replay")
-    out["back_driven"] = bool(backdriven(P.blocks)) if P is not None else None
+    out["back_driven"] = d.back_driven
     if P is not None:       # the share of moving blocks where the input shaft gives power back
         import numpy as np
         b = P.blocks
