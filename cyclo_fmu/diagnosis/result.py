@@ -194,6 +194,16 @@ def _entry(t, S, prob, P, first, rel1, base_rss, stability, check, offset=0.0):
     return entry, form
 
 
+def _one_direction(w_in) -> bool:
+    """The driving shaft never turns the other way: every block moving faster than the drag's
+    sign regularisation (``model_core.drag.DRAG_SIGN_SPEED``, 1 rad/s: below it the speed is
+    a standstill's noise) has the same sign."""
+    from model_core.drag import DRAG_SIGN_SPEED
+    w = np.asarray(w_in, float)
+    w = w[np.isfinite(w) & (np.abs(w) > DRAG_SIGN_SPEED)]
+    return bool(w.size) and bool(np.all(w > 0) or np.all(w < 0))
+
+
 def _notes(sel, rem, P, effects, close_first):
     notes = []
     b = rem.unexplained["bursts"]
@@ -221,6 +231,14 @@ def _notes(sel, rem, P, effects, close_first):
                      "same change over time (the recording does not return to its operating "
                      f"points late enough to tell a drift apart); to separate: "
                      f"{EFFECTS[c].separating_run}")
+    one_way = _one_direction(P.blocks["w_in"])
+    for e in effects:
+        if one_way and e["id"] in ("torque_sensor_offset", "torque_sensor_drift"):
+            notes.append(f"{e['id']}: the driving shaft turns one way only in this recording, "
+                         "so a loss of the same course (a drag that is constant, or follows "
+                         "time or temperature, and opposes the motion) reads the same; a "
+                         "transducer's zero keeps its sign when the motion reverses, a loss "
+                         "does not: runs in both directions separate them")
     for c in rem.unexplained.get("_rejected", []):
         notes.append(f"{c} proposed by the selection but not named: its statistic lies within "
                      "what twins of the recording show at the false-alarm rate")
