@@ -169,14 +169,16 @@ def _same_signal(a, b) -> bool:
     return type(a) is type(b) and a == b
 
 
-def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, counts=None):
+def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, counts=None,
+                refined=()):
     """Every candidate's block-mean columns (each shape's basis at sample level, through the
     transducer's low pass, block-averaged over the compared samples) and its Terms. ``reuse``:
     (signals, columns) of an earlier problem with the same samples, mask and block length (the
     re-linearised replay): a column whose basis read only signals equal to that problem's (the
     recording's own speed, angle, time, load) is that problem's column, the same numbers; the
     ones that read the model (its loss, sensitivities, torque) are computed again.
-    ``counts``: ``mask``'s compared samples per block (``masked_means``). Returns
+    ``counts``: ``mask``'s compared samples per block (``masked_means``). ``refined``: the
+    effects whose finer shape grid (``Effect.refine``) is scanned. Returns
     (cols, options, columns) with columns {(effect, shape): (signals read, column)}."""
     cols, options, columns = [], {}, {}
     sig = _Reads(P_sig)
@@ -197,7 +199,7 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, c
         if not loaded and eid in _DRIFT_LOADED:
             continue
         terms = []
-        for shape in eff.shapes(P_sig):
+        for shape in eff.shapes(P_sig, eid in refined):
             if shape is None and eff.shape and not (eff.temperature_form
                                                     and P_sig.get("temperature") is not None):
                 # Effect.shapes' fallback when its filter keeps no shape of the grid (a run-in
@@ -220,8 +222,7 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, c
             terms.append(Term(eid, shape, tuple(range(k0, k0 + B.shape[1])),
                               tuple(p.name for p in par), tuple(p.unit for p in par),
                               tuple(p.lower for p in par), tuple(p.upper for p in par),
-                              len(eff.shape_names) if (eff.shape and shape is not None)
-                              else 0))
+                              eff.shape_count(shape)))
         options[eid] = terms
     return cols, options, columns
 
@@ -244,11 +245,12 @@ def _structure(Gb, groups, k0):
 
 
 def build_problem(rec, design, mode, candidates, bandwidth, block,
-                  sensitivities=None, reuse=None) -> Problem:
+                  sensitivities=None, reuse=None, refined=()) -> Problem:
     """Stage ``replay``: replay ``rec`` through ``design`` per sample, mask the jumps, and form
     the block-mean regression problem. ``reuse``: an earlier Problem of the same recording
     (another design): candidate columns that do not depend on the design are taken from it
-    (``_candidates``)."""
+    (``_candidates``). ``refined``: effects scanned on their finer shape grid
+    (``Effect.refine``: once selected)."""
     t = rec.time
     dt = float(np.median(np.diff(t)))
     # the calibration's sensitivities only where a candidate reads them (four replays)
@@ -282,7 +284,7 @@ def build_problem(rec, design, mode, candidates, bandwidth, block,
         prior = ({k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == t.shape else v)
                   for k, v in reuse.sig.items()}, reuse.columns)
     cols, options, columns = _candidates(sig_n, candidates, loaded, dt, bandwidth, mask_b, m,
-                                         prior, counts)
+                                         prior, counts, refined)
     if reuse is not None:
         reuse.columns = None       # (views of the earlier problem's X: released with it)
     Gb, groups = R.generic_basis(blocks)
