@@ -645,12 +645,8 @@ def extra_torque(extra, s: dict) -> np.ndarray:
     :func:`reading_model`."""
     n = len(s["t"])
     total = np.zeros(n)
-    if extra.drag_torque:
-        total += EFFECTS["load_independent_loss"].torque(s, [extra.drag_torque],
-                                                         extra.drag_exponent)
-    if extra.stribeck_torque:
-        total += EFFECTS["low_speed_friction"].torque(
-            s, [extra.stribeck_torque], (extra.stribeck_speed, extra.stribeck_exponent))
+    if extra.drag_torque or extra.stribeck_torque:   # the one steady formula of the FMUs
+        total += extra.steady_torque(s["w_in"])
     if (extra.input_inertia or extra.ripple_1x or extra.ripple_roller
             or extra.thermal_loss_change):
         total += extra.dynamic_torque(s["alpha_in"], s["theta_in"], s["order_roller"],

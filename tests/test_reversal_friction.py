@@ -67,6 +67,22 @@ def test_the_sharp_sign_is_the_formula_as_before():
     assert set(eff.shape) <= set(eff.refine)
 
 
+def test_the_replay_evaluates_the_same_formula():
+    """The diagnosis's replay of a design (effects.extra_torque) is the FMUs' steady torque
+    (ExtraPhysics.steady_torque) to the last bit, width included: a design written by a
+    diagnosis closes its recording only if the replay carries the width it was fitted with."""
+    from model_core.effects import extra_torque
+    ex = ExtraPhysics(stribeck_torque=0.02, stribeck_speed=30.0, stribeck_exponent=1.5,
+                      stribeck_transition=2.0, drag_torque=0.01, drag_exponent=0.5)
+    t = np.linspace(0.0, 1.0, len(W))
+    got = extra_torque(ex, {"t": t, "w_in": W})
+    np.testing.assert_array_equal(got, ex.steady_torque(W))
+    inside = np.abs(W) < 2.0
+    assert np.all(np.abs(got[inside]) < np.abs(
+        ExtraPhysics(stribeck_torque=0.02, stribeck_speed=30.0, stribeck_exponent=1.5,
+                     drag_torque=0.01, drag_exponent=0.5).steady_torque(W[inside])) + 1e-300)
+
+
 def test_the_width_in_the_design_file_and_its_bounds():
     d = DriveDesign(extra=ExtraPhysics(stribeck_torque=0.01, stribeck_transition=1.5))
     assert design_from_toml(design_to_toml(d)) == d
