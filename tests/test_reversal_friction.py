@@ -63,8 +63,9 @@ def test_the_sharp_sign_is_the_formula_as_before():
         np.testing.assert_array_equal(eff.basis(s, (w_s, delta, w_r))[:, 0],
                                       np.sign(W) * np.exp(-(np.abs(W) / w_s) ** delta))
     assert ExtraPhysics().stribeck_transition == 0.0
-    assert set(STRIBECK_TRANSITIONS) >= {0.0} and len(eff.refine) > len(eff.shape)
-    assert set(eff.shape) <= set(eff.refine)
+    fine = eff.shapes(s, around=eff.shape[0])
+    assert set(STRIBECK_TRANSITIONS) >= {0.0} and set(eff.shape) < set(fine)
+    assert {r for _, _, r in fine} == set(STRIBECK_TRANSITIONS)
 
 
 def test_the_replay_evaluates_the_same_formula():

@@ -260,8 +260,8 @@ class Diagnoser:
         keeping only the best refined shape made the twins stiffer than the recording's own
         fit and a 0.64 mN*m remainder of a drag of another law stood out). Returns ``(P0,
         first)``, unchanged where nothing is refined."""
-        refined = {t.effect: EFFECTS[t.effect].shapes(P0.sig, refined=True)
-                   for t in first.S.terms if EFFECTS[t.effect].refine}
+        refined = {t.effect: EFFECTS[t.effect].shapes(P0.sig, around=t.shape)
+                   for t in first.S.terms if EFFECTS[t.effect].refine is not None}
         if not refined:
             return P0, first
         self._refined = refined
