@@ -647,7 +647,8 @@ def test_bad_input_gives_fmi2error_with_a_message(native):
                                ("stribeck_speed", 0.0, "stribeck_speed = 0"),
                                ("thermal_tau", float("nan"), "thermal_tau"),
                                ("ripple_out_1x_load", -0.01, "ripple_out_1x_load = -0.01"),
-                               ("ripple_2x_phase", float("inf"), "ripple_2x_phase")):
+                               ("ripple_2x_phase", float("inf"), "ripple_2x_phase"),
+                               ("stribeck_transition", -1.0, "stribeck_transition = -1")):
         fresh.messages.clear()
         with pytest.raises(FMICallException) as exc:
             fresh.set(**{name: value})
