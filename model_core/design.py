@@ -290,6 +290,11 @@ class ExtraPhysics:
                                    "(dynamic); 0 or more")
     ripple_out_2x_load_phase: float = _f(0.0, "rad", "phase of the load-scaled output 2x "
                                          "ripple")
+    stribeck_transition: float = _f(0.0, "rad/s", "transition width w_r of the standstill "
+                                    "friction's sign through a speed reversal: stribeck_torque "
+                                    "tanh(w/w_r) exp(-(|w|/w_s)^delta) (pre-sliding, "
+                                    "model_core.friction.reversal_sign; 0: the sharp sign "
+                                    "sgn(w); 0 or more)")
 
     #: fields no FMU carries: the diagnosis's replay uses them. Where the same physics has a
     #: form the FMUs carry, the diagnosis writes that too (model_core.effects): a viscosity
@@ -317,7 +322,8 @@ class ExtraPhysics:
             s, self.drag_exponent)[:, 0]
         if self.stribeck_torque:
             t = t + self.stribeck_torque * EFFECTS["low_speed_friction"].basis(
-                s, (self.stribeck_speed, self.stribeck_exponent))[:, 0]
+                s, (self.stribeck_speed, self.stribeck_exponent,
+                    self.stribeck_transition))[:, 0]
         return t.reshape(w.shape)
 
 
@@ -712,6 +718,9 @@ def validate_design(d: DriveDesign) -> None:
     if not 1.0 <= d.extra.stribeck_exponent <= 2.0:
         raise CycloidInputError("extra.stribeck_exponent", d.extra.stribeck_exponent,
                                 "must lie between 1 (Tustin) and 2 (Gaussian)")
+    if not 0.0 <= d.extra.stribeck_transition < float("inf"):
+        raise CycloidInputError("extra.stribeck_transition", d.extra.stribeck_transition,
+                                "must be 0 (a sharp sign) or a positive width in rad/s")
     if not 0.0 <= d.extra.drag_exponent <= 2.0:
         raise CycloidInputError("extra.drag_exponent", d.extra.drag_exponent,
                                 "must lie between 0 and 2")

@@ -306,7 +306,9 @@ EXTRA = dict(drag_torque=0.12, stribeck_torque=0.3, stribeck_speed=25.0, input_i
              ripple_2x=0.015, ripple_2x_phase=0.25, ripple_2x_load=0.012,
              ripple_2x_load_phase=-0.6, ripple_out_1x=0.04, ripple_out_1x_phase=1.3,
              ripple_out_1x_load=0.018, ripple_out_1x_load_phase=-2.0, ripple_out_2x=0.01,
-             ripple_out_2x_phase=-0.4, ripple_out_2x_load=0.007, ripple_out_2x_load_phase=2.2)
+             ripple_out_2x_phase=-0.4, ripple_out_2x_load=0.007, ripple_out_2x_load_phase=2.2,
+             # the standstill friction's sign through a reversal, tanh(w/6 rad/s)
+             stribeck_transition=6.0)
 
 
 @pytest.mark.parametrize("mode", ["S2", "S1"])
@@ -322,6 +324,34 @@ def test_agrees_with_python_fmu_with_extra_physics(native, fmu, mode):
         a, b = n.step(w, t, dt=2e-3), p.step(w, t, dt=2e-3)
         assert_same(a, b, k)
         assert a["P_extra"] != 0.0
+    n.close()
+    p.close()
+
+
+@pytest.mark.parametrize("w_r", [0.0, 1.5])
+def test_a_slow_speed_reversal_agrees_with_python_fmu(native, fmu, w_r):
+    """The standstill friction's sign through a slow reversal (-12 .. +12 rad/s in steps of
+    0.4 rad/s, both directions at a back-driving load) with a sharp sign and a transition width
+    of 1.5 rad/s (tanh(w/w_r), model_core.friction.reversal_sign): native = Python FMU, and the
+    friction torque P_extra/w_in is odd in w and never feeds power (P_extra >= 0)."""
+    ex = dict(stribeck_torque=0.3, stribeck_speed=25.0, stribeck_exponent=1.3,
+              stribeck_transition=w_r)
+    n = Inst(native, mode="S1", **ex)
+    p = Inst(fmu, mode="S1", **ex)
+    ws = [w for w in np.arange(-12.0, 12.01, 0.4)] + [w for w in np.arange(12.0, -12.01, -0.4)]
+    seen = {}
+    for k, w in enumerate(ws):
+        a, b = n.step(w, -2.0, dt=2e-3), p.step(w, -2.0, dt=2e-3)
+        assert_same(a, b, (w_r, w))
+        assert a["P_extra"] >= 0.0
+        if abs(w) > 1e-9:
+            seen.setdefault(round(abs(w), 6), set()).add(round(a["P_extra"] / w, 12))
+    for t in seen.values():      # odd: the same |T| in both directions at the same |w|
+        assert len({abs(x) for x in t}) == 1
+    inside = [a / 0.3 for a in seen.get(0.4, ())]   # tanh(0.4/1.5) = 0.26 of the level
+    want = math.tanh(0.4 / w_r) if w_r else 1.0
+    assert inside and all(abs(abs(x) - want * math.exp(-(0.4 / 25.0) ** 1.3)) < 1e-9
+                          for x in inside)
     n.close()
     p.close()
 
@@ -586,9 +616,10 @@ def test_build_design_changes_every_reducer_fmu(calibrated_fmus, native, fmu):
     # the existing variables keep their value references; the new parameters come last, in
     # the order they were added (cycloid_drive.LATE_DESIGN_PARAMETERS)
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    assert vr["ripple_out_2x_load_phase"] == max(vr.values())
+    assert vr["stribeck_transition"] == max(vr.values())
     assert (vr["nu_100"] < vr["load_loss_scale"] < vr["thermal_loss_per_10K"]
-            < vr["thermal_T_ref"] < vr["ripple_2x"] < vr["ripple_out_1x"] < vr["ripple_out_2x"])
+            < vr["thermal_T_ref"] < vr["ripple_2x"] < vr["ripple_out_1x"] < vr["ripple_out_2x"]
+            < vr["ripple_out_2x_load_phase"] < vr["stribeck_transition"])
 
 
 def test_bad_input_gives_fmi2error_with_a_message(native):
@@ -616,7 +647,8 @@ def test_bad_input_gives_fmi2error_with_a_message(native):
                                ("stribeck_speed", 0.0, "stribeck_speed = 0"),
                                ("thermal_tau", float("nan"), "thermal_tau"),
                                ("ripple_out_1x_load", -0.01, "ripple_out_1x_load = -0.01"),
-                               ("ripple_2x_phase", float("inf"), "ripple_2x_phase")):
+                               ("ripple_2x_phase", float("inf"), "ripple_2x_phase"),
+                               ("stribeck_transition", -1.0, "stribeck_transition = -1")):
         fresh.messages.clear()
         with pytest.raises(FMICallException) as exc:
             fresh.set(**{name: value})

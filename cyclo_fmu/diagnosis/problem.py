@@ -169,14 +169,17 @@ def _same_signal(a, b) -> bool:
     return type(a) is type(b) and a == b
 
 
-def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, counts=None):
+def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, counts=None,
+                refined=None):
     """Every candidate's block-mean columns (each shape's basis at sample level, through the
     transducer's low pass, block-averaged over the compared samples) and its Terms. ``reuse``:
     (signals, columns) of an earlier problem with the same samples, mask and block length (the
     re-linearised replay): a column whose basis read only signals equal to that problem's (the
     recording's own speed, angle, time, load) is that problem's column, the same numbers; the
     ones that read the model (its loss, sensitivities, torque) are computed again.
-    ``counts``: ``mask``'s compared samples per block (``masked_means``). Returns
+    ``counts``: ``mask``'s compared samples per block (``masked_means``). ``refined``:
+    {effect: shapes} scanned instead of ``Effect.shapes`` (a refinement of a selected
+    effect's shape, ``Effect.refine``). Returns
     (cols, options, columns) with columns {(effect, shape): (signals read, column)}."""
     cols, options, columns = [], {}, {}
     sig = _Reads(P_sig)
@@ -197,7 +200,7 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, c
         if not loaded and eid in _DRIFT_LOADED:
             continue
         terms = []
-        for shape in eff.shapes(P_sig):
+        for shape in (refined or {}).get(eid) or eff.shapes(P_sig):
             if shape is None and eff.shape and not (eff.temperature_form
                                                     and P_sig.get("temperature") is not None):
                 # Effect.shapes' fallback when its filter keeps no shape of the grid (a run-in
@@ -220,8 +223,7 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, c
             terms.append(Term(eid, shape, tuple(range(k0, k0 + B.shape[1])),
                               tuple(p.name for p in par), tuple(p.unit for p in par),
                               tuple(p.lower for p in par), tuple(p.upper for p in par),
-                              len(eff.shape_names) if (eff.shape and shape is not None)
-                              else 0))
+                              eff.shape_count(shape)))
         options[eid] = terms
     return cols, options, columns
 
@@ -244,11 +246,12 @@ def _structure(Gb, groups, k0):
 
 
 def build_problem(rec, design, mode, candidates, bandwidth, block,
-                  sensitivities=None, reuse=None) -> Problem:
+                  sensitivities=None, reuse=None, refined=None) -> Problem:
     """Stage ``replay``: replay ``rec`` through ``design`` per sample, mask the jumps, and form
     the block-mean regression problem. ``reuse``: an earlier Problem of the same recording
     (another design): candidate columns that do not depend on the design are taken from it
-    (``_candidates``)."""
+    (``_candidates``). ``refined``: {effect: shapes} scanned instead of the effect's grid
+    (``Effect.refine``: once selected)."""
     t = rec.time
     dt = float(np.median(np.diff(t)))
     # the calibration's sensitivities only where a candidate reads them (four replays)
@@ -281,10 +284,24 @@ def build_problem(rec, design, mode, candidates, bandwidth, block,
             and np.array_equal(reuse.mask, mask)):
         prior = ({k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == t.shape else v)
                   for k, v in reuse.sig.items()}, reuse.columns)
-    cols, options, columns = _candidates(sig_n, candidates, loaded, dt, bandwidth, mask_b, m,
-                                         prior, counts)
+    parts = _assemble(sig_n, candidates, loaded, dt, bandwidth, mask_b, m, prior, counts,
+                      refined, blocks)
     if reuse is not None:
         reuse.columns = None       # (views of the earlier problem's X: released with it)
+    # the replay's temporaries are freed: their heap pages go back before the next stage's peak
+    from ..slaves.heap import release_free_heap
+    release_free_heap()
+    return Problem(rp=rp, sig=sig, y=y, blocks=blocks, m=m, dt=dt, T_model_f=T_model_f,
+                   loaded=loaded, mask=mask, valid=valid, noise_sample=noise,
+                   bandwidth=bandwidth, **parts)
+
+
+def _assemble(sig_n, candidates, loaded, dt, bandwidth, mask_b, m, prior, counts, refined,
+              blocks) -> dict:
+    """The candidates' columns and the generic basis as one matrix ``X`` with their Terms
+    (the Problem's fields X, options, generic, steady, structure, groups, columns)."""
+    cols, options, columns = _candidates(sig_n, candidates, loaded, dt, bandwidth, mask_b, m,
+                                         prior, counts, refined)
     Gb, groups = R.generic_basis(blocks)
     k0 = sum(c.shape[1] for c in cols)
     generic, steady, structure = _structure(Gb, groups, k0)
@@ -294,10 +311,22 @@ def build_problem(rec, design, mode, candidates, bandwidth, block,
             keys, B = columns[(eid, term.shape)]
             columns[(eid, term.shape)] = (keys, X[:, list(term.cols)] if not term.cols else
                                           X[:, term.cols[0]:term.cols[-1] + 1])
-    # the replay's temporaries are freed: their heap pages go back before the next stage's peak
-    from ..slaves.heap import release_free_heap
-    release_free_heap()
-    return Problem(rp=rp, sig=sig, y=y, X=X, options=options, generic=generic, steady=steady,
-                   structure=structure, groups=groups, blocks=blocks, m=m, dt=dt,
-                   T_model_f=T_model_f, loaded=loaded, mask=mask, valid=valid,
-                   noise_sample=noise, bandwidth=bandwidth, columns=columns)
+    return dict(X=X, options=options, generic=generic, steady=steady, structure=structure,
+                groups=groups, columns=columns)
+
+
+def refine_problem(P: Problem, candidates, refined: dict) -> Problem:
+    """``P`` with the shapes ``refined`` ({effect: shapes}, e.g. an effect's finer grid
+    ``Effect.refine``) scanned instead of their grids: the same replay, mask and blocks; the
+    columns ``P`` has are reused, only the new shapes' are computed (no second replay)."""
+    from dataclasses import replace as _replace
+    n = len(P.y) * P.m
+    full = P.mask.shape
+    sig_n = {k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == full else v)
+             for k, v in P.sig.items()}
+    mask_b = P.mask[:n]
+    counts = mask_b.reshape(-1, P.m).sum(1)
+    parts = _assemble(sig_n, candidates, P.loaded, P.dt, P.bandwidth, mask_b, P.m,
+                      (sig_n, P.columns), counts, refined, P.blocks)
+    P.columns = None               # (views of the earlier X: released with it)
+    return _replace(P, **parts)

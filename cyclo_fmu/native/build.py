@@ -119,7 +119,10 @@ EXTRA = (
         ("", "N.m", "Torque", 0.0, "amplitude (>= 0)"), ("_phase", "rad", "Angle", None, "phase"),
         ("_load", "N.m", "Torque", 0.0, "load-scaled amplitude at 10 N.m of |tau_out|, in "
          "proportion (>= 0)"),
-        ("_load_phase", "rad", "Angle", None, "phase of the load-scaled part")))
+        ("_load_phase", "rad", "Angle", None, "phase of the load-scaled part"))) + (
+    ("stribeck_transition", "rad/s", "AngularVelocity", 0.0, False, "transition width w_r of "
+     "the standstill friction's sign through a speed reversal, tanh(w/w_r) (pre-sliding; 0: "
+     "the sharp sign; >= 0)"),)
 #: value references of EXTRA: its first EXTRA_FIRST at 30.., the others at EXTRA_VR1..
 #: (50..59 were taken when they came; fmi2_cycloid.c's extra_index)
 EXTRA_FIRST = 20

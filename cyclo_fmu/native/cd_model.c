@@ -153,12 +153,19 @@ void cd_solve(const CDMap *map, int mode, double w_in, double tau_out, CDSolutio
 
 static double sign(double w) { return w > 0 ? 1.0 : (w < 0 ? -1.0 : 0.0); }
 
+/* model_core.friction.reversal_sign: tanh(w/w_r), the sharp sign at w_r = 0 */
+static double reversal_sign(double w, double w_r)
+{
+    return w_r > 0 ? tanh(w / w_r) : sign(w);
+}
+
 double cd_steady_torque(const CDExtra *x, double w)
 {
     double t = x->drag_torque * (sign(w) * pow(fabs(w) / CD_W_REF, x->drag_exponent));
     if (x->stribeck_torque != 0) {
         double q = fabs(w) / x->stribeck_speed;
-        t = t + x->stribeck_torque * (sign(w) * exp(-pow(q, x->stribeck_exponent)));
+        t = t + x->stribeck_torque * (reversal_sign(w, x->stribeck_transition)
+                                      * exp(-pow(q, x->stribeck_exponent)));
     }
     return t;
 }

@@ -59,9 +59,12 @@ typedef struct {
     double ripple_2x, ripple_2x_phase, ripple_2x_load, ripple_2x_load_phase;
     double ripple_out_1x, ripple_out_1x_phase, ripple_out_1x_load, ripple_out_1x_load_phase;
     double ripple_out_2x, ripple_out_2x_phase, ripple_out_2x_load, ripple_out_2x_load_phase;
+    /* the standstill friction's sign through a speed reversal, tanh(w/w_r) (0: sgn(w)),
+     * rad/s (model_core.friction.reversal_sign) */
+    double stribeck_transition;
 } CDExtra;
 
-#define CD_N_EXTRA 32
+#define CD_N_EXTRA 33
 
 /* A discovered loss term (design [[extra.discovered]], model_core.discovered): the torque
  * coefficient * sgn(w) (|w|/300 rad/s)^speed_exponent (|tau_out|/10 N*m)^load_exponent. */

@@ -10,7 +10,8 @@
  *   Real     0 w_in, 1 tau_out, 2 alpha_in, 3 T_oil_in (inputs)
  *            10..29 outputs, in the order of OUT_NAMES
  *            30..49 extra physics parameters, in the order of CDExtra (its first 20)
- *            60..71 its fields 20..31 (the ripple at 2x, output 1x and 2x)
+ *            60..71 its fields 20..31 (the ripple at 2x, output 1x and 2x), 72 its field
+ *            32 (stribeck_transition)
  *            50 J_out, 51 alpha_ref (parameters of the output inertia)
  *            52 PL_mesh (output: the calibrated mesh loss; out[O_PL_MESH])
  *            53 T_oil, 54 Q_ambient (outputs of the temperature)
@@ -75,7 +76,7 @@ static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "thermal_loss_per_10K", "thermal_T_ref", "ripple_2x", "ripple_2x_phase", "ripple_2x_load",
     "ripple_2x_load_phase", "ripple_out_1x", "ripple_out_1x_phase", "ripple_out_1x_load",
     "ripple_out_1x_load_phase", "ripple_out_2x", "ripple_out_2x_phase", "ripple_out_2x_load",
-    "ripple_out_2x_load_phase"};
+    "ripple_out_2x_load_phase", "stribeck_transition"};
 
 /* index into CDExtra of a value reference, or -1 */
 static int extra_index(fmi2ValueReference r)
@@ -87,10 +88,10 @@ static int extra_index(fmi2ValueReference r)
 }
 
 #define STATE_MAGIC 0x43444e53u   /* "CDNS" */
-#define STATE_VERSION 7u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
+#define STATE_VERSION 8u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
                               * load ripple, CDState.distance; 5: the oil temperature;
                               * 6: CDExtra's warm-up per 10 K; 7: the ripple at 2x, output
-                              * 1x and 2x */
+                              * 1x and 2x; 8: CDExtra.stribeck_transition */
 
 /* Everything that defines the instance's behaviour from here on: inputs, parameters,
  * outputs and the dynamic state. Plain data: copied and serialised as it is. */
@@ -174,7 +175,7 @@ static double *extra_field(CDExtra *x, int i)
     f[25] = &x->ripple_out_1x_phase; f[26] = &x->ripple_out_1x_load;
     f[27] = &x->ripple_out_1x_load_phase; f[28] = &x->ripple_out_2x;
     f[29] = &x->ripple_out_2x_phase; f[30] = &x->ripple_out_2x_load;
-    f[31] = &x->ripple_out_2x_load_phase;
+    f[31] = &x->ripple_out_2x_load_phase; f[32] = &x->stribeck_transition;
     return f[i];
 }
 
@@ -183,7 +184,7 @@ static const char *extra_problem(int i, double v)
 {
     if (!isfinite(v)) return "must be a finite number";
     switch (i) {
-    case 0: case 1: case 3:
+    case 0: case 1: case 3: case 32:   /* case 32: the reversal's width, 0 = a sharp sign */
     case 20: case 22: case 24: case 26: case 28: case 30:   /* the ripples' amplitudes */
         return v < 0 ? "must not be negative" : NULL;
     case 2: case 9:

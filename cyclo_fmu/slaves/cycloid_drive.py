@@ -155,7 +155,12 @@ LATE_DESIGN_PARAMETERS = [
     for sfx, unit, text in (("", "N.m", "amplitude (>= 0)"), ("_phase", "rad", "phase"),
                             ("_load", "N.m", "load-scaled amplitude at 10 N.m of |tau_out|, "
                              "in proportion (>= 0)"),
-                            ("_load_phase", "rad", "phase of the load-scaled part"))]
+                            ("_load_phase", "rad", "phase of the load-scaled part"))] + [
+    # the standstill friction's sign through a speed reversal (model_core.friction.
+    # reversal_sign)
+    ("stribeck_transition", "extra", "stribeck_transition", "rad/s", "transition width w_r of "
+     "the standstill friction's sign through a speed reversal, tanh(w/w_r) (pre-sliding; 0: "
+     "the sharp sign; >= 0)", Real)]
 ALL_DESIGN_PARAMETERS = DESIGN_PARAMETERS + LATE_DESIGN_PARAMETERS
 #: design parameters of the heat balance only (run-time in both FMUs; not in the loss map)
 THERMAL_PARAMETERS = ("ambient_temperature", "housing_heat_capacity", "housing_heat_transfer",
@@ -197,7 +202,8 @@ PARAMETER_LIMITS = dict(
                                 "D_p", "d_p", "delta_z", "nu", "rho_oil", "pin_roughness",
                                 "drag_torque", "stribeck_torque", "input_inertia",
                                 "ripple_2x", "ripple_2x_load", "ripple_out_1x",
-                                "ripple_out_1x_load", "ripple_out_2x", "ripple_out_2x_load")},
+                                "ripple_out_1x_load", "ripple_out_2x", "ripple_out_2x_load",
+                                "stribeck_transition")},
     # must be positive: FMI's min is inclusive, so the smallest positive normal double
     **{n: (sys.float_info.min, None) for n in ("stribeck_speed", "thermal_tau")},
     mu_boundary=(0.0, 1.0), mu_rolling=(0.0, 1.0), thermal_loss_change=(-1.0, None),
