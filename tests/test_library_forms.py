@@ -69,10 +69,10 @@ def test_named_with_their_shape_and_closed(effect, values, shape, key, expect):
 @pytest.mark.parametrize("seed, kw", [(91, {}), (93, {"temperature_rise": 0.0}),
                                       (94, {"plan": "four_quadrant"})])
 def test_a_run_in_is_named_as_such_and_closes(seed, kw):
-    """Losses 15 % above the model at the start, settling over 1e4 rad of the driving shaft
-    (no temperature change; with a flat temperature column too): named ``run_in`` (not a
-    transducer drift, not a warm-up), its size and distance found, nothing left; the updated
-    design closes the recording."""
+    """Load-dependent losses 15 % above the model at the start, settling over 1e4 rad of the
+    driving shaft (no temperature change; with a flat temperature column too): named
+    ``run_in`` (not a transducer drift, not a warm-up), its size and distance found, nothing
+    left; the updated design closes the recording."""
     r = synthesize("run_in", seed, "S1", "small", **kw)
     d = Diagnoser(None, "S1").fit(as_recording(r)).diagnosis_
     assert [e["id"] for e in d.effects] == ["run_in"], [e["id"] for e in d.effects]
