@@ -57,6 +57,7 @@ void cd_solve_thermal(const CDThermalMap *tm, int mode, double w_in, double tau_
 double cd_housing_step(double T, double P, double dt, double T_amb, double C, double R)
 { (void)P; (void)dt; (void)T_amb; (void)C; (void)R; return T; }
 double cd_run_in_torque(const CDExtra *x, double d, double l) { (void)x; (void)d; (void)l; return 0.0; }
+double cd_load_loss_torque(double p, double w) { (void)p; (void)w; return 0.0; }
 double cd_load_ripple_torque(const CDExtra *x, double t, double o, double q)
 { (void)x; (void)t; (void)o; (void)q; return 0.0; }
 double cd_shaft_order_ripple_torque(const CDExtra *x, double t, double r, double q)

@@ -194,7 +194,8 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
         return _through_the_bench(eid, values, eff_shape, true_design, plan, hold, mode,
                                   duration, seed, settings, friction_error, fmu_dir, progress,
                                   temperature_rise)
-    tau_in, loss_in = replay_input_torque(true_design, mode, w_in, tau_out)
+    tau_in, loss_in, load_loss_in = replay_input_torque(true_design, mode, w_in, tau_out,
+                                                        load_loss=True)
     temperature = None
     if temperature_rise is not None:
         tau_T = next((sh for e, (v, sh) in hidden.items() if EFFECTS[e].temperature_form),
@@ -209,7 +210,7 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
         sens_nu = (rp(hi, mode, w_in, tau_out)[0] - rp(lo, mode, w_in, tau_out)[0]) / (
             math.log(1.05) - math.log(0.95))
     sig = effect_signals(t, w_in, loss_in, mode, design.z1, temperature, T_in_model=tau_in,
-                         sens_nu=sens_nu, tau_out=tau_out)
+                         sens_nu=sens_nu, tau_out=tau_out, load_loss_in=load_loss_in)
     if sens_nu is not None and hidden["viscosity_drift"][0].get("ln_viscosity_change"):
         # the viscosity drift through the core at its size (the quadratic in ln(nu) through
         # replays at the drift's end and middle: effects._viscosity)

@@ -242,9 +242,12 @@ class ExtraPhysics:
                            "load a diagnosis fitted to a mismatch outside the library; the "
                            "design file's [[extra.discovered]] tables")
 
-    run_in_change: float = _f(0.0, "1", "excess of the losses of a drive that runs in, relative, "
-                              "at the start; it decays with the sliding distance, "
-                              "exp(-distance/run_in_distance) (no temperature needed; dynamic)")
+    run_in_change: float = _f(0.0, "1", "excess of the load-dependent losses (the gear's "
+                              "PL1..PL6, the friction of its sliding and rolling contacts; not "
+                              "the idle losses of seals, bearings' drag and churning) of a "
+                              "drive that runs in, relative, at the start; it decays with the "
+                              "sliding distance, exp(-distance/run_in_distance) (no "
+                              "temperature needed; dynamic)")
     run_in_distance: float = _f(1e4, "rad", "distance (angle travelled by the driving shaft) over "
                                 "which the run-in excess decays by 1/e")
     ripple_1x_load: float = _f(0.0, "N*m", "part of the 1x ripple's amplitude that grows with "
@@ -385,13 +388,17 @@ class ExtraPhysics:
                         getattr(self, p) or getattr(self, p + "_load")
                         for p, _, _ in SHAFT_ORDER_RIPPLES))
 
-    def run_in_torque(self, distance, loss_in):
-        """Run-in torque at the driving shaft (N*m): c exp(-distance/s0) loss_in, with the
+    def run_in_torque(self, distance, load_loss_in):
+        """Run-in torque at the driving shaft (N*m): c exp(-distance/s0) T_load, with the
         distance the driving shaft has travelled since the start (rad, the integral of |w|) and
-        the model's loss torque referred to it (N*m): the losses of a new drive start c above
-        the model's and settle as its contacts run in (model_core.effects 'run_in')."""
+        T_load the gear's load-dependent loss torque referred to it (N*m, with the sign of a
+        loss: ``lossmap.load_loss_torque``, the partial losses PL1..PL6 over the driving speed,
+        the losses ``[calibration] load_loss_scale`` scales): the friction of a new drive's
+        sliding and rolling contacts starts c above the model's and settles as its contacts
+        run in; the load-independent (idle) losses of seals, bearings' drag and churning do
+        not run in (model_core.effects 'run_in'). Zero at zero load."""
         import numpy as _np
-        return self.run_in_change * _np.exp(-distance / self.run_in_distance) * loss_in
+        return self.run_in_change * _np.exp(-distance / self.run_in_distance) * load_loss_in
 
     def thermal_per_10K_torque(self, T, loss_in):
         """Loss change per 10 K at the driving shaft (N*m): c (T - T_ref)/(10 K) loss_in, with

@@ -20,7 +20,9 @@ steady and dynamic terms of ``design.ExtraPhysics`` from the same formulas.
 Signals ``s`` (numpy arrays over samples, SI), built by :func:`effect_signals`: ``t`` (s),
 ``w_in`` (rad/s), ``alpha_in`` (rad/s^2), ``theta_in`` (rad, integral of w_in),
 ``distance_in`` (rad, integral of |w_in|: the distance run), ``loss_in``
-(the model's loss torque referred to the input, N*m), ``T_in_model`` (the model's input
+(the model's loss torque referred to the input, N*m), ``load_loss_in`` (its load-dependent
+part, the gear's PL1..PL6 over the driving speed, N*m: ``lossmap.load_loss_torque``; where a
+replay provides it), ``T_in_model`` (the model's input
 torque, N*m), ``order_roller`` (roller-pass order of the input speed), ``ratio_out``
 (w_out/w_in of the mode, signed: the driven shaft's angle is ``ratio_out * theta_in``),
 ``temperature`` (degC
@@ -174,8 +176,17 @@ def _thermal(s, shape):
     return (s["loss_in"] * _warm(s, shape))[:, None]
 
 
+def _load_loss_in(s):
+    """The load-dependent loss torque of the signals (N*m), which the run-in scales."""
+    T = s.get("load_loss_in")
+    if T is None:
+        raise ValueError("the run-in needs the gear's load-dependent loss torque (signals "
+                         "'load_loss_in': lossmap.replay_input_torque(..., load_loss=True))")
+    return T
+
+
 def _run_in(s, shape):
-    return (s["loss_in"] * np.exp(-s["distance_in"] / shape))[:, None]
+    return (_load_loss_in(s) * np.exp(-s["distance_in"] / shape))[:, None]
 
 
 def _viscosity(s, shape):
@@ -478,17 +489,20 @@ EFFECTS = {
         synth_default=({"ln_viscosity_change": -0.8}, 300.0), requires=("sens_nu",),
         temperature_form=True, time_drift=True),
     "run_in": Effect(
-        "run_in", "the drive runs in: its losses start above the model's and settle with the "
-        "distance its contacts have slid (every loss scaled by c exp(-distance/s0), the distance "
-        "the angle travelled by the driving shaft); unlike a warm-up it needs no temperature "
-        "change and follows the distance run, not the time",
-        (Parameter("loss_excess", "1", 0.0, 2.0, "excess of the losses at the start, relative"),),
+        "run_in", "the drive runs in: the friction of its sliding and rolling contacts starts "
+        "above the model's and settles with the distance they have slid (the gear's "
+        "load-dependent losses PL1..PL6 scaled by 1 + c exp(-distance/s0), the distance the "
+        "angle travelled by the driving shaft; the idle losses of seals, bearings' drag and "
+        "churning do not run in); unlike a warm-up it needs no temperature change and follows "
+        "the distance run, not the time",
+        (Parameter("loss_excess", "1", 0.0, 2.0, "excess of the load-dependent losses at the "
+                   "start, relative"),),
         shape=RUN_IN_DISTANCES, shape_name="s0", shape_unit="rad",
         separating_run="a temperature channel (a warm-up follows it, a run-in does not) and a "
                        "return to the first operating points late in the run, at another speed "
                        "(a run-in follows the distance run, a warm-up the time)",
         synth_default=({"loss_excess": 0.15}, 1e4), time_drift=True,
-        shape_filter=_run_in_resolvable),
+        shape_filter=_run_in_resolvable, requires=("load_loss_in",)),
     "inertia": Effect(
         "inertia", "unmodelled rotating inertia on the input side: torque J dw/dt",
         (Parameter("J", "kg*m^2", 0.0, 1e-2, "inertia referred to the input shaft"),),
@@ -633,7 +647,7 @@ def roller_pass_order(mode: str, z1: int) -> float:
 
 def effect_signals(t, w_in, loss_in, mode, z1, temperature=None, T_in_model=None,
                    sens_mu=None, sens_nu=None, sens_k=None, sens_idle=None,
-                   tau_out=None, sens_load=None) -> dict:
+                   tau_out=None, sens_load=None, load_loss_in=None) -> dict:
     """The signal dict the effects' terms read (see the module docstring); ``tau_out``
     [N*m], the load torque on the driven shaft, feeds a design's discovered terms."""
     t = np.asarray(t, float)
@@ -648,6 +662,7 @@ def effect_signals(t, w_in, loss_in, mode, z1, temperature=None, T_in_model=None
             "temperature": temperature,
             "T_in_model": T_in_model, "sens_mu": sens_mu, "sens_nu": sens_nu,
             "sens_k": sens_k, "sens_idle": sens_idle, "sens_load": sens_load,
+            "load_loss_in": None if load_loss_in is None else np.asarray(load_loss_in, float),
             "tau_out": None if tau_out is None else np.asarray(tau_out, float)}
 
 
@@ -678,7 +693,7 @@ def extra_torque(extra, s: dict) -> np.ndarray:
                              "'tau_out')")
         total += extra.discovered_torque(s["w_in"], s["tau_out"])
     if extra.run_in_change:
-        total += extra.run_in_torque(s["distance_in"], s["loss_in"])
+        total += extra.run_in_torque(s["distance_in"], _load_loss_in(s))
     temp = s.get("temperature")
     if extra.thermal_loss_per_10K and temp is not None:
         # the column is in degC; the design's reference (thermal_T_ref) in K

@@ -292,12 +292,14 @@ class ModeMap:
         """True when ``other`` has this map's speed grid (``locate_speeds`` can be shared)."""
         return self._lw == other._lw and self._w_low == other._w_low
 
-    def input_torque_arrays(self, w_in, tau_out, located=None):
+    def input_torque_arrays(self, w_in, tau_out, located=None, load_loss=False):
         """The input torque of :meth:`solve_arrays` alone (N*m; the same arithmetic, element
         by element, so the same numbers), for replays of long recordings: only the two drag
         columns and the basic efficiency it needs are interpolated, each flow direction's
         table is read at its own samples. ``located``: ``locate_speeds(w_in)`` of this map or
-        of one with the same speed grid."""
+        of one with the same speed grid. ``load_loss``: return (tau_in, T_load) with T_load the
+        gear's load-dependent loss torque at the driving shaft (:func:`load_loss_torque` of
+        the partial losses PL1..PL6 that :meth:`solve` reports)."""
         w_in = np.asarray(w_in, float)
         tau_out = np.asarray(tau_out, float)
         j, fw, low, sgn = located if located is not None else self.locate_speeds(w_in)
@@ -341,7 +343,21 @@ class ModeMap:
         c2 = -self.i0 * e
         c = (1.0, c2, -(1.0 + c2))
         T1 = tau / c[k] if k else tau        # (c[0] = 1: the division is exact)
-        return T1 * c[a_] + d_a
+        if not load_loss:
+            return T1 * c[a_] + d_a
+        # the gear's load-dependent losses PL1..PL6 (their shares of its loss power, the table's
+        # columns 1..5, summed) over the driving speed: share * sum_x T_x w_x / w_in, with
+        # w_x = r_x w_in (load_loss_torque; zero at a standstill, as there)
+        shares = getattr(self, "_load_share_stack", None)
+        if shares is None:
+            shares = self._load_share_stack = np.stack(
+                [self._arrays[False][..., 1:1 + len(LOSS_NAMES)].sum(-1),
+                 self._arrays[True][..., 1:1 + len(LOSS_NAMES)].sum(-1)]).ravel()
+        share = g * (h * shares[flat] + ft * shares[flat + 1]) \
+            + fw * (h * shares[flat + nt] + ft * shares[flat + nt + 1])
+        r = self.ratio
+        T_load = np.where(w_in != 0, share * T1 * (r[0] + c[1] * r[1] + c[2] * r[2]), 0.0)
+        return T1 * c[a_] + d_a, T_load
 
 
 #: [1] headroom of a replay's map over the recording's largest torque and speed
@@ -351,7 +367,32 @@ REPLAY_MARGIN = 1.05
 REPLAY_CHUNK = 16384
 
 
-def replay_input_torque(design, mode, w_in, tau_out, grid=None, located=None):
+def load_loss_torque(P_load, w_in):
+    r"""The gear's load-dependent loss torque at the driving shaft (N*m): the power of its
+    load-dependent partial losses PL1..PL6 (every sliding and rolling contact; what
+    ``[calibration] load_loss_scale`` scales) over the driving speed,
+
+    .. math:: T_{load} = \frac{P_{L1} + P_{L2} + P_{L3} + P_{L5} + P_{L6}}{\omega_{in}},
+
+    with the sign of a loss (T_load w_in >= 0), zero at a standstill. The load-independent
+    (idle) losses of bearings' drag, seals and churning are not in it. The one formula of the
+    run-in (``design.ExtraPhysics.run_in_torque``) in the core's replays, both FMUs (the
+    native one in C, cd_model.h) and the diagnosis.
+
+    Parameters
+    ----------
+    P_load : float or ndarray
+        PL1 + PL2 + PL3 + PL5 + PL6 [W].
+    w_in : float or ndarray
+        Driving speed [rad/s].
+    """
+    w_in = np.asarray(w_in, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        T = np.where(w_in != 0, np.asarray(P_load, float) / np.where(w_in != 0, w_in, 1.0), 0.0)
+    return T if T.ndim else float(T)
+
+
+def replay_input_torque(design, mode, w_in, tau_out, grid=None, located=None, load_loss=False):
     """The input torque the model predicts along a recording, and its loss part (both N*m).
 
     Parameters
@@ -376,6 +417,9 @@ def replay_input_torque(design, mode, w_in, tau_out, grid=None, located=None):
     tau_in, loss_in : ndarray
         Model input torque [N*m] and its part beyond the lossless torque
         ``-tau_out * w_out / w_in`` [N*m], from a ``ModeMap`` spanning the recording.
+    load_loss_in : ndarray
+        With ``load_loss=True``: the gear's load-dependent loss torque at the driving shaft
+        [N*m] (:func:`load_loss_torque`), the part of ``loss_in`` that PL1..PL6 make.
     """
     w_in = np.asarray(w_in, float)
     tau_out = np.asarray(tau_out, float)
@@ -386,6 +430,7 @@ def replay_input_torque(design, mode, w_in, tau_out, grid=None, located=None):
     # in chunks (the map is the same for every chunk), the input torque alone: the numbers of
     # solve_arrays(...)["tau_in"], without its other outputs' temporaries
     tau_in = np.empty_like(w_in)
+    load_in = np.empty_like(w_in) if load_loss else None
     chunks = None if located is None else located.setdefault(
         (w_in.size, tuple(m._lw), m._w_low), [])
     for c, k0 in enumerate(range(0, w_in.size, REPLAY_CHUNK)):
@@ -396,8 +441,13 @@ def replay_input_torque(design, mode, w_in, tau_out, grid=None, located=None):
                 j, fw, low, sgn = m.locate_speeds(w_in[sl])
                 chunks.append((j.astype(np.int32), fw, low, sgn.astype(np.int8)))
             loc = chunks[c]
-        tau_in[sl] = m.input_torque_arrays(w_in[sl], tau_out[sl], loc)
+        if load_loss:
+            tau_in[sl], load_in[sl] = m.input_torque_arrays(w_in[sl], tau_out[sl], loc, True)
+        else:
+            tau_in[sl] = m.input_torque_arrays(w_in[sl], tau_out[sl], loc)
     lossless = -tau_out * m.ratio[m._k]
+    if load_loss:
+        return tau_in, tau_in - lossless, load_in
     return tau_in, tau_in - lossless
 
 

@@ -90,10 +90,10 @@ def _named(d):
 
 @pytest.mark.slow
 def test_a_run_in_beside_a_mesh_loss_does_not_name_an_idle_loss_scale():
-    """A run-in scales every loss of the drive, the hidden mesh loss among them: at the first
-    linearisation (mesh loss k = 0) that product is missing from the run-in's column and an
-    idle-loss scale takes it up; at the corrected calibration the idle losses need no change
-    (they are the model's), so it is not named, and k comes out at the hidden value."""
+    """A run-in (of the load-dependent losses) beside a mesh loss: both named, k at the hidden
+    value, and no idle-loss scale (the idle losses are the model's). When the run-in scaled
+    every loss, the mesh loss among them, an idle-loss scale took up the product missing at the
+    first linearisation (mesh loss k = 0) and was withdrawn at the corrected calibration."""
     k = 0.0053
     d = _rec({"mesh_loss": ({"mesh_loss_k_change": k}, None),
               "run_in": ({"loss_excess": 0.255}, 1e4)}, 671263, "S1", 200.0, 0.0055)

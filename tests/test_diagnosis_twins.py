@@ -206,7 +206,7 @@ def test_a_run_in_no_distance_can_resolve_is_left_out():
     distance = 300.0 * t                           # 300 rad/s: 1.08e6 rad in all
     assert RUN_IN_MIN_SHARE * distance[-1] > max(RUN_IN_DISTANCES)
     sig = {"t": t, "w_in": np.full(n, 300.0), "distance_in": distance,
-           "loss_in": np.full(n, 0.02), "temperature": None}
+           "loss_in": np.full(n, 0.02), "load_loss_in": np.full(n, 0.012), "temperature": None}
     cols, options, _ = _candidates(sig, ("run_in",), True, 1.0, 0.0, np.ones(n, bool), 1)
     assert cols == [] and options["run_in"] == []
     short = dict(sig, distance_in=distance / 20)    # three minutes' distance: resolvable

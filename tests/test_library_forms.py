@@ -69,10 +69,10 @@ def test_named_with_their_shape_and_closed(effect, values, shape, key, expect):
 @pytest.mark.parametrize("seed, kw", [(91, {}), (93, {"temperature_rise": 0.0}),
                                       (94, {"plan": "four_quadrant"})])
 def test_a_run_in_is_named_as_such_and_closes(seed, kw):
-    """Losses 15 % above the model at the start, settling over 1e4 rad of the driving shaft
-    (no temperature change; with a flat temperature column too): named ``run_in`` (not a
-    transducer drift, not a warm-up), its size and distance found, nothing left; the updated
-    design closes the recording."""
+    """Load-dependent losses 15 % above the model at the start, settling over 1e4 rad of the
+    driving shaft (no temperature change; with a flat temperature column too): named
+    ``run_in`` (not a transducer drift, not a warm-up), its size and distance found, nothing
+    left; the updated design closes the recording."""
     r = synthesize("run_in", seed, "S1", "small", **kw)
     d = Diagnoser(None, "S1").fit(as_recording(r)).diagnosis_
     assert [e["id"] for e in d.effects] == ["run_in"], [e["id"] for e in d.effects]
@@ -85,40 +85,65 @@ def test_a_run_in_is_named_as_such_and_closes(seed, kw):
     assert again.effects == [] and not again.unexplained["present"]
 
 
-def test_run_in_in_the_fmu_decays_with_the_distance_run(fmu):
-    """Held at one operating point, the Python FMU's run-in excess decays as
-    c exp(-|w| t / s0) of its loss torque; standing still (w = 0) it does not decay."""
+def _run_fmu(fmu, change, s0, w, tau, n=5):
+    """tau_in, the load-dependent losses' power PL1+..+PL6 and P_loss of the Python FMU held
+    at (w, tau) for n steps of 0.1 s, the grease held at the design's temperature (with the
+    heat balance the run-in's extra heat would warm it and change the gear's own losses)."""
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
-    c, s0, w, tau = 0.2, 50.0, 100.0, -8.0
-    out = {}
-    for change in (0.0, c):
-        md = read_model_description(fmu)
-        vr = {v.name: v.valueReference for v in md.modelVariables}
-        f = FMU2Slave(guid=md.guid, unzipDirectory=extract(fmu),
-                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="i")
-        f.instantiate()
-        f.setupExperiment(startTime=0.0)
-        f.enterInitializationMode()
-        f.setReal([vr["run_in_change"], vr["run_in_distance"], vr["w_in"], vr["tau_out"]],
-                  [change, s0, w, tau])
-        # the grease held at the design's temperature: with the heat balance the run-in's
-        # extra heat would warm the grease and change the gear's own losses too
-        f.setBoolean([vr["use_T_oil_input"]], [True])
-        f.exitInitializationMode()
-        vals = []
-        for k in range(5):
-            f.doStep(currentCommunicationPoint=0.1 * k, communicationStepSize=0.1)
-            vals.append(f.getReal([vr["tau_in"]])[0])
-        f.terminate()
-        f.freeInstance()
-        out[change] = np.array(vals)
-    from model_core import shaft_speeds
-    gear = out[0.0]
-    loss_in = gear + tau * float(shaft_speeds("S1", 1.0, 15)["1"])   # less the lossless torque
+    md = read_model_description(fmu)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    f = FMU2Slave(guid=md.guid, unzipDirectory=extract(fmu),
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="i")
+    f.instantiate()
+    f.setupExperiment(startTime=0.0)
+    f.enterInitializationMode()
+    f.setReal([vr["run_in_change"], vr["run_in_distance"], vr["w_in"], vr["tau_out"]],
+              [change, s0, w, tau])
+    f.setBoolean([vr["use_T_oil_input"]], [True])
+    f.exitInitializationMode()
+    names = ["tau_in", "PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal", "PL_churn",
+             "P_loss"]
+    vals = []
+    for k in range(n):
+        f.doStep(currentCommunicationPoint=0.1 * k, communicationStepSize=0.1)
+        vals.append(f.getReal([vr[x] for x in names]))
+    f.terminate()
+    f.freeInstance()
+    v = np.array(vals)
+    return v[:, 0], v[:, 1:6].sum(1), v[:, 6:9].sum(1), v[:, 9]
+
+
+def test_run_in_in_the_fmu_decays_with_the_distance_run(fmu):
+    """Held at one operating point, the Python FMU's run-in adds c exp(-|w| t / s0) of the
+    gear's load-dependent loss torque (PL1+..+PL6)/w_in, not of its whole loss torque (the
+    idle losses of bearings, seals and churning do not run in); the added loss power is
+    exactly that (energy balance); with no load there is nothing to run in."""
+    c, s0, w = 0.2, 50.0, 100.0
     dist = w * 0.1 * np.arange(1, 6)
-    assert out[c] - gear == pytest.approx(c * np.exp(-dist / s0) * loss_in, rel=1e-9)
-    assert np.all(loss_in > 0)
+    ratio = float(__import__("model_core").shaft_speeds("S1", 1.0, 15)["1"])
+    excess = {}
+    for tau in (-8.0, -4.0):
+        gear, P_load, P_idle, P_loss = _run_fmu(fmu, 0.0, s0, w, tau)
+        run, P_load_c, _, P_loss_c = _run_fmu(fmu, c, s0, w, tau)
+        assert P_load_c == pytest.approx(P_load, rel=1e-12)   # the gear's own losses held
+        T_load = P_load / w
+        loss_in = gear + tau * ratio                         # less the lossless torque
+        assert np.all(P_idle > 0) and np.all(T_load > 0)
+        assert np.all(T_load < loss_in)                      # the idle part left out
+        assert run - gear == pytest.approx(c * np.exp(-dist / s0) * T_load, rel=1e-9)
+        # the run-in's torque is loss: P_loss grows by c exp(-d/s0) (PL1+..+PL6)
+        assert P_loss_c - P_loss == pytest.approx(c * np.exp(-dist / s0) * P_load, rel=1e-9)
+        excess[tau] = (run - gear) / P_load
+    # in proportion to the load-dependent losses at either load
+    assert excess[-8.0] == pytest.approx(excess[-4.0], rel=1e-9)
+    # no load: the idle losses (here 4.3 W of 5.2 W) are untouched; what runs in is the
+    # friction of the torque the driven shaft's own drag puts through the gear, and only that
+    gear, P_load, P_idle, P_loss = _run_fmu(fmu, 0.0, s0, w, 0.0)
+    run, _, _, _ = _run_fmu(fmu, c, s0, w, 0.0)
+    assert np.all(P_idle > 2.0 * P_load) and np.all(P_load > 0)
+    assert P_load + P_idle == pytest.approx(P_loss, rel=1e-9)     # no mesh loss calibrated
+    assert run - gear == pytest.approx(c * np.exp(-dist / s0) * (gear - P_idle / w), rel=1e-9)
 
 
 @pytest.mark.parametrize("seed, plan", [(61, "full"), (65, "one_speed")])

@@ -94,3 +94,38 @@ def test_replay_kernel_gives_solve_arrays_input_torque_to_the_bit(design, mode):
     other = ModeMap(scale_friction_level(design, 1.1), mode, 30.0, 300.0)
     assert other.same_speed_grid(m)
     assert np.array_equal(m.input_torque_arrays(w, T, other.locate_speeds(w)), ref)
+
+
+@pytest.mark.parametrize("mode", ["S1", "S2", "1S", "21"])
+def test_replay_load_loss_torque_is_the_gear_friction_of_solve(mode):
+    """The run-in's basis in a replay (``replay_input_torque(..., load_loss=True)``) is the
+    gear's load-dependent partial losses PL1..PL6 that ``ModeMap.solve`` reports over the
+    driving speed (``load_loss_torque``), every flow direction, with the sign of a loss; it is
+    the part of the whole loss torque that the idle losses (bearings' drag, seals, churning:
+    physical profile) are not, so loss_in - T_load = (PL_support + PL_seal + PL_churn)/w_in;
+    zero at a standstill."""
+    from model_core.lossmap import load_loss_torque, replay_input_torque
+    d = DriveDesign()       # physical profile, idle losses included
+    rng = np.random.default_rng(8)
+    w = rng.normal(0, 150, 300)
+    w[::40] = 0.0
+    T = rng.normal(0, 8, 300)
+    m = ModeMap(d, mode, 30.0, 300.0)
+    tau_in, T_load = m.input_torque_arrays(w, T, None, True)
+    assert np.array_equal(tau_in, m.input_torque_arrays(w, T))
+    for k in range(w.size):
+        _, _, L, _, _, _, _ = m.solve(w[k], T[k])
+        assert T_load[k] == pytest.approx(load_loss_torque(sum(L[:5]), w[k]), rel=1e-12,
+                                          abs=1e-15)
+        assert T_load[k] * w[k] >= 0
+    assert np.all(T_load[w == 0] == 0.0)
+    t_in, loss_in, load_in = replay_input_torque(d, mode, w, T, load_loss=True)
+    assert np.array_equal(t_in, replay_input_torque(d, mode, w, T)[0])
+    # the replay's own map (REPLAY_MARGIN over the recording's ranges)
+    from model_core.lossmap import REPLAY_MARGIN
+    mr = ModeMap(d, mode, float(np.max(np.abs(T))) * REPLAY_MARGIN + 1e-6,
+                 float(np.max(np.abs(w))) * REPLAY_MARGIN + 1e-6)
+    for k in np.flatnonzero(w != 0)[:40]:
+        _, _, L, _, _, _, _ = mr.solve(w[k], T[k])
+        assert loss_in[k] - load_in[k] == pytest.approx(sum(L[5:8]) / w[k], rel=1e-9,
+                                                        abs=1e-12)

@@ -416,6 +416,25 @@ def test_c_shaft_order_ripple_equals_python(model_lib):
                 ex.shaft_order_ripple_torque(theta, r, tau), rel=1e-12, abs=1e-12)
 
 
+def test_c_run_in_equals_python(model_lib):
+    """cd_run_in_torque of cd_load_loss_torque against ExtraPhysics.run_in_torque of
+    lossmap.load_loss_torque (the run-in on the gear's load-dependent losses PL1..PL6 over the
+    driving speed), both signs of the speed and at a standstill (no loss torque there)."""
+    from model_core.lossmap import load_loss_torque
+    ex = ExtraPhysics(**EXTRA)
+    cx = CExtra(**EXTRA)
+    run, load = model_lib.cd_run_in_torque, model_lib.cd_load_loss_torque
+    run.restype = load.restype = ctypes.c_double
+    run.argtypes = [ctypes.POINTER(CExtra)] + [ctypes.c_double] * 2
+    load.argtypes = [ctypes.c_double] * 2
+    rng = np.random.default_rng(5)
+    for P, w, d in zip(rng.uniform(0, 50, 20), rng.normal(0, 200, 20), rng.uniform(0, 200, 20)):
+        T = load(P, w)
+        assert T == pytest.approx(load_loss_torque(P, w), rel=1e-15) and T * w >= 0
+        assert run(ctypes.byref(cx), d, T) == pytest.approx(ex.run_in_torque(d, T), rel=1e-13)
+    assert load(3.0, 0.0) == load_loss_torque(3.0, 0.0) == 0.0
+
+
 def test_c_map_solve_equals_model_core(model_lib):
     """cd_solve against ModeMap.solve, every mode, in and beyond the map, both directions."""
     cmap = ctypes.c_void_p.in_dll(model_lib, "CD_MAP")       # address of the struct

@@ -223,7 +223,9 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
     t, w_in, T_out = rec.time, rec.speed_in, rec.torque_out
     tau_out = -T_out
     located = {}      # the speeds' places on the maps' speed grids, looked up once per grid
-    T_in, loss = replay_input_torque(design, mode, w_in, tau_out, located=located)
+    # (with the gear's load-dependent loss torque, which the run-in scales)
+    T_in, loss, load_loss = replay_input_torque(design, mode, w_in, tau_out, located=located,
+                                                load_loss=True)
     h = SENSITIVITY_STEP
     dln = math.log(1 + h) - math.log(1 - h)
     g = SENSITIVITY_GRID
@@ -250,7 +252,8 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
     w_s = uniform_filter1d(w_in, 2 * int(round(SPEED_SMOOTHING / (2 * dt))) + 1, mode="nearest")
     sig = effect_signals(t, w_s, loss, mode, design.z1, getattr(rec, "temperature", None),
                          T_in_model=T_in, sens_mu=sens_mu, sens_nu=sens_nu, sens_k=sens_k,
-                         sens_idle=sens_idle, tau_out=tau_out, sens_load=sens_load)
+                         sens_idle=sens_idle, tau_out=tau_out, sens_load=sens_load,
+                         load_loss_in=load_loss)
     if bandwidth > 0:
         # the measured speed lags the shaft's by the transducer's delay, the angle integrated
         # from it by that delay times the speed: advanced by the delay of the same filter the

@@ -90,8 +90,9 @@ EXTRA = (
      "(|w|/300 rad/s)^p (0 to 2)"),
     ("stribeck_exponent", "1", None, 1.0, False, "shape exponent delta of the Stribeck decay "
      "exp(-(|w|/w_s)^delta): 1 Tustin, 2 Gaussian (1 to 2)"),
-    ("run_in_change", "1", None, -1.0, False, "excess of the losses of a drive that runs in, "
-     "relative, at the start, decaying as exp(-distance/run_in_distance)"),
+    ("run_in_change", "1", None, -1.0, False, "excess of the load-dependent losses "
+     "(PL1..PL6) of a drive that runs in, relative, at the start, decaying as "
+     "exp(-distance/run_in_distance)"),
     ("run_in_distance", "rad", "Angle", POSITIVE_MIN, True, "distance (angle travelled by the driving "
      "shaft) over which the run-in excess decays by 1/e (> 0)"),
     ("ripple_1x_load", "N.m", "Torque", None, False, "load-scaled 1x ripple: amplitude at 10 N.m "

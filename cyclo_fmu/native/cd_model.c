@@ -170,9 +170,14 @@ double cd_steady_torque(const CDExtra *x, double w)
     return t;
 }
 
-double cd_run_in_torque(const CDExtra *x, double distance, double loss_in)
+double cd_run_in_torque(const CDExtra *x, double distance, double load_loss_in)
 {
-    return x->run_in_change * exp(-distance / x->run_in_distance) * loss_in;
+    return x->run_in_change * exp(-distance / x->run_in_distance) * load_loss_in;
+}
+
+double cd_load_loss_torque(double P_load, double w_in)
+{
+    return w_in != 0.0 ? P_load / w_in : 0.0;
 }
 
 /* model_core.discovered: reference load of the terms (T_REF), N*m */

@@ -49,7 +49,7 @@ typedef struct {
     double ripple_1x, ripple_1x_phase, ripple_roller, ripple_roller_phase;
     double thermal_loss_change, thermal_tau, drag_exponent;
     double stribeck_exponent;  /* delta of exp(-(|w|/w_s)^delta): 1 Tustin .. 2 Gaussian */
-    double run_in_change, run_in_distance;   /* run-in: c exp(-distance/s0) loss_in */
+    double run_in_change, run_in_distance;   /* run-in: c exp(-distance/s0) T_load (PL1..PL6) */
     double ripple_1x_load, ripple_1x_load_phase, ripple_roller_load, ripple_roller_load_phase;
     /* the warm-up per 10 K: c (T_oil - T_ref)/10 K loss_in */
     double thermal_loss_per_10K, thermal_T_ref;
@@ -110,8 +110,12 @@ double cd_dynamic_torque(const CDExtra *x, double alpha, double theta, double or
                          double elapsed, double loss_in);
 
 /* ExtraPhysics.run_in_torque: run-in torque after the driving shaft travelled distance (rad)
- * at the loss torque loss_in (N*m). */
-double cd_run_in_torque(const CDExtra *x, double distance, double loss_in);
+ * at the gear's load-dependent loss torque load_loss_in (N*m, cd_load_loss_torque). */
+double cd_run_in_torque(const CDExtra *x, double distance, double load_loss_in);
+
+/* lossmap.load_loss_torque: the gear's load-dependent loss torque at the driving shaft (N*m),
+ * the power of PL1..PL6 P_load (W) over the driving speed w_in (rad/s); 0 at a standstill. */
+double cd_load_loss_torque(double P_load, double w_in);
 
 /* ExtraPhysics.load_ripple_torque: the ripple whose amplitude grows with |tau_out| (N*m). */
 double cd_load_ripple_torque(const CDExtra *x, double theta, double order, double tau_out);

@@ -365,8 +365,10 @@ static void evaluate(Instance *c, double t, double dt, int commit)
             p_stored = p_stored + ripple;
         }
         tau_in += dyn;
-        if (s->extra.run_in_change != 0)
-            tau_in += cd_run_in_torque(&s->extra, distance, loss_in);
+        if (s->extra.run_in_change != 0)   /* the gear's load-dependent losses alone */
+            tau_in += cd_run_in_torque(&s->extra, distance, cd_load_loss_torque(
+                s->out[O_PL1] + s->out[O_PL2] + s->out[O_PL3] + s->out[O_PL5] + s->out[O_PL6],
+                w_in));
         if (s->extra.thermal_loss_per_10K != 0)   /* at T_oil; the losses at T_oil_start */
             tau_in += cd_thermal_per_10K_torque(&s->extra, s->out[O_T_OIL], loss_in);
         p_stored = p_stored * w_in;

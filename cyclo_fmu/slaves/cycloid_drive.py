@@ -106,8 +106,9 @@ DESIGN_PARAMETERS = [
     ("stribeck_exponent", "extra", "stribeck_exponent", "1",
      "shape exponent delta of the Stribeck decay exp(-(|w|/w_s)^delta): 1 Tustin, 2 Gaussian",
      Real),
-    ("run_in_change", "extra", "run_in_change", "1", "excess of the losses of a drive that runs "
-     "in, relative, at the start, decaying as exp(-distance/run_in_distance)", Real),
+    ("run_in_change", "extra", "run_in_change", "1", "excess of the load-dependent losses "
+     "(PL1..PL6) of a drive that runs in, relative, at the start, decaying as "
+     "exp(-distance/run_in_distance)", Real),
     ("run_in_distance", "extra", "run_in_distance", "rad", "distance (angle travelled by the "
      "driving shaft) over which the run-in excess decays by 1/e", Real),
     ("ripple_1x_load", "extra", "ripple_1x_load", "N.m", "load-scaled 1x ripple: amplitude at "
@@ -755,7 +756,11 @@ class CycloidDrive(UnitSlave):
         loss_in = self._tau_in_gear + tau_out * self._ratio_out   # minus the lossless torque
         ex = self._design.extra
         torque = float(ex.dynamic_torque(alpha, self._theta, self._order, t, loss_in))
-        self._run_in = float(ex.run_in_torque(self._distance, loss_in))
+        # the run-in scales the gear's load-dependent losses PL1..PL6 alone (its outputs, set
+        # by _update_at before this call), not the idle ones
+        self._run_in = float(ex.run_in_torque(self._distance, core.lossmap.load_loss_torque(
+            self.PL1 + self.PL2 + self.PL3 + self.PL5 + self.PL6, w_in))) \
+            if ex.run_in_change else 0.0
         # the per-10 K loss change at the grease temperature T_oil (the losses themselves held
         # at T_oil_start: one warm-up)
         self._per_10K = float(ex.thermal_per_10K_torque(self._T, loss_in))
