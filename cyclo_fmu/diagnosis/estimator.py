@@ -341,18 +341,14 @@ class Diagnoser:
         the discovery stage proposes the form. The dictionary holds only what a loss scale
         can stand in for (``STAND_IN_FAMILIES``), its laws of speed alone with the sign of a
         loss (``SPEED_FAMILIES``: a negative one is fitted again without them)."""
-        from dataclasses import replace as _replace
         S = rem.S
         cal = [t for t in S.terms if t.effect in CALIBRATION_EFFECTS]
         if not cal or rem.residual_raw is None:
             return
         try:
-            from .discover import Library, discover
+            from .discover import Library, discover  # noqa: F401 (the stage is optional)
         except ImportError:
             return
-        from .selection import DELTA_BIC, GramProblem, Term
-        temperature = getattr(rec, "temperature", None)
-        features = Library.default(temperature is not None).features
         other = [t for t in S.terms if t not in cal]
         fr = sel.opts.get("friction_miscalibrated")
         if fr and "friction_miscalibrated" not in S.ids:
@@ -365,7 +361,37 @@ class Diagnoser:
             v, _ = S.of(t)
             back += first_order(EFFECTS[t.effect].basis(P.sig, t.shape), P.dt,
                                 self.bandwidth) @ v
-        resid = rem.residual_raw + back
+        d = self._stand_in_form(rec, P, sel, rem.residual_raw + back, ocols)
+        if d is None:
+            return
+        # model A holds the whole calibration family (the pair the design carries), B the form
+        for eid in CALIBRATION_EFFECTS:
+            if eid not in S.ids and sel.opts.get(eid):
+                cal = cal + [sel.opts[eid][0]]
+        fit_a, fit_b = _form_against(P, sel, other, cal, d, self.n_folds)
+        gap = fit_a.bic - fit_b.bic
+        if gap < DELTA_BIC:
+            return
+        ids = [t.effect for t in cal if t.effect in S.ids]
+        rms = float(np.sqrt(np.mean(block_means(back, P.m) ** 2)))
+        text = (f"{' and '.join(ids)} ({1e3 * rms:.2f} mN*m) stood in for it: the proposed "
+                f"closed form explains that part better (BIC lower by {gap:.0f})")
+        note = (f"{', '.join(ids)} withdrawn: the sparse closed form of the discovery's "
+                f"dictionary explains what {'it' if len(ids) == 1 else 'they'} held better (BIC "
+                f"{fit_b.bic:.1f} against {fit_a.bic:.1f}, at least {DELTA_BIC:g} lower "
+                "needed); a free loss scale stands in for a loss of another law")
+        return ids, note, text
+
+    def _stand_in_form(self, rec, P, sel, resid, ocols):
+        """The discovery's sparse closed form of what the calibration effects held
+        (``resid``: the remainder with their part added back), from the families a loss scale
+        can stand in for (``STAND_IN_FAMILIES``; a negative law of speed alone is fitted again
+        without ``SPEED_FAMILIES``); None where no form holding a law of the load is proposed
+        (a law of speed alone is the library's drag, which the selection already put against
+        the idle-loss scale on the recording's BIC)."""
+        from .discover import Library, discover
+        temperature = getattr(rec, "temperature", None)
+        features = Library.default(temperature is not None).features
 
         def closed_form(families):
             # without the feature in proportion to the model's input torque: it is a library
@@ -384,40 +410,10 @@ class Diagnoser:
                               for t in d.terms):
             d = closed_form(tuple(f for f in STAND_IN_FAMILIES if f not in SPEED_FAMILIES))
         if not d.proposed or d.prediction is None:
-            return
+            return None
         if not {t["family"] for t in d.terms} & set(LOAD_FAMILIES):
-            # a law of speed alone is the library's drag, which the selection already put
-            # against the idle-loss scale on the recording's BIC
-            return
-        n = min(len(P.y), len(d.prediction))
-        # model A holds the whole calibration family (the pair the design carries), B the form
-        for eid in CALIBRATION_EFFECTS:
-            if eid not in S.ids and sel.opts.get(eid):
-                cal = cal + [sel.opts[eid][0]]
-        ccols = [c for t in cal for c in t.cols]
-        X = np.column_stack([P.X[:n, ocols + ccols], d.prediction[:n]])
-        prob = GramProblem(X, P.y[:n], np.asarray(sel.weights, float)[:n], self.n_folds)
-        i, A = 0, []
-        for t in other + cal:
-            A.append(_replace(t, cols=tuple(range(i, i + len(t.cols)))))
-            i += len(t.cols)
-        k_form = 2 * len(d.terms)
-        form = Term("form", None, (X.shape[1] - 1,), ("form",), ("N*m",), (-np.inf,),
-                    (np.inf,), k_form - 1)
-        fit_a = prob.fit(tuple(A), cv=False)
-        fit_b = prob.fit(tuple(A[:len(other)]) + (form,), cv=False)
-        gap = fit_a.bic - fit_b.bic
-        if gap < DELTA_BIC:
-            return
-        ids = [t.effect for t in cal if t.effect in S.ids]
-        rms = float(np.sqrt(np.mean(block_means(back, P.m) ** 2)))
-        text = (f"{' and '.join(ids)} ({1e3 * rms:.2f} mN*m) stood in for it: the proposed "
-                f"closed form explains that part better (BIC lower by {gap:.0f})")
-        note = (f"{', '.join(ids)} withdrawn: the sparse closed form of the discovery's "
-                f"dictionary explains what {'it' if len(ids) == 1 else 'they'} held better (BIC "
-                f"{fit_b.bic:.1f} against {fit_a.bic:.1f}, at least {DELTA_BIC:g} lower "
-                "needed); a free loss scale stands in for a loss of another law")
-        return ids, note, text
+            return None
+        return d
 
     def _decide_beside_form(self, rec, d):
         """The named effects decided again with the proposed closed form in the model.
@@ -733,3 +729,24 @@ class Diagnoser:
                 f"the updated design would fit worse (residual RMS {1e3 * after:.3f} against "
                 f"{1e3 * before:.3f} mN*m): not applied"]
         return fixed, notes
+
+
+def _form_against(P, sel, other, cal, d, n_folds):
+    """(fit A, fit B) on the blocks both cover: A the selection's ``other`` terms with the
+    calibration terms ``cal``, B the ``other`` terms with the closed form ``d`` (its
+    parameters counted as two per coefficient, a value and a shape chosen on a grid, so that
+    a tie keeps the library's physical effect)."""
+    from dataclasses import replace as _replace
+    from .selection import GramProblem, Term
+    n = min(len(P.y), len(d.prediction))
+    ocols = [c for t in other for c in t.cols]
+    ccols = [c for t in cal for c in t.cols]
+    X = np.column_stack([P.X[:n, ocols + ccols], d.prediction[:n]])
+    prob = GramProblem(X, P.y[:n], np.asarray(sel.weights, float)[:n], n_folds)
+    i, A = 0, []
+    for t in other + cal:
+        A.append(_replace(t, cols=tuple(range(i, i + len(t.cols)))))
+        i += len(t.cols)
+    form = Term("form", None, (X.shape[1] - 1,), ("form",), ("N*m",), (-np.inf,),
+                (np.inf,), 2 * len(d.terms) - 1)
+    return prob.fit(tuple(A), cv=False), prob.fit(tuple(A[:len(other)]) + (form,), cv=False)
