@@ -275,15 +275,21 @@ def test_a_clean_four_quadrant_recording_with_flicker_noise_gives_nothing(seed):
 
 
 def test_a_small_offset_in_flicker_noise_is_still_found():
-    """A 1.5 mN*m zero offset of the input torque reading under the same 1/f noise is named
-    (within 0.5 mN*m of its size) and leaves nothing unexplained."""
+    """A 2.5 mN*m zero offset of the input torque reading under the same 1/f noise is named
+    (within 0.5 mN*m of its size) and leaves nothing unexplained. The mean of this noise over
+    the recording wanders by 0.51 mN*m (standard deviation, 300 draws): an offset is that
+    mean's twin, and 2.5 mN*m is 5 of its standard deviations, beyond the effect claim's
+    false-alarm rate (1 % over the candidates, a normal score of 3.7) with the spectrum's
+    own uncertainty at zero frequency (``twins.f_tail``). (1.5 mN*m, 3 standard deviations,
+    the former size here, is not: twins that took the spectrum as exact named it at
+    p = 1e-6.)"""
     r = synthesize("torque_sensor_offset", 5, "S1", "small", plan="four_quadrant",
-                   effect_values={"offset": 1.5e-3})
+                   effect_values={"offset": 2.5e-3})
     d = Diagnoser(mode="S1").fit(_with_flicker(r, 5)).diagnosis_
     found = {e["id"]: e for e in d.effects}
     assert "torque_sensor_offset" in found, list(found)
     assert found["torque_sensor_offset"]["parameters"]["offset"]["value"] == pytest.approx(
-        1.5e-3, abs=0.5e-3)
+        2.5e-3, abs=0.5e-3)
     assert not d.unexplained["present"], d.unexplained["statement"]
 
 
