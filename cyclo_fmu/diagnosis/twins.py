@@ -33,7 +33,10 @@ false-alarm rate ``FALSE_ALARM`` (1 %). ``N_TWINS`` twins (64) cannot resolve a 
 empirically, so the twins' statistics are fitted with the tail their distribution has under
 Gaussian noise, its scale and shape measured on the twins: the improvement in the residual sum
 of squares a linear term makes is a scaled chi-square (scale and effective degrees of freedom
-by the method of moments: colour and weights change both); a claim chosen among K candidates
+by the method of moments: colour and weights change both), divided by the spectrum's own
+error at the frequencies the statistic lives at (each twin drawn again from the same normal
+numbers under a redrawn spectrum, ``spectrum_draws``): a scaled F tail (``f_tail``); a claim
+chosen among K candidates
 is judged at FALSE_ALARM / K (Bonferroni), a claim that already maximises over its options
 (the best group of the generic basis) at FALSE_ALARM, its twins maximising alike.
 """
