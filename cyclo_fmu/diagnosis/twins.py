@@ -33,7 +33,10 @@ false-alarm rate ``FALSE_ALARM`` (1 %). ``N_TWINS`` twins (64) cannot resolve a 
 empirically, so the twins' statistics are fitted with the tail their distribution has under
 Gaussian noise, its scale and shape measured on the twins: the improvement in the residual sum
 of squares a linear term makes is a scaled chi-square (scale and effective degrees of freedom
-by the method of moments: colour and weights change both); a claim chosen among K candidates
+by the method of moments: colour and weights change both), divided by the spectrum's own
+error at the frequencies the statistic lives at (each twin drawn again from the same normal
+numbers under a redrawn spectrum, ``spectrum_draws``): a scaled F tail (``f_tail``); a claim
+chosen among K candidates
 is judged at FALSE_ALARM / K (Bonferroni), a claim that already maximises over its options
 (the best group of the generic basis) at FALSE_ALARM, its twins maximising alike.
 """
@@ -89,6 +92,47 @@ def chi2_tail(samples, stat, alpha) -> tuple:
     return float(c * chdtri(nu, alpha)), float(chdtrc(nu, max(stat, 0.0) / c))
 
 
+#: [1] the largest effective degrees of freedom of a spectrum's error taken as finite (beyond
+#: it the F tail is the chi-square's to three digits)
+MAX_SPECTRUM_DOF = 1e5
+
+
+def f_tail(samples, redrawn, stat, alpha) -> tuple:
+    """(threshold at ``alpha``, p-value of ``stat``) of a statistic whose twins' noise has an
+    estimated spectrum: the twins' statistic given the estimate is a scaled chi-square
+    (``chi2_tail``'s moments on ``samples``: scale c, degrees of freedom a); the estimate's
+    error at the frequencies the statistic lives at scales it by a factor whose relative
+    variance the same twins under redrawn spectra show (``redrawn``: the same noise draws,
+    the spectrum times ``spectrum_draws``' factors; the variance of the ratio of the two,
+    2/nu). The statistic over its chi-square's scale is then F(a, nu) distributed: Student's
+    t for a variance estimated from the recording itself, generalised (a claim that lives at
+    the few slowest frequencies of a 1/f noise, nu ~ 2 TAPERS, is judged on a tail several
+    times as long as the chi-square's; a claim spread over the band, nu large, on the
+    chi-square's). (scipy.special's F tail and its inverse.)"""
+    from scipy.special import fdtrc, fdtri
+    s = np.asarray(samples, float)
+    mu, var = float(np.mean(s)), float(np.var(s, ddof=1)) if len(s) > 1 else 0.0
+    if mu <= 0 or var <= 0:
+        return max(mu, 0.0), (0.0 if stat > mu else 1.0)
+    a = 2 * mu * mu / var
+    c = var / (2 * mu)
+    q = np.asarray(redrawn, float)
+    ok = (s > 0) & (q > 0)
+    nu = MAX_SPECTRUM_DOF
+    if ok.sum() > 2:
+        # the factor each twin's statistic took from its redrawn spectrum: q / s with the
+        # same noise draws; its relative variance from the spread of log(q / s) (a median
+        # absolute deviation: a twin whose statistic is near zero gives a ratio of little
+        # weight), at most one band's (a weighted mean of the bands' factors varies less
+        # than one of them: nu >= 2 TAPERS)
+        lr = np.log(q[ok] / s[ok])
+        v = (1.4826 * float(np.median(np.abs(lr - np.median(lr))))) ** 2
+        if v > 0:
+            nu = float(np.clip(2.0 / v, 2.0 * TAPERS, MAX_SPECTRUM_DOF))
+    return (float(c * a * fdtri(a, nu, 1.0 - alpha)),
+            float(fdtrc(a, nu, max(stat, 0.0) / (c * a))))
+
+
 def normal_tail(samples, stat, alpha) -> tuple:
     """(threshold, p-value) of a normal fitted to ``samples`` (a mean over many blocks).
     (scipy.special's normal tail and its inverse, as scipy.stats.norm's sf and isf.)"""
@@ -130,22 +174,38 @@ def gumbel_tail(samples, stat, alpha) -> tuple:
             float(-math.expm1(-math.exp(-(stat - loc) / beta))))
 
 
-def noise_spectrum(x, tapers=TAPERS) -> np.ndarray:
+def noise_spectrum(x, tapers=TAPERS, keep=None) -> np.ndarray:
     """Sine-multitaper estimate of the power of ``x`` at the frequencies of its real FFT,
     scaled as |FFT|^2 (a white series of variance s2 has the value N s2 at every frequency);
-    the mean removed."""
-    x = np.asarray(x, float) - np.mean(x)
+    the mean removed.
+
+    ``keep`` (bool, optional): the samples that hold the series; the others (a standstill the
+    model does not judge, excluded spikes) are set to zero, and each taper's periodogram is
+    divided by the taper's energy on the kept samples (sum h_k^2 over them, 1 with none
+    left out): a series with a fifth of its blocks zeroed would otherwise read a fifth too
+    quiet at every frequency (measured on a start-stop recording with 20 % standstill: twins
+    of the slow structure 0.75 - 0.8 of the noise's own)."""
+    x = np.asarray(x, float)
     n = len(x)
+    m = np.ones(n, bool) if keep is None else np.asarray(keep, bool)
+    if not m.any():
+        return np.zeros(n // 2 + 1)
+    x = np.where(m, x - np.mean(x[m]), 0.0)
     k = np.arange(1, tapers + 1)[:, None]
     h = math.sqrt(2.0 / (n + 1)) * np.sin(math.pi * k * np.arange(1, n + 1)[None, :] / (n + 1))
-    return n * np.mean(np.abs(np.fft.rfft(h * x[None, :], axis=1)) ** 2, 0)
+    energy = np.maximum((h * h) @ m.astype(float), 1e-300)
+    return n * np.mean(np.abs(np.fft.rfft(h * x[None, :], axis=1)) ** 2 / energy[:, None], 0)
 
 
-def spectral_noise(spec, n, k, rng) -> np.ndarray:
+def spectral_noise(spec, n, k, rng, z=None) -> np.ndarray:
     """``k`` stationary Gaussian series of length ``n`` whose expected |FFT|^2 is ``spec``
-    (columns)."""
-    z = rng.standard_normal((len(spec), k)) + 1j * rng.standard_normal((len(spec), k))
-    z *= np.sqrt(np.asarray(spec) / 2.0)[:, None]
+    (one spectrum for all, or frequencies x ``k``: one per series); ``z`` (frequencies x
+    ``k`` complex standard normals, optional): the draws to use (the same series under
+    another spectrum)."""
+    spec = np.asarray(spec, float)
+    if z is None:
+        z = rng.standard_normal((len(spec), k)) + 1j * rng.standard_normal((len(spec), k))
+    z = z * (np.sqrt(spec / 2.0) if spec.ndim == 2 else np.sqrt(spec / 2.0)[:, None])
     # the mean: a real normal of the spectrum's level at zero frequency (the multitaper
     # estimate there is the level of the slowest frequencies: how far the noise's mean over
     # the recording wanders, which a constant term such as a zero offset would take)
@@ -183,10 +243,38 @@ class Twins:
         r0 = self.rss(tuple(base))
         return np.max([r0 - self.rss(tuple(base) + tuple(o)) for o in extra_options], 0)
 
-    def check(self, stat, samples, alpha=FALSE_ALARM, tail=chi2_tail) -> Check:
-        thr, p = tail(samples, stat, alpha)
+    def check(self, stat, samples, alpha=FALSE_ALARM, tail=None) -> Check:
+        """``samples``: a statistic of the twins as ``rss`` and ``gain`` give it (the twins
+        of the estimated spectrum, then the same twins of the redrawn spectra): judged on a
+        scaled F tail (``f_tail``); with ``tail``, that tail on the first half alone."""
+        s = np.asarray(samples, float)
+        if tail is None:
+            thr, p = f_tail(s[:self.n], s[self.n:], stat, alpha)
+        else:
+            thr, p = tail(s[:self.n], stat, alpha)
         return Check(float(stat), float(thr), float(p), float(alpha), self.n,
                      bool(stat > thr))
+
+
+def spectrum_draws(spec, k, rng, tapers=TAPERS) -> np.ndarray:
+    """``k`` spectra (frequencies x ``k``) as the recording's noise could have had them: the
+    multitaper estimate ``spec`` times an independent factor per band of ``tapers + 1``
+    frequencies (the estimate's resolution: bands further apart are nearly independent), the
+    factor distributed as the estimate's own error, chi-square of 2 ``tapers`` degrees of
+    freedom over its mean (mean 1, relative standard deviation 1/sqrt(tapers)).
+
+    One recording holds only a few frequencies below the slowest changes of a plan, and a
+    flicker (1/f) noise puts most of its power there: a statistic that lives in those few
+    frequencies (a slow drift, a warm-up, an offset between holds) is then as uncertain as
+    the spectrum estimated from them. Twins of one fixed estimate treat it as exact and
+    state a false-alarm rate they do not hold; twins of these draws carry its uncertainty
+    (a parametric bootstrap of the spectrum). A statistic spread over many bands (most
+    claims) averages the factors out, its twins unchanged in the mean."""
+    spec = np.asarray(spec, float)
+    band = tapers + 1
+    nb = -(-len(spec) // band)
+    f = rng.gamma(tapers, 1.0 / tapers, (nb, k))
+    return spec[:, None] * np.repeat(f, band, axis=0)[:len(spec)]
 
 
 def make_twins(prob, noise_resid, weights, rng=None, n=N_TWINS, keep_noise=False) -> Twins:
@@ -194,21 +282,25 @@ def make_twins(prob, noise_resid, weights, rng=None, n=N_TWINS, keep_noise=False
     ``noise_resid`` (the block residual after the selection; blocks of zero ``weights`` set
     to zero), the Gram products with the problem's columns, per fold."""
     rng = rng or np.random.default_rng(20261126)
-    x = np.where(weights > 0, noise_resid, 0.0)
-    N = len(x)
-    spec = noise_spectrum(x)
-    C = [np.zeros((prob.Xs.shape[1], n)) for _ in range(prob.n_folds)]
-    yy = [np.zeros(n) for _ in range(prob.n_folds)]
+    keep = np.asarray(weights) > 0
+    N = len(noise_resid)
+    spec = noise_spectrum(noise_resid, keep=keep)
+    # columns 0..n-1: the twins of the estimated spectrum; n..2n-1: the same draws under
+    # redrawn spectra (``spectrum_draws``), for the F tail of every claim (``f_tail``)
+    C = [np.zeros((prob.Xs.shape[1], 2 * n)) for _ in range(prob.n_folds)]
+    yy = [np.zeros(2 * n) for _ in range(prob.n_folds)]
     keep = [] if keep_noise else None
     for k0 in range(0, n, CHUNK):
         k = min(CHUNK, n - k0)
-        Y = spectral_noise(spec, N, k, rng)
-        if keep is not None:
-            keep.append(Y)
-        for f, sel in enumerate(prob.fold_slices):
-            Yw = Y[sel] * prob.w[sel, None]
-            C[f][:, k0:k0 + k] = prob.Xs[sel].T @ Yw
-            yy[f][k0:k0 + k] = np.einsum("ij,ij->j", Yw, Y[sel])
+        z = rng.standard_normal((len(spec), k)) + 1j * rng.standard_normal((len(spec), k))
+        for off, sp in ((0, spec), (n, spectrum_draws(spec, k, rng))):
+            Y = spectral_noise(sp, N, k, rng, z=z)
+            if keep is not None and off == 0:
+                keep.append(Y)
+            for f, sel in enumerate(prob.fold_slices):
+                Yw = Y[sel] * prob.w[sel, None]
+                C[f][:, off + k0:off + k0 + k] = prob.Xs[sel].T @ Yw
+                yy[f][off + k0:off + k0 + k] = np.einsum("ij,ij->j", Yw, Y[sel])
     return Twins(prob, n, spec, C, yy, np.hstack(keep) if keep else None)
 
 
