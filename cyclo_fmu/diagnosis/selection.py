@@ -41,11 +41,26 @@ class Term:
 class Fit:
     terms: tuple
     coef: np.ndarray           # in column order of the terms
-    se: np.ndarray
+    #: the standard errors (``se``), or what they are computed from when first read:
+    #: (G, sigma2, scale) (a selection fits thousands of subsets and reads the errors of a few)
+    _se: object
     rss: float                 # weighted
     cv_mse: float              # weighted held-out mean square (blocked folds)
     bic: float
     admissible: bool
+
+    @property
+    def se(self) -> np.ndarray:
+        """Standard errors of ``coef`` (noise only): sqrt(diag(sigma2 pinv(G))) / scale."""
+        if not isinstance(self._se, np.ndarray):
+            G, sigma2, scale = self._se
+            try:
+                cov = sigma2 * np.linalg.pinv(G) if len(G) else np.zeros((0, 0))
+                se = np.sqrt(np.clip(np.diag(cov), 0, None))
+            except np.linalg.LinAlgError:
+                se = np.full(len(G), np.nan)
+            self._se = se / scale if len(G) else se
+        return self._se
 
     @property
     def cv_rmse(self) -> float:
@@ -137,13 +152,9 @@ class GramProblem:
                 err += self.yy[f] - 2 * bf @ self.c[f][idx] + bf @ self.G[f][np.ix_(idx, idx)] @ bf
             cv_mse = max(err, 0.0) / sw
         sigma2 = rss / max(sw - len(idx), 1.0)
-        try:
-            cov = sigma2 * np.linalg.pinv(G) if len(idx) else np.zeros((0, 0))
-            se = np.sqrt(np.clip(np.diag(cov), 0, None))
-        except np.linalg.LinAlgError:
-            se = np.full(len(idx), np.nan)
         coef = b / self.scale[idx] if len(idx) else b
-        se = se / self.scale[idx] if len(idx) else se
+        # the standard errors when first read (``Fit.se``)
+        se = (G, sigma2, self.scale[idx] if len(idx) else None)
         lo = np.array([v for t in terms for v in t.lower])
         hi = np.array([v for t in terms for v in t.upper])
         admissible = bool(np.all((coef >= lo) & (coef <= hi))) if len(idx) else True
