@@ -81,6 +81,11 @@ class Fit:
         return [t.effect for t in self.terms]
 
 
+def _sub(G, idx):
+    """``G[np.ix_(idx, idx)]``, the same array, in a third of its time (fits are many)."""
+    return G.take(idx, 0).take(idx, 1)
+
+
 class GramProblem:
     """Weighted least squares ``y ~ X b`` over blocks, with time-ordered folds."""
 
@@ -136,7 +141,7 @@ class GramProblem:
         idx = np.array([i for t in terms for i in t.cols], int)
         fs = range(self.n_folds) if folds is None else list(folds)
         Gs, cs, yy, sw = self._totals(fs)
-        G = Gs[np.ix_(idx, idx)] if len(idx) else np.zeros((0, 0))
+        G = _sub(Gs, idx) if len(idx) else np.zeros((0, 0))
         c = cs[idx] if len(idx) else np.zeros(0)
         b = self._solve(G, c)
         rss = max(yy - 2 * b @ c + b @ G @ b, 1e-300)
@@ -147,9 +152,9 @@ class GramProblem:
         if cv:
             err = 0.0
             for f in fs:
-                Gtr, ctr = G - self.G[f][np.ix_(idx, idx)], c - self.c[f][idx]
+                Gtr, ctr = G - _sub(self.G[f], idx), c - self.c[f][idx]
                 bf = self._solve(Gtr, ctr)
-                err += self.yy[f] - 2 * bf @ self.c[f][idx] + bf @ self.G[f][np.ix_(idx, idx)] @ bf
+                err += self.yy[f] - 2 * bf @ self.c[f][idx] + bf @ _sub(self.G[f], idx) @ bf
             cv_mse = max(err, 0.0) / sw
         sigma2 = rss / max(sw - len(idx), 1.0)
         coef = b / self.scale[idx] if len(idx) else b
@@ -173,7 +178,7 @@ class GramProblem:
         if not len(idx):
             return max(float(yy), 1e-300)
         cr = c[idx] - b * G[idx, j]
-        Gr = G[np.ix_(idx, idx)]
+        Gr = _sub(G, idx)
         br = self._solve(Gr, cr)
         return max(float(yy - 2 * br @ cr + br @ Gr @ br), 1e-300)
 
