@@ -160,9 +160,12 @@ class GramProblem:
         coef = b / self.scale[idx] if len(idx) else b
         # the standard errors when first read (``Fit.se``)
         se = (G, sigma2, self.scale[idx] if len(idx) else None)
-        lo = np.array([v for t in terms for v in t.lower])
-        hi = np.array([v for t in terms for v in t.upper])
-        admissible = bool(np.all((coef >= lo) & (coef <= hi))) if len(idx) else True
+        lo = [v for t in terms for v in t.lower]
+        hi = [v for t in terms for v in t.upper]
+        if len(lo) == len(hi) == len(idx):   # (a few values: compared in Python, the same test)
+            admissible = all(a <= v <= z for v, a, z in zip(coef.tolist(), lo, hi))
+        else:
+            admissible = bool(np.all((coef >= np.array(lo)) & (coef <= np.array(hi))))
         return Fit(tuple(terms), coef, se, float(rss), cv_mse, float(bic), admissible)
 
 
