@@ -122,3 +122,35 @@ def test_a_hidden_width_is_found_and_closes(seed, shape, widths):
     assert fixed.extra.stribeck_transition == p["w_r"]["value"]
     again = Diagnoser(fixed, "S1").fit(as_recording(r)).diagnosis_
     assert again.effects == [] and not again.unexplained["present"]
+
+
+@pytest.mark.parametrize("rate, bandwidth", [(1000.0, 1000.0), (10000.0, 1000.0),
+                                             (200.0, 1000.0), (1000.0, 0.0)])
+def test_widened_columns_are_the_whole_columns_to_the_bit(rate, bandwidth):
+    """The diagnosis forms a widened Stribeck column (w_r > 0) from its sharp one, evaluating
+    the basis and the transducer's low pass only near the reversals
+    (problem._Widened): the same numbers, bit for bit, as the whole column through the low
+    pass and the masked block means, for any sample rate, with compared samples masked out."""
+    from cyclo_fmu.diagnosis.problem import _candidates, masked_means
+    from cyclo_fmu.diagnosis.replay import first_order
+    rng = np.random.default_rng(3)
+    dt, m = 1.0 / rate, max(1, int(round(0.01 * rate)))
+    n = 40 * m * 10
+    t = np.arange(n) * dt
+    # reversals of several rates and a hold at standstill, with speed noise
+    w = 120 * np.sin(2 * np.pi * t / 1.7) * np.abs(np.sin(2 * np.pi * t / 5.3)) ** 0.5
+    w[(t > 1.0) & (t < 1.3)] = 0.0
+    w += rng.normal(0, 0.05, n)
+    mask = rng.random(n) > 0.05
+    mask[: 3 * m] = False                 # an empty block: its plain mean
+    counts = mask.reshape(-1, m).sum(1)
+    eff = EFFECTS["low_speed_friction"]
+    shapes = eff.shapes({"w_in": w}, around=(30.0, 2.0, 0.0))
+    assert any(s[2] > 0 for s in shapes)
+    cols, options, _ = _candidates({"w_in": w}, ["low_speed_friction"], True, dt, bandwidth,
+                                   mask, m, counts=counts,
+                                   refined={"low_speed_friction": shapes})
+    for term, B in zip(options["low_speed_friction"], cols):
+        whole = masked_means(first_order(eff.basis({"w_in": w}, term.shape), dt, bandwidth),
+                             mask, m, counts)
+        np.testing.assert_array_equal(B, whole, err_msg=str(term.shape))

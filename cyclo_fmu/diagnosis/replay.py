@@ -53,13 +53,15 @@ def _pole(bandwidth, dt):
     return math.exp(-2 * math.pi * bandwidth * dt)
 
 
-def first_order(x, dt, bandwidth):
+def first_order(x, dt, bandwidth, before=None):
     """A first-order low pass (the transducer's bandwidth, Hz) along axis 0, started in steady
-    state (``scipy.signal.lfilter``, see ``_linear_filter``)."""
+    state (``scipy.signal.lfilter``, see ``_linear_filter``); ``before``: its output at the
+    sample before ``x`` (``x[None, 0]``'s shape), where ``x`` continues a filtered series (the
+    same numbers as the whole series filtered: the recursion's state is ``a`` times it)."""
     if bandwidth <= 0:
         return x
     a = _pole(bandwidth, dt)
-    zi = a * x[:1]
+    zi = a * (x[:1] if before is None else before)
     return _linear_filter()(np.atleast_1d([1 - a]), np.atleast_1d([1, -a]), x, 0, zi)[0]
 
 

@@ -41,11 +41,26 @@ class Term:
 class Fit:
     terms: tuple
     coef: np.ndarray           # in column order of the terms
-    se: np.ndarray
+    #: the standard errors (``se``), or what they are computed from when first read:
+    #: (G, sigma2, scale) (a selection fits thousands of subsets and reads the errors of a few)
+    _se: object
     rss: float                 # weighted
     cv_mse: float              # weighted held-out mean square (blocked folds)
     bic: float
     admissible: bool
+
+    @property
+    def se(self) -> np.ndarray:
+        """Standard errors of ``coef`` (noise only): sqrt(diag(sigma2 pinv(G))) / scale."""
+        if not isinstance(self._se, np.ndarray):
+            G, sigma2, scale = self._se
+            try:
+                cov = sigma2 * np.linalg.pinv(G) if len(G) else np.zeros((0, 0))
+                se = np.sqrt(np.clip(np.diag(cov), 0, None))
+            except np.linalg.LinAlgError:
+                se = np.full(len(G), np.nan)
+            self._se = se / scale if len(G) else se
+        return self._se
 
     @property
     def cv_rmse(self) -> float:
@@ -64,6 +79,11 @@ class Fit:
     @property
     def ids(self) -> list:
         return [t.effect for t in self.terms]
+
+
+def _sub(G, idx):
+    """``G[np.ix_(idx, idx)]``, the same array, in a third of its time (fits are many)."""
+    return G.take(idx, 0).take(idx, 1)
 
 
 class GramProblem:
@@ -121,7 +141,7 @@ class GramProblem:
         idx = np.array([i for t in terms for i in t.cols], int)
         fs = range(self.n_folds) if folds is None else list(folds)
         Gs, cs, yy, sw = self._totals(fs)
-        G = Gs[np.ix_(idx, idx)] if len(idx) else np.zeros((0, 0))
+        G = _sub(Gs, idx) if len(idx) else np.zeros((0, 0))
         c = cs[idx] if len(idx) else np.zeros(0)
         b = self._solve(G, c)
         rss = max(yy - 2 * b @ c + b @ G @ b, 1e-300)
@@ -132,21 +152,20 @@ class GramProblem:
         if cv:
             err = 0.0
             for f in fs:
-                Gtr, ctr = G - self.G[f][np.ix_(idx, idx)], c - self.c[f][idx]
+                Gtr, ctr = G - _sub(self.G[f], idx), c - self.c[f][idx]
                 bf = self._solve(Gtr, ctr)
-                err += self.yy[f] - 2 * bf @ self.c[f][idx] + bf @ self.G[f][np.ix_(idx, idx)] @ bf
+                err += self.yy[f] - 2 * bf @ self.c[f][idx] + bf @ _sub(self.G[f], idx) @ bf
             cv_mse = max(err, 0.0) / sw
         sigma2 = rss / max(sw - len(idx), 1.0)
-        try:
-            cov = sigma2 * np.linalg.pinv(G) if len(idx) else np.zeros((0, 0))
-            se = np.sqrt(np.clip(np.diag(cov), 0, None))
-        except np.linalg.LinAlgError:
-            se = np.full(len(idx), np.nan)
         coef = b / self.scale[idx] if len(idx) else b
-        se = se / self.scale[idx] if len(idx) else se
-        lo = np.array([v for t in terms for v in t.lower])
-        hi = np.array([v for t in terms for v in t.upper])
-        admissible = bool(np.all((coef >= lo) & (coef <= hi))) if len(idx) else True
+        # the standard errors when first read (``Fit.se``)
+        se = (G, sigma2, self.scale[idx] if len(idx) else None)
+        lo = [v for t in terms for v in t.lower]
+        hi = [v for t in terms for v in t.upper]
+        if len(lo) == len(hi) == len(idx):   # (a few values: compared in Python, the same test)
+            admissible = all(a <= v <= z for v, a, z in zip(coef.tolist(), lo, hi))
+        else:
+            admissible = bool(np.all((coef >= np.array(lo)) & (coef <= np.array(hi))))
         return Fit(tuple(terms), coef, se, float(rss), cv_mse, float(bic), admissible)
 
 
@@ -162,7 +181,7 @@ class GramProblem:
         if not len(idx):
             return max(float(yy), 1e-300)
         cr = c[idx] - b * G[idx, j]
-        Gr = G[np.ix_(idx, idx)]
+        Gr = _sub(G, idx)
         br = self._solve(Gr, cr)
         return max(float(yy - 2 * br @ cr + br @ Gr @ br), 1e-300)
 
