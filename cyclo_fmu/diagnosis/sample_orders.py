@@ -67,13 +67,21 @@ def fit_ripple(P, r_raw, n_folds=5):
     law_max = max(RIPPLE_LOAD_LAWS)
     sig = {k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == P.mask.shape else v)
            for k, v in P.sig.items()}
-    B = _within(first_order(eff.basis(sig, law_max), P.dt, P.bandwidth), mask, m, counts)
+    # the columns through the transducer's low pass one at a time, in place (the basis is the
+    # stage's largest array: no filtered copy of it beside it)
+    B = eff.basis(sig, law_max)
+    for j in range(B.shape[1]):
+        B[:, j] = first_order(B[:, j], P.dt, P.bandwidth)
+    B = _within(B, mask, m, counts)
     r = _within(np.array(r_raw[:n], float)[:, None], mask, m, counts)[:, 0]
-    idx = np.flatnonzero(use)
-    B, r = B[idx], r[idx]
-    nu = len(idx)
-    # time-ordered folds of the resolvable samples; per-fold Gram matrices
-    bounds = (np.arange(n_folds + 1) * nu) // n_folds
+    # the samples that do not resolve the orders weigh nothing (zeroed in place, no copy)
+    B[~use] = 0.0
+    r[~use] = 0.0
+    nu = int(np.count_nonzero(use))
+    # time-ordered folds with equal shares of the resolvable samples; per-fold Gram matrices
+    cum = np.cumsum(use)
+    bounds = np.searchsorted(cum, (np.arange(n_folds + 1) * nu) // n_folds, side="left")
+    bounds[0], bounds[-1] = 0, n
     Gf = [B[a:b].T @ B[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
     bf = [B[a:b].T @ r[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
     rf = [float(r[a:b] @ r[a:b]) for a, b in zip(bounds[:-1], bounds[1:])]
@@ -103,7 +111,9 @@ def fit_ripple(P, r_raw, n_folds=5):
     k = L["k"]
     s2 = L["rss"] / max(nu - k, 1)
     se = np.sqrt(np.maximum(np.diag(np.linalg.pinv(G[:k, :k])) * s2, 0.0))
-    torque = first_order(eff.basis(sig, best), P.dt, P.bandwidth) @ L["coef"]
+    del B, r
+    # (the low pass is linear and starts in steady state: the filtered sum is the sum filtered)
+    torque = first_order(eff.basis(sig, best) @ L["coef"], P.dt, P.bandwidth)
     return dict(law=best, coef=L["coef"], se=se,
                 explained=math.sqrt(max(rr - L["held"], 0.0) / nu),
                 torque_rms=float(np.sqrt(np.mean(torque ** 2))), n=nu,
