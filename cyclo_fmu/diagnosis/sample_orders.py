@@ -95,11 +95,12 @@ def fit_ripple(P, r_raw, n_folds=5):
         k = len(eff.parameters_for(law))
         c = solve(G, bb, k)
         rss = max(rr - 2 * c @ bb[:k] + c @ G[:k, :k] @ c, 1e-300)
-        held = 0.0
+        held, jack = 0.0, []
         for f in range(n_folds):
             cf = solve(G - Gf[f], bb - bf[f], k)
+            jack.append(cf)
             held += rf[f] - 2 * cf @ bf[f][:k] + cf @ Gf[f][:k, :k] @ cf
-        laws[law] = dict(k=k, coef=c, rss=rss, held=max(held, 0.0),
+        laws[law] = dict(k=k, coef=c, rss=rss, held=max(held, 0.0), jack=np.array(jack),
                          bic=nu * math.log(rss / nu) + k * math.log(nu))
     best = min(RIPPLE_LOAD_LAWS)
     for law in sorted(RIPPLE_LOAD_LAWS)[1:]:
@@ -111,6 +112,11 @@ def fit_ripple(P, r_raw, n_folds=5):
     k = L["k"]
     s2 = L["rss"] / max(nu - k, 1)
     se = np.sqrt(np.maximum(np.diag(np.linalg.pinv(G[:k, :k])) * s2, 0.0))
+    # the standard error of white sample noise, or the leave-one-fold-out jackknife's where
+    # larger (coloured noise, a noisy load signal in the load part: the folds' spread says)
+    J = L["jack"]
+    se_jack = np.sqrt((n_folds - 1) / n_folds * np.sum((J - J.mean(0)) ** 2, axis=0))
+    se = np.maximum(se, se_jack)
     del B, r
     # (the low pass is linear and starts in steady state: the filtered sum is the sum filtered)
     torque = first_order(eff.basis(sig, best) @ L["coef"], P.dt, P.bandwidth)
