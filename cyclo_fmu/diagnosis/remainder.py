@@ -248,8 +248,9 @@ def burst_claims(P, r, spikes, rng):
     exact permutation test for a stationary residual, no tail fitted). The former twins (64
     random shifts, a normal tail) put the p-value of that recording at 0.00025."""
     t, w, T = P.blocks["t"], P.blocks["w_in"], P.blocks["T_out"]
-    b = R.bursts(t, spikes, w, T)
-    ev = R.burst_events(t, w, T)
+    T_in = P.blocks["T_in"] - P.y       # the model's input torque (block means of the replay)
+    b = R.bursts(t, spikes, w, T, T_in)
+    ev = R.burst_events(t, w, T, T_in)
     r2 = r * r
     n = len(r2)
     # the statistic is the mean rank of |r| near the events (a few random spikes move a rank
