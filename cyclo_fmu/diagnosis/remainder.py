@@ -17,7 +17,8 @@ Claims and their statistics (``twins`` for the false-alarm rate and the fitted t
   them, their noise has the same colour), an exponential tail (a sine-cosine amplitude squared
   in noise is chi-square with 2 degrees of freedom) fitted to them; judged at FALSE_ALARM
   over the orders analysed.
-- *bursts at events* (speed reversals, torque reversals, load or speed steps): the mean rank
+- *bursts at events* (speed reversals, reversals of the model's input torque and of the
+  output torque, load or speed steps; ``residual.burst_events``): the mean rank
   of the squared block residual within ``residual.EVENT_WINDOW`` of the events minus its
   mean rank in their flanks (``FLANK_WINDOW``: a transient is local, a slow change of level
   is as high beside the events); twins: the recording's own block residual shifted
