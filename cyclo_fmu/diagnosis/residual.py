@@ -580,7 +580,7 @@ def burst_events(t, w, T_out, T_in=None) -> dict:
     the output torque ``T_out`` ("torque reversals"), steps of load or speed.
 
     A lost motion is taken up where the torque through it reverses: on the input side (the
-    motor coupling, the eccentric's bearing) with the input torque, on the output side with
+    motor coupling, the input shaft) with the input torque, on the output side with
     the output torque. The losses between the shafts part the two sign changes (back-driving
     through a slow load ramp: up to 0.9 s apart in batch 1's ``o04``), so the two are kinds of
     their own: either alone dilutes the other's transients with events that carry none."""
@@ -600,8 +600,9 @@ def near_events(t, w, T_out, kinds, T_in=None) -> np.ndarray:
 
 
 def bursts(t, spikes, w, T_out, T_in=None) -> dict:
-    """Where the excluded spike blocks sit: at speed reversals, at torque reversals, at steps of
-    load or speed, or elsewhere; ``tied``: the events whose bursts are too many for chance
+    """Where the excluded spike blocks sit: at speed reversals, at reversals of the input
+    torque ``T_in`` (the model's; when given) or of the output torque, at steps of load or
+    speed, or elsewhere; ``tied``: the events whose bursts are too many for chance
     (binomial tail below ``BURST_P``) and, for reversals, that sit at ``REVERSAL_SHARE`` of
     them at least; ``events_with_burst``: {kind: (events with a burst, events)};
     ``burst_blocks``: {kind: mean length of its bursts, in blocks (runs of consecutive spike
