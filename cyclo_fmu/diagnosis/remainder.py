@@ -17,7 +17,8 @@ Claims and their statistics (``twins`` for the false-alarm rate and the fitted t
   them, their noise has the same colour), an exponential tail (a sine-cosine amplitude squared
   in noise is chi-square with 2 degrees of freedom) fitted to them; judged at FALSE_ALARM
   over the orders analysed.
-- *bursts at events* (speed reversals, torque reversals, load or speed steps): the mean rank
+- *bursts at events* (speed reversals, reversals of the model's input torque and of the
+  output torque, load or speed steps; ``residual.burst_events``): the mean rank
   of the squared block residual within ``residual.EVENT_WINDOW`` of the events minus its
   mean rank in their flanks (``FLANK_WINDOW``: a transient is local, a slow change of level
   is as high beside the events); twins: the recording's own block residual shifted
@@ -248,8 +249,9 @@ def burst_claims(P, r, spikes, rng):
     exact permutation test for a stationary residual, no tail fitted). The former twins (64
     random shifts, a normal tail) put the p-value of that recording at 0.00025."""
     t, w, T = P.blocks["t"], P.blocks["w_in"], P.blocks["T_out"]
-    b = R.bursts(t, spikes, w, T)
-    ev = R.burst_events(t, w, T)
+    T_in = P.blocks["T_in"] - P.y       # the model's input torque (block means of the replay)
+    b = R.bursts(t, spikes, w, T, T_in)
+    ev = R.burst_events(t, w, T, T_in)
     r2 = r * r
     n = len(r2)
     # the statistic is the mean rank of |r| near the events (a few random spikes move a rank

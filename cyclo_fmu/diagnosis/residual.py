@@ -573,24 +573,36 @@ def _steps(t, x, factor=20.0):
     return t[1:][d > factor * ref]
 
 
-def burst_events(t, w, T_out) -> dict:
+def burst_events(t, w, T_out, T_in=None) -> dict:
     """The events residual bursts are judged against, {kind: sorted times}: speed reversals,
-    torque reversals, steps of load or speed."""
-    return {"speed reversals": np.sort(_reversals(t, w)),
-            "torque reversals": np.sort(_reversals(t, T_out)),
-            "load or speed steps": np.union1d(_steps(t, T_out), _steps(t, w))}
+    reversals of the input torque ``T_in`` (when given: pass the model's, a function of the
+    measured inputs; a measured one would put events where its own noise crosses zero), of
+    the output torque ``T_out`` ("torque reversals"), steps of load or speed.
+
+    A lost motion is taken up where the torque through it reverses: on the input side (the
+    motor coupling, the input shaft) with the input torque, on the output side with
+    the output torque. The losses between the shafts part the two sign changes (back-driving
+    through a slow load ramp: up to 0.9 s apart in batch 1's ``o04``), so the two are kinds of
+    their own: either alone dilutes the other's transients with events that carry none."""
+    ev = {"speed reversals": np.sort(_reversals(t, w))}
+    if T_in is not None:
+        ev["input torque reversals"] = np.sort(_reversals(t, T_in))
+    ev["torque reversals"] = np.sort(_reversals(t, T_out))
+    ev["load or speed steps"] = np.union1d(_steps(t, T_out), _steps(t, w))
+    return ev
 
 
-def near_events(t, w, T_out, kinds) -> np.ndarray:
+def near_events(t, w, T_out, kinds, T_in=None) -> np.ndarray:
     """Blocks (times ``t``) within EVENT_WINDOW of an event of the given ``kinds``."""
-    ev = burst_events(t, w, T_out)
+    ev = burst_events(t, w, T_out, T_in)
     times = np.sort(np.concatenate([ev[k] for k in kinds])) if kinds else np.zeros(0)
     return _near(t, times, EVENT_WINDOW)
 
 
-def bursts(t, spikes, w, T_out) -> dict:
-    """Where the excluded spike blocks sit: at speed reversals, at torque reversals, at steps of
-    load or speed, or elsewhere; ``tied``: the events whose bursts are too many for chance
+def bursts(t, spikes, w, T_out, T_in=None) -> dict:
+    """Where the excluded spike blocks sit: at speed reversals, at reversals of the input
+    torque ``T_in`` (the model's; when given) or of the output torque, at steps of load or
+    speed, or elsewhere; ``tied``: the events whose bursts are too many for chance
     (binomial tail below ``BURST_P``) and, for reversals, that sit at ``REVERSAL_SHARE`` of
     them at least; ``events_with_burst``: {kind: (events with a burst, events)};
     ``burst_blocks``: {kind: mean length of its bursts, in blocks (runs of consecutive spike
@@ -601,7 +613,7 @@ def bursts(t, spikes, w, T_out) -> dict:
         return out
     left = spikes.copy()
     out["events_with_burst"] = {}
-    for name, events in burst_events(t, w, T_out).items():
+    for name, events in burst_events(t, w, T_out, T_in).items():
         near = _near(t, events, EVENT_WINDOW)
         k = int((left & near).sum())
         out["at"][name] = k
