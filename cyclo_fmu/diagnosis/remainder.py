@@ -205,26 +205,12 @@ def order_claims(r, sig, orders, dt, rng):
 MIN_SHIFT_SHARE = 0.1
 
 
-#: [s] the flank of an event: the blocks within this time before it but beyond
-#: ``residual.EVENT_WINDOW``, the residual's own level before it (``_before``). Five event windows: longer
+#: [s] the flanks of an event: the blocks within this time of it but beyond
+#: ``residual.EVENT_WINDOW``, the residual's own level around it. Five event windows: longer
 #: than the transients a burst is (backlash, compliance, a filter: tens of ms), shorter than
 #: the slow changes of level that are no transient (a 1/f noise's excursions, a slow
 #: remainder that follows the operating phase: seconds)
 FLANK_WINDOW = 0.5
-
-
-def _before(t, events, window):
-    """Blocks (times ``t``) within ``window`` [s] before an event (the event itself
-    excluded). A transient follows its event (causality): the residual before it is the
-    level the event's window is judged against. Flanks on both sides held a ring-out's own
-    tail: a backlash ringing at 12 Hz, decaying in 80 ms, still tops the noise 0.1-0.3 s
-    after a speed reversal, and on ranks its tail counted as much as its head (batch 2's
-    x05: p = 0.007 against both flanks, 5e-5 against the flank before)."""
-    if not len(events):
-        return np.zeros(len(t), bool)
-    i = np.searchsorted(events, t, side="right")
-    nxt = events[np.clip(i, 0, len(events) - 1)]
-    return (i < len(events)) & (nxt - t <= window) & (nxt - t > 0)
 
 
 def shift_twins(rk, weights) -> tuple:
@@ -248,8 +234,7 @@ def burst_claims(P, r, spikes, rng):
 
     A burst is a transient at the events: the statistic is the mean rank of the squared
     block residual within ``residual.EVENT_WINDOW`` of the events minus its mean rank in
-    the flanks before them (``FLANK_WINDOW``, ``_before``: a transient follows its event),
-    and its size the mean square there beyond the flanks'.
+    their flanks (``FLANK_WINDOW``), and its size the mean square there beyond the flanks'.
     A slow change of level (a 1/f noise's excursion over a phase of the plan that holds many
     events, a slow remainder larger in some phases) is as high in the flanks and is no
     burst: the clean start-stop recording of batch 4 (1/f noise, 30 % of its blocks within
@@ -279,7 +264,7 @@ def burst_claims(P, r, spikes, rng):
     for kind, times in ev.items():
         near = R._near(t, times, R.EVENT_WINDOW) & ~taken
         taken |= near
-        flank = _before(t, times, FLANK_WINDOW) & ~near & ~taken
+        flank = R._near(t, times, FLANK_WINDOW) & ~near & ~taken
         if near.sum() < 3 or flank.sum() < 3 or n <= 20:
             continue
         idx = np.flatnonzero(near)
