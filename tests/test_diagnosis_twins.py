@@ -389,12 +389,7 @@ def test_bursts_hold_their_rate_on_flicker_noise_and_find_a_transient():
     P = _burst_problem(t, w, 2.0 + 0.01 * w)
     spikes = np.zeros(n, bool)
     rng = np.random.default_rng(11)
-    alpha = FALSE_ALARM / 3
-    hits = 0
-    for _ in range(300):
-        _, claims = burst_claims(P, flicker(rng, n, fs, 4e-3), spikes, rng)
-        hits += claims["load or speed steps"][0].p_value <= alpha
-    allowed = 300 * alpha + 2.5 * math.sqrt(300 * alpha * (1 - alpha))
+    hits, allowed = _false_alarms(P, spikes, rng, fs, "load or speed steps", FALSE_ALARM / 3)
     assert hits <= allowed, hits
     steps = np.cumsum(rng.uniform(1.5, 4.5, 60))
     steps = steps[steps < t[-1] - 1.0]
@@ -423,12 +418,7 @@ def test_bursts_at_the_input_torques_reversals_hold_their_rate_and_are_found():
     t, w, T_out, T_in = _back_driven_plan(fs, n, rng)
     P = _burst_problem(t, w, T_out, T_in)
     spikes = np.zeros(n, bool)
-    alpha = FALSE_ALARM / 4
-    hits = 0
-    for _ in range(300):
-        _, claims = burst_claims(P, flicker(rng, n, fs, 4e-3), spikes, rng)
-        hits += claims["input torque reversals"][0].p_value <= alpha
-    allowed = 300 * alpha + 2.5 * math.sqrt(300 * alpha * (1 - alpha))
+    hits, allowed = _false_alarms(P, spikes, rng, fs, "input torque reversals", FALSE_ALARM / 4)
     assert hits <= allowed, hits
     rev = t[1:][np.diff(np.sign(T_in)) != 0]
     rev_out = t[1:][np.diff(np.sign(T_out)) != 0]
@@ -439,3 +429,15 @@ def test_bursts_at_the_input_torques_reversals_hold_their_rate_and_are_found():
     b, claims = burst_claims(P, flicker(rng, n, fs, 2e-3) + ring, spikes, rng)
     assert claims["input torque reversals"][0].stands
     assert b["tied"] == ["input torque reversals"]
+
+
+def _false_alarms(P, spikes, rng, fs, kind, alpha, draws=300):
+    """(claims of ``kind`` at rate ``alpha`` on ``draws`` residuals of 4 mN*m 1/f noise, the
+    binomial allowance: draws * alpha + 2.5 sigma)."""
+    from cyclo_fmu.diagnosis.remainder import burst_claims
+    n = len(P.blocks["t"])
+    hits = 0
+    for _ in range(draws):
+        _, claims = burst_claims(P, flicker(rng, n, fs, 4e-3), spikes, rng)
+        hits += claims[kind][0].p_value <= alpha
+    return hits, draws * alpha + 2.5 * math.sqrt(draws * alpha * (1 - alpha))
