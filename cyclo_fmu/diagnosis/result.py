@@ -277,6 +277,24 @@ def headline(effects, calibration, close) -> tuple:
             else "")
     return eid, EFFECTS[eid].description, params, list(close), test
 
+def _located(P, y, rem, mismatch: bool) -> dict:
+    """Where the residual ``y`` (block means) sits over the operating points
+    (``residual.locate``), with the shaft orders that stand beyond their twins; without a
+    named effect or a remainder (``mismatch`` False), that there is nothing to locate."""
+    located = R.locate(P.blocks["t"], y, P.blocks["w_in"], P.blocks["T_out"],
+                       P.blocks["T_in"], P.blocks["alpha"], P.blocks["temperature"])
+    located["orders"] = {k: a for k, (a, c) in rem.orders_all.items()
+                         if c is not None and c.stands}
+    if not mismatch:
+        located["statement"] = ("the model explains the recording within its noise: "
+                                "there is no mismatch to locate.")
+    elif located["orders"]:
+        located["statement"] = located["statement"][:-1] + "; it sits at " + ", ".join(
+            f"{k} of the input speed ({1e3 * v:.1f} mN*m)" for k, v in located["orders"].items()
+        ) + "."
+    return located
+
+
 def report(rec, first, sel, J, rem, P, rel1, first_P, cal_offsets=None) -> Diagnosis:
     """Stage ``report``: ``first`` is the first analysis's selection (at the design's own
     friction level and calibration), ``sel``/``P`` the final one's; ``cal_offsets`` the
@@ -324,18 +342,8 @@ def report(rec, first, sel, J, rem, P, rel1, first_P, cal_offsets=None) -> Diagn
     close_first = close.get(eid if effects else "friction_miscalibrated", [])
     y_before = first_P.y
     y_after = block_means(rem.residual_raw, P.m)
-    located = R.locate(P.blocks["t"], y_before if sel is first else P.y, P.blocks["w_in"],
-                       P.blocks["T_out"], P.blocks["T_in"], P.blocks["alpha"],
-                       P.blocks["temperature"])
-    located["orders"] = {k: a for k, (a, c) in rem.orders_all.items()
-                         if c is not None and c.stands}
-    if not effects and not un["present"]:
-        located["statement"] = ("the model explains the recording within its noise: "
-                                "there is no mismatch to locate.")
-    elif located["orders"]:
-        located["statement"] = located["statement"][:-1] + "; it sits at " + ", ".join(
-            f"{k} of the input speed ({1e3 * v:.1f} mN*m)" for k, v in located["orders"].items()
-        ) + "."
+    located = _located(P, y_before if sel is first else P.y, rem,
+                       bool(effects) or un["present"])
     fitted = rec.torque_in - P.T_model_f - rem.residual_raw
     z_before = zeta_d(rec.speed_in, rec.torque_in, rec.speed_out, rec.torque_out,
                       first_P.rp.T_model, P.m)
