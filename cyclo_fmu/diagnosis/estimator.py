@@ -43,6 +43,7 @@ from .problem import MIN_LOAD, build_problem, refine_problem
 from .remainder import PEAK_MIN_AMPLITUDE_NM, remainder
 from .replay import Replay, block_means, first_order, replay
 from .result import Diagnosis, DiagnosisError, headline, report, zeta_d
+from .sample_orders import name_ripple
 from .select_effects import MIN_EXPLAINED_NM, select
 from .selection import DELTA_BIC
 from .twins import FALSE_ALARM, N_TWINS, judge
@@ -194,7 +195,7 @@ class Diagnoser:
         import sys
         from tqdm import tqdm
         self._check(rec)
-        self._bar = tqdm(total=6, leave=False, unit=" stages", desc="replay",
+        self._bar = tqdm(total=7, leave=False, unit=" stages", desc="replay",
                          disable=not (self.progress and sys.stderr.isatty()))
         self._refined = {}
         P0 = self.problem(rec)
@@ -240,6 +241,9 @@ class Diagnoser:
         rem.unexplained["_rejected"] = J.rejected
         self._stage("report")
         d = report(rec, first, sel, J, rem, P, rel1, P0, self.calibration_offsets_)
+        # stage ``orders``: the library's orders the block means cannot resolve, at sample level
+        self._stage("orders")
+        d = name_ripple(d, P, rem, self.n_folds)
         d.notes += self._notes
         d.stages = {"replay": P, "select": sel, "twins": J, "remainder": rem}
         if not self._beside_form:
