@@ -395,6 +395,13 @@ def _burst_parts(b, claims, P):
     return parts, step, bool(rev), rms
 
 
+def orders_part(orders) -> str:
+    """The statement's part for the shaft orders that stand ({name: amplitude [N*m]}): one
+    wording, which ``sample_orders.name_ripple`` finds again when it names the ripple."""
+    return "the residual holds shaft orders: " + ", ".join(
+        f"{n} ({1e3 * a:.2f} mN*m)" for n, a in orders.items())
+
+
 def _lines(P, S, r, design, mode, rng):
     """Shaft orders (judged against their off-order twins) and fixed-frequency peaks (against
     twins of the residual's null spectrum) of the sample-level residual ``r``: (statement
@@ -414,8 +421,7 @@ def _lines(P, S, r, design, mode, rng):
         inside = {}       # the library's orders, fitted: what is left is phase tracking
     parts = []
     if outside or inside:
-        parts.append("the residual holds shaft orders: " + ", ".join(
-            f"{n} ({1e3 * a:.2f} mN*m)" for n, a in {**inside, **outside}.items()))
+        parts.append(orders_part({**inside, **outside}))
     peaks, search, pc = R.peak_claims(r, P.dt, min_amplitude=PEAK_MIN_AMPLITUDE_NM,
                                       speed=P.sig["w_in"], orders=list(orders.values()))
     if peaks:

@@ -29,6 +29,7 @@ from model_core.effects import EFFECTS, RIPPLE_LOAD_LAWS, ripple_orders
 
 from . import residual as R
 from .problem import masked_means
+from .remainder import orders_part
 from .replay import first_order
 from .select_effects import MIN_EXPLAINED_NM
 from .selection import DELTA_BIC
@@ -126,12 +127,6 @@ def fit_ripple(P, r_raw, n_folds=5):
                 share=max(rr - L["rss"], 0.0) / max(rr, 1e-300))
 
 
-def _orders_part(un, inside, outside):
-    names = {**inside, **outside}
-    return "the residual holds shaft orders: " + ", ".join(
-        f"{n} ({1e3 * a:.2f} mN*m)" for n, a in names.items())
-
-
 def name_ripple(d, P, rem, n_folds=5):
     """Where the remainder found the library's orders left (standing against their twins at
     sample level, ``remainder._lines``) and no mesh ripple is named, fit it at sample level
@@ -172,7 +167,7 @@ def name_ripple(d, P, rem, n_folds=5):
         d.suggested_test = headline(effects, d.calibration, close)
     # the orders taken out of what is unexplained
     outside = dict(un.get("orders") or {})
-    old = _orders_part(un, inside, outside)
+    old = orders_part({**inside, **outside})
     left = math.sqrt(max(un.get("rms_Nm", 0.0) ** 2
                          - sum(a * a / 2 for a in inside.values()), 0.0))
     un["library_orders_left"] = {}
@@ -182,7 +177,7 @@ def name_ripple(d, P, rem, n_folds=5):
     if still:
         st = un["statement"]
         if outside:
-            st = st.replace(old, _orders_part(un, {}, outside))
+            st = st.replace(old, orders_part(outside))
         else:
             for a in ("; " + old, old + "; ", old):
                 if a in st:
