@@ -540,13 +540,6 @@ def spectral_peaks(r, dt, min_amplitude=1e-3, f_min=2.5, speed=None, orders=()) 
 EVENT_WINDOW = 0.1
 #: [1] share of the peak speed or torque below which a sign is not judged (noise about zero)
 SIGN_SHARE = 0.02
-#: binomial tail probability below which bursts are tied to events, not chance
-BURST_P = 1e-6
-#: [1] share of the reversals of one kind that must carry a burst before the bursts are called
-#: a transient of the drive (lost motion, compliance): such a transient is taken up at every
-#: reversal; bursts at a part of them are the transients of a quasi-static replay at a hard
-#: reversal (the model's own inertia and losses through a fast speed change), not missing physics
-REVERSAL_SHARE = 0.75
 
 
 def _near(t, events, window):
@@ -602,11 +595,11 @@ def near_events(t, w, T_out, kinds, T_in=None) -> np.ndarray:
 def bursts(t, spikes, w, T_out, T_in=None) -> dict:
     """Where the excluded spike blocks sit: at speed reversals, at reversals of the input
     torque ``T_in`` (the model's; when given) or of the output torque, at steps of load or
-    speed, or elsewhere; ``tied``: the events whose bursts are too many for chance
-    (binomial tail below ``BURST_P``) and, for reversals, that sit at ``REVERSAL_SHARE`` of
-    them at least; ``events_with_burst``: {kind: (events with a burst, events)};
+    speed, or elsewhere; ``events_with_burst``: {kind: (events with a burst, events)};
     ``burst_blocks``: {kind: mean length of its bursts, in blocks (runs of consecutive spike
-    blocks)}."""
+    blocks)}. ``tied`` (the event kinds a transient is tied to) is left empty here: it is
+    decided against twins of the residual (``remainder.burst_claims``), not by counting
+    spike blocks."""
     n = int(spikes.sum())
     out = {"count": n, "at": {}, "tied": []}
     if n == 0:
@@ -626,12 +619,6 @@ def bursts(t, spikes, w, T_out, T_in=None) -> dict:
         for tb in t[left & near]:
             hit |= np.abs(events - tb) <= EVENT_WINDOW
         out["events_with_burst"][name] = (int(hit.sum()), len(events))
-        every = "reversal" not in name or hit.sum() >= REVERSAL_SHARE * len(events)
-        if k >= 3 and every:
-            from scipy.special import bdtrc      # binomial P(X >= k): scipy.stats.binom.sf
-            p0 = max(float(near.mean()), 1e-12)
-            if bdtrc(k - 1, n, p0) < BURST_P:
-                out["tied"].append(name)
         left &= ~near
     out["at"]["elsewhere"] = int(left.sum())
     return out
