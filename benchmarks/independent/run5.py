@@ -1,0 +1,36 @@
+"""Diagnose every recording of the fifth independent batch (gen5.py) through the command line,
+`cyclo-fmu diagnose FILE --mode auto --json --out DIR` (no option beyond what a user gets by
+default), and score it against the truth gen5.py fixed before the first run: run3.py's runner
+and rules (score.py), with batch 5's files and categories. Writes OUT/results5.json,
+OUT/raw/<id>.json and OUT/diag/<id>/.
+
+    nice python benchmarks/independent/run5.py [-j 1] [case_id ...]
+    python benchmarks/independent/run5.py --rescore      # score the last run's JSON again
+
+OUT: the environment variable CYCLO_INDEPENDENT_OUT (default out/independent5). Missing
+recordings are generated first (gen5.py).
+"""
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+os.environ.setdefault("CYCLO_INDEPENDENT_OUT", "out/independent5")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import run3 as R  # noqa: E402
+
+R.GEN = Path(__file__).resolve().parent / "gen5.py"
+R.CASES_JSON, R.RESULTS_JSON = "cases5.json", "results5.json"
+R.CATEGORIES = ("clean", "single", "forms", "pair", "triple", "outside")
+
+
+def category5(cid):
+    return {"clean": "clean", "lib": "single", "form": "forms", "pair": "pair", "tri": "triple",
+            "out": "outside"}[cid.split("_", 1)[0]]
+
+
+R.CATEGORY = category5
+
+if __name__ == "__main__":
+    R.main(sys.argv[1:])
