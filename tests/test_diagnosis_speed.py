@@ -150,3 +150,34 @@ def test_replays_sharing_their_speed_look_ups_give_the_same_torques():
             ref = replay_input_torque(d, mode, w, tau, grid)
             assert all(np.array_equal(a, b) for a, b in zip(got, ref))
         assert len(located) == 2
+
+
+def test_a_ripple_law_from_the_constant_laws_columns_is_the_whole_one():
+    """The mesh ripple's load law (a + b |tau_out|) begins with the constant law's columns
+    (a): its basis built from them (``Effect.basis(lead=)``), and the diagnosis's block-mean
+    columns that filter and average only the load columns, are the whole ones to the bit."""
+    from cyclo_fmu.diagnosis.problem import _candidates, _edge_samples
+    from cyclo_fmu.diagnosis.replay import first_order
+    from model_core.effects import EFFECTS
+    rng = np.random.default_rng(5)
+    n, dt, m = 4000, 1e-3, 10
+    w = 150.0 * np.sin(np.linspace(0.0, 9.0, n)) + rng.normal(0.0, 0.5, n)
+    sig = {"t": np.arange(n) * dt, "w_in": w, "theta_in": np.cumsum(w) * dt,
+           "tau_out": -4.0 - 3.0 * np.sin(np.linspace(0.0, 5.0, n)), "ratio_out": -1 / 14,
+           "order_roller": 15.0}
+    e = EFFECTS["mesh_ripple"]
+    assert e.nested and e.leads(1.0, 0.0) and not e.leads(0.0, 1.0)
+    assert not EFFECTS["low_speed_friction"].nested
+    a = e.basis(sig, 0.0)
+    whole = e.basis(sig, 1.0)
+    assert np.array_equal(e.basis(sig, 1.0, (0.0, a)), whole)
+    assert np.array_equal(whole[:, :a.shape[1]], a)
+    mask = rng.random(n) > 0.05
+    counts = mask.reshape(-1, m).sum(1)
+    edges = np.array([2, 7, 100, 399])
+    _, options, columns = _candidates(sig, ("mesh_ripple",), True, dt, 1000.0, mask, m,
+                                      counts=counts, edges=edges)
+    assert [t.shape for t in options["mesh_ripple"]] == [0.0, 1.0]
+    y = first_order(whole, dt, 1000.0)
+    assert np.array_equal(columns[("mesh_ripple", 1.0)][1], masked_means(y, mask, m, counts))
+    assert np.array_equal(columns[("mesh_ripple", 1.0)][2], _edge_samples(y, edges, m))

@@ -338,6 +338,20 @@ class _Patched:
         view[self.rows] = self.values
 
 
+def _fresh(x, k, B0, Y0, dt, bandwidth, mask, m, counts, edges):
+    """(block means, filtered samples of the edge blocks) of the basis ``x`` (n x columns)
+    through the low pass; its first ``k`` columns' are ``B0`` and ``Y0`` (another shape's,
+    whose basis they are: ``Effect.leads``). The low pass and the block means act column by
+    column, so only the other columns are filtered and averaged: the same numbers, where
+    both parts have at least two columns and are averaged as a basis of several columns is
+    (``masked_means``); else all are."""
+    if k and (k < 2 or x.shape[1] - k < 2):
+        k = 0
+    y = first_order(x[:, k:] if k else x, dt, bandwidth)
+    B, Y = masked_means(y, mask, m, counts), _edge_samples(y, edges, m)
+    return (np.hstack([B0, B]), np.hstack([Y0, Y])) if k else (B, Y)
+
+
 def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, counts=None,
                 refined=None, edges=None):
     """Every candidate's block-mean columns (each shape's basis at sample level, through the
@@ -388,6 +402,8 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, c
         if not loaded and eid in _DRIFT_LOADED:
             continue
         terms = []
+        prev = None        # (shape, basis, block means, edge samples, signals read) of the
+        #                    last shape computed (an Effect.nested effect's)
         for shape in (refined or {}).get(eid) or eff.shapes(P_sig):
             if shape is None and eff.shape and not (eff.temperature_form
                                                     and P_sig.get("temperature") is not None):
@@ -405,12 +421,19 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, c
                 keys, B, Y = widened.column(eff, shape, k, {s: c for (e, s), c in
                                                             columns.items() if e == eid})
             else:
+                lead = prev if prev is not None and eff.leads(shape, prev[0]) else None
+                prev = None
                 sig.read = set()
-                y = first_order(eff.basis(sig, shape), dt, bandwidth)
-                B = masked_means(y, mask, m, counts)
-                Y = _edge_samples(y, edges, m)
-                del y
-                keys = frozenset(sig.read)
+                x = eff.basis(sig, shape) if lead is None else eff.basis(sig, shape, lead[:2])
+                keys = frozenset(sig.read) | (lead[4] if lead is not None else frozenset())
+                k_lead, B0, Y0 = (0, None, None) if lead is None else (
+                    lead[1].shape[1], lead[2], lead[3])
+                lead = None                   # (released before this basis is filtered)
+                B, Y = _fresh(x, k_lead, B0, Y0, dt, bandwidth, mask, m, counts, edges)
+                # kept for the effect's next shape, whose basis may begin with this one
+                # (Effect.leads: the mesh ripple's load law a + b |T| begins with a's)
+                prev = (shape, x, B, Y, keys) if eff.nested else None
+                del x
             columns[(eid, shape)] = (keys, B, Y)
             k0 = sum(c.shape[1] for c in cols)
             cols.append(B)
