@@ -181,3 +181,21 @@ def test_a_ripple_law_from_the_constant_laws_columns_is_the_whole_one():
     y = first_order(whole, dt, 1000.0)
     assert np.array_equal(columns[("mesh_ripple", 1.0)][1], masked_means(y, mask, m, counts))
     assert np.array_equal(columns[("mesh_ripple", 1.0)][2], _edge_samples(y, edges, m))
+
+
+def test_grid_cells_are_searchsorteds():
+    """The replay's look-up of each sample's cell on a map's grid (``lossmap.grid_cell``:
+    from the step of a grid of equal steps, checked) gives searchsorted's cells, clipped to
+    the grid's cells, for values on the nodes, next to them, outside the grid, infinite or
+    NaN, and on grids of unequal steps."""
+    from model_core.lossmap import grid_cell
+    rng = np.random.default_rng(7)
+    for trial in range(200):
+        n = int(rng.integers(2, 50))
+        g = (np.log(np.geomspace(rng.uniform(1e-3, 1.0), rng.uniform(2.0, 1e3), n))
+             if trial % 3 else np.unique(rng.normal(size=n)))
+        x = np.concatenate([rng.uniform(g[0] - 1, g[-1] + 1, 2000), g, np.nextafter(g, 9.0),
+                            np.nextafter(g, -9.0), [np.nan, np.inf, -np.inf]])
+        for xx in (x, x[np.isfinite(x)], np.clip(x[np.isfinite(x)], g[0], g[-1])):
+            ref = np.clip(np.searchsorted(g, xx, side="right") - 1, 0, len(g) - 2)
+            assert np.array_equal(grid_cell(g, xx), ref)
