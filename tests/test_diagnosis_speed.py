@@ -199,3 +199,6 @@ def test_grid_cells_are_searchsorteds():
         for xx in (x, x[np.isfinite(x)], np.clip(x[np.isfinite(x)], g[0], g[-1])):
             ref = np.clip(np.searchsorted(g, xx, side="right") - 1, 0, len(g) - 2)
             assert np.array_equal(grid_cell(g, xx), ref)
+            i, lo, hi = grid_cell(g, xx, nodes=True)
+            assert np.array_equal(i, ref) and np.array_equal(lo, g[ref])
+            assert np.array_equal(hi, g[ref + 1])
