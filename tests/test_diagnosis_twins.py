@@ -244,20 +244,34 @@ def test_columns_averaged_again_where_the_compared_samples_moved_are_the_fresh_o
         assert "_Patched" in kinds        # (reused and averaged again, not recomputed)
 
 
-def test_the_relinearised_problem_is_written_over_the_released_matrix():
+@pytest.mark.parametrize("effect, seed, plan, edge_share", [
+    ("thermal_drift", 3, "one_speed", None),        # the same samples compared
+    ("low_speed_friction", 81, "four_quadrant", None),   # a few blocks moved: averaged again
+    ("low_speed_friction", 81, "four_quadrant", 0.0)])   # no edge blocks kept: computed again
+def test_the_relinearised_problem_is_written_over_the_released_matrix(monkeypatch, effect,
+                                                                       seed, plan, edge_share):
     """The re-linearised problem of an earlier one whose matrix its owner released (the
     estimator does, before the second replay) is written over that matrix (no second one
-    held at the peak): the same numbers as a problem built afresh."""
+    held at the peak), whether its columns are reused, averaged again where the compared
+    samples moved, or computed again: the same numbers as a problem built afresh."""
     from cyclo_fmu.diagnosis import problem
     from model_core.design import scale_friction_level
     from model_core.effects import DEFAULT_CANDIDATES
-    rec = as_recording(synthesize("thermal_drift", 3, "S1", "tiny", plan="one_speed"))
+    if edge_share is not None:
+        monkeypatch.setattr(problem, "EDGE_SHARE", edge_share)
+    rec = as_recording(synthesize(effect, seed, "S1", "tiny", plan=plan))
     cands = tuple(c for c in DEFAULT_CANDIDATES if c != "none")
     design = DriveDesign()
     P0 = problem.build_problem(rec, design, "S1", cands, 1000.0, 0.01)
     changed = scale_friction_level(design, 1.08)
     sens = (P0.sig["sens_mu"], None)
     fresh = problem.build_problem(rec, changed, "S1", cands, 1000.0, 0.01, sens)
+    moved = (P0.mask != fresh.mask).any()
+    assert moved == (plan == "four_quadrant")
+    assert (len(P0.edges) > 0) == (edge_share is None)
+    n, m = len(P0.y) * P0.m, P0.m
+    blocks = np.flatnonzero((P0.mask[:n] != fresh.mask[:n]).reshape(-1, m).any(1))
+    assert np.isin(blocks, P0.edges).all() == (edge_share is None)   # averaged again there
     buffer = P0.X
     P0.X = None
     reused = problem.build_problem(rec, changed, "S1", cands, 1000.0, 0.01, sens, reuse=P0)

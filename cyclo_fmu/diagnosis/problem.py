@@ -103,13 +103,21 @@ def jump_mask(t, w_in, T_model, noise, dt) -> np.ndarray:
 #: whose compared samples changed. Speed only, never a result: where a block outside them
 #: changes, every column is computed again (the same numbers either way)
 STEP_MARGIN = 2.0
+#: [1] the edge blocks' filtered samples are kept only while the edge blocks are at most this
+#: share of the blocks (their samples then cost at most this share of the matrix's memory;
+#: measured: 0.15 % of a 10-minute four-quadrant recording's blocks, 2.3 % of a 42-s one):
+#: where the model steps near the threshold all along (an hour read as 10 ms block means, one
+#: sample a block: half its blocks, 190 MB), a change of the mask is as likely outside them,
+#: and every column is computed again anyway. Speed and memory only, never a result
+EDGE_SHARE = 0.1
 
 
 def edge_blocks(w_in, T_model, noise, dt, m, n_blocks) -> np.ndarray:
     """Indices of the blocks (of ``m`` samples, the first ``n_blocks``) whose compared samples
     (``jump_mask``) may change when the model's steps change by less than ``STEP_MARGIN``:
     those within the settling window of a sample interval whose step lies within that factor
-    of the jump threshold (a reversal of the speed is a jump at any level)."""
+    of the jump threshold (a reversal of the speed is a jump at any level); none where they
+    are more than ``EDGE_SHARE`` of the blocks."""
     d = np.abs(np.diff(T_model))
     thr = JUMP_NOISE * max(noise, 1e-12)
     s = np.signbit(w_in)
@@ -123,7 +131,8 @@ def edge_blocks(w_in, T_model, noise, dt, m, n_blocks) -> np.ndarray:
     hit = np.zeros(n_blocks + 1, np.intp)
     np.add.at(hit, first[first < n_blocks], 1)
     np.add.at(hit, np.minimum(last[first < n_blocks], n_blocks - 1) + 1, -1)
-    return np.flatnonzero(np.cumsum(hit[:-1]) > 0)
+    edges = np.flatnonzero(np.cumsum(hit[:-1]) > 0)
+    return edges if len(edges) <= EDGE_SHARE * n_blocks else np.zeros(0, np.intp)
 
 
 def _edge_samples(y, edges, m):
@@ -508,8 +517,11 @@ def build_problem(rec, design, mode, candidates, bandwidth, block,
             prior = ({k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == t.shape
                           else v) for k, v in reuse.sig.items()}, reuse.columns, changed)
             edges = reuse.edges        # (the kept samples do not depend on the mask)
-            into = _released_matrix(reuse)
-            into = None if into is None else (reuse.options, into)
+    if reuse is not None and reuse.columns is not None:
+        # the earlier matrix, released by its owner, is written over (its columns are read,
+        # where reused, before the new matrix is written)
+        into = _released_matrix(reuse)
+        into = None if into is None else (reuse.options, into)
     if edges is None:
         edges = edge_blocks(rec.speed_in[:n], rp.T_model[:n], noise, dt, m, n // m)
     parts = _assemble(sig_n, candidates, loaded, dt, bandwidth, mask_b, m, prior, counts,
