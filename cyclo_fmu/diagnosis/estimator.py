@@ -198,6 +198,9 @@ class Diagnoser:
         self._bar = tqdm(total=7, leave=False, unit=" stages", desc="replay",
                          disable=not (self.progress and sys.stderr.isatty()))
         self._refined = {}
+        #: calibration effects that stood in for a loss of another law (``_judge``): no
+        #: candidates of the later passes (the calibration's re-linearisation among them)
+        self._stood_in = set()
         P0 = self.problem(rec)
         self._stage("select")
         first = select(P0, self.n_folds)
@@ -292,11 +295,11 @@ class Diagnoser:
             # the calibration effects stood in for a form outside the library: the stages run
             # again without them as candidates (what a diagnose --no-calibrate sees), and the
             # discovery stage proposes the form
-            ids, note, text = out
-            P = replace(P, options={k: v for k, v in P.options.items()
-                                    if k not in CALIBRATION_EFFECTS})
+            ids, note, text, drop = out
+            self._stood_in |= set(drop)
+            P = replace(P, options={k: v for k, v in P.options.items() if k not in drop})
             sel = select(P, self.n_folds, forced=tuple(f for f in sel.forced
-                                                      if f not in CALIBRATION_EFFECTS))
+                                                      if f not in drop))
             P, sel, J, rem = self._judge(rec, P, sel, rel1, compete=False)
             rem.withdrawn += [e for e in ids if e not in rem.withdrawn]
             un = rem.unexplained
@@ -365,6 +368,9 @@ class Diagnoser:
             v, _ = S.of(t)
             back += first_order(EFFECTS[t.effect].basis(P.sig, t.shape), P.dt,
                                 self.bandwidth) @ v
+        beaten = self._calibration_against_rivals(rec, P, sel, other, cal)
+        if beaten is not None:
+            return beaten
         d = self._stand_in_form(rec, P, sel, rem.residual_raw + back, ocols)
         if d is None:
             return
@@ -384,7 +390,75 @@ class Diagnoser:
                 f"dictionary explains what {'it' if len(ids) == 1 else 'they'} held better (BIC "
                 f"{fit_b.bic:.1f} against {fit_a.bic:.1f}, at least {DELTA_BIC:g} lower "
                 "needed); a free loss scale stands in for a loss of another law")
-        return ids, note, text
+        return ids, note, text, CALIBRATION_EFFECTS
+
+    def _calibration_against_rivals(self, rec, P, sel, other, cal):
+        """The calibration effects chosen again with generic load laws as their rivals.
+
+        A calibration effect scales the model's own loss map: its law over speed and load is
+        the physics', fixed. A loss of another law that grows with the load (the load or
+        speed*load families of the discovery's dictionary, ``LOAD_FAMILIES``) is taken up by
+        these scales in part, and beside them what is left can lie within the twins. So the
+        selection is run once more from the other named effects (forced, the friction level
+        among them), with the calibration effects and the dictionary's load laws as
+        candidates side by side (``selection.stepwise``: BIC by ``DELTA_BIC`` and
+        ``min_explained`` of held-out RMS to enter or stay). A law of the dictionary counts
+        its exponent(s) as parameters chosen on a grid, and it must be a loss (coefficient
+        >= 0: a negative one removes loss the model has, the loss scales' own physics), so a
+        tie keeps the library's effect. A calibration effect the selection named that is not
+        chosen here stood in for a loss of another law: ``(ids, note, text)`` for the stages
+        to run again without it and without the calibration effects the joint selection did
+        not choose (another scale would take the withdrawn one's place), else None. The laws
+        replace the scales only where the joint selection's BIC is lower by ``DELTA_BIC``
+        than that of the same selection with the calibration effects alone as candidates."""
+        from dataclasses import replace as _replace
+        from .discover import Library, _signals
+        from .selection import GramProblem, Term, stepwise
+        s, m = _signals(rec.time, rec.speed_in, rec.torque_out, P.m, self.block, None, None,
+                        self.mode, self.design.z1)
+        feats = [f for f in Library.default().features if f.family in LOAD_FAMILIES]
+        lib = Library(feats)
+        cols = lib.block_columns(s, m, self.bandwidth)
+        n = min(len(P.y), len(cols[0]))
+        family = list(cal) + [sel.opts[e][0] for e in CALIBRATION_EFFECTS
+                              if e not in {t.effect for t in cal} and sel.opts.get(e)]
+        own = [c for t in other + family for c in t.cols]
+        X = np.column_stack([P.X[:n, own]] + [c[:n].reshape(n, -1) for c in cols])
+        prob = GramProblem(X, P.y[:n], np.asarray(sel.weights, float)[:n], self.n_folds)
+        i, terms = 0, []
+        for t in other + family:
+            terms.append(_replace(t, cols=tuple(range(i, i + len(t.cols)))))
+            i += len(t.cols)
+        forced, mine = tuple(terms[:len(other)]), terms[len(other):]
+        options = {t.effect: [t] for t in mine}
+        for f in feats:
+            options.setdefault(f"law: {f.family}", []).append(
+                Term(f"law: {f.family}", f.shape, (i,), (f.name,), ("N*m",), (0.0,),
+                     (np.inf,), f.n_shape))
+            i += 1
+        got = stepwise(prob, options, sel.min_expl, cv=True, forced=forced).fit
+        gone = [t.effect for t in cal if t.effect not in got.ids]
+        laws = [x for x in got.terms if x.effect.startswith("law: ")]
+        if not gone or not laws:
+            return None
+        # the laws replace a library scale only on very strong evidence: the same selection
+        # with the calibration effects alone as candidates must be worse by DELTA_BIC (a tie,
+        # a law that is the scale's own look-alike in this recording, keeps the library's)
+        lib_only = stepwise(prob, {t.effect: [t] for t in mine}, sel.min_expl, cv=True,
+                            forced=forced).fit
+        gap = lib_only.bic - got.bic
+        if gap < DELTA_BIC:
+            return None
+        drop = tuple(e for e in CALIBRATION_EFFECTS if e not in got.ids)
+        law = ", ".join(x.names[0] for x in laws)
+        text = (f"{' and '.join(gone)} stood in for it: a load law of another form ({law}) "
+                "takes its place when both are candidates (BIC and held-out error)")
+        note = (f"{', '.join(gone)} withdrawn: chosen again side by side with the load laws "
+                f"of the discovery's dictionary, the recording prefers {law} to "
+                f"{'it' if len(gone) == 1 else 'them'} (BIC lower by {gap:.0f} than with the "
+                f"loss scales alone, at least {DELTA_BIC:g} needed; held-out error); a free "
+                "scale of the model's losses stood in for a loss of another law")
+        return gone, note, text, drop
 
     def _stand_in_form(self, rec, P, sel, resid, ocols):
         """The discovery's sparse closed form of what the calibration effects held
@@ -539,7 +613,8 @@ class Diagnoser:
         design = base
         values = self._calibration_values(rem.S)
         dropped = set(self._calibration_values(sel.S)) - set(values)
-        candidates = tuple(c for c in self.candidates if c not in dropped)
+        candidates = tuple(c for c in self.candidates
+                           if c not in dropped and c not in self._stood_in)
         offsets = {}
         # the selection is taken at the design that carries ``offsets`` (else the whole
         # changes cannot be judged there: a change clipped at its bounds ends the passes
