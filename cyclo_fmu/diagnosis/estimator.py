@@ -75,6 +75,13 @@ STAND_IN_FAMILIES = ("coulomb", "speed", "load", "speed*load", "temperature")
 #: below zero), not a loss outside the library (the model's idle losses removed as a negative
 #: Coulomb and speed law beside a load-cubed term beat a true idle-loss scale of -1)
 SPEED_FAMILIES = ("coulomb", "speed")
+#: the library's steady loss laws chosen again beside the dictionary's load laws
+#: (``Diagnoser._calibration_against_rivals``): the free scales of the model's own losses and
+#: the drag, a law of speed alone. Their laws over speed and load are fixed by the physics;
+#: a loss of another law that grows with the load is taken up by them in part
+RIVALLED = CALIBRATION_EFFECTS + ("load_independent_loss",)
+#: of those, the effects with a shape chosen on a grid (all shapes are candidates there)
+SHAPED_LAWS = ("load_independent_loss",)
 #: re-linearisation passes of the calibration at most (Gauss-Newton on the replay; the
 #: preset mackic-rig from the default design, k 0 -> 0.027 and the idle scale 1 -> 0.03,
 #: settles in two)
@@ -350,27 +357,30 @@ class Diagnoser:
         loss (``SPEED_FAMILIES``: a negative one is fitted again without them)."""
         S = rem.S
         cal = [t for t in S.terms if t.effect in CALIBRATION_EFFECTS]
-        if not cal or rem.residual_raw is None:
+        named = [t for t in S.terms if t.effect in RIVALLED]
+        if not named or rem.residual_raw is None:
             return
         try:
             from .discover import Library, discover  # noqa: F401 (the stage is optional)
         except ImportError:
             return
-        other = [t for t in S.terms if t not in cal]
         fr = sel.opts.get("friction_miscalibrated")
-        if fr and "friction_miscalibrated" not in S.ids:
-            # the model's own friction level beside both (a loss scale of the whole gear is
-            # in large part a friction level; it must not count for the form)
-            other = [fr[0]] + other
+        extra = [fr[0]] if fr and "friction_miscalibrated" not in S.ids else []
+        # the model's own friction level beside them (a loss scale of the whole gear is in
+        # large part a friction level; it must not count for the form)
+        beaten = self._calibration_against_rivals(
+            rec, P, sel, extra + [t for t in S.terms if t not in named], named)
+        if beaten is not None:
+            return beaten
+        if not cal:
+            return
+        other = extra + [t for t in S.terms if t not in cal]
         ocols = [c for t in other for c in t.cols]
         back = np.zeros(len(rec.time))
         for t in cal:
             v, _ = S.of(t)
             back += first_order(EFFECTS[t.effect].basis(P.sig, t.shape), P.dt,
                                 self.bandwidth) @ v
-        beaten = self._calibration_against_rivals(rec, P, sel, other, cal)
-        if beaten is not None:
-            return beaten
         d = self._stand_in_form(rec, P, sel, rem.residual_raw + back, ocols)
         if d is None:
             return
@@ -392,72 +402,77 @@ class Diagnoser:
                 "needed); a free loss scale stands in for a loss of another law")
         return ids, note, text, CALIBRATION_EFFECTS
 
-    def _calibration_against_rivals(self, rec, P, sel, other, cal):
-        """The calibration effects chosen again with generic load laws as their rivals.
+    def _calibration_against_rivals(self, rec, P, sel, other, named):
+        """The library's steady loss laws chosen again with generic load laws as rivals.
 
-        A calibration effect scales the model's own loss map: its law over speed and load is
-        the physics', fixed. A loss of another law that grows with the load (the load or
-        speed*load families of the discovery's dictionary, ``LOAD_FAMILIES``) is taken up by
-        these scales in part, and beside them what is left can lie within the twins. So the
-        selection is run once more from the other named effects (forced, the friction level
-        among them), with the calibration effects and the dictionary's load laws as
-        candidates side by side (``selection.stepwise``: BIC by ``DELTA_BIC`` and
-        ``min_explained`` of held-out RMS to enter or stay). A law of the dictionary counts
-        its exponent(s) as parameters chosen on a grid, and it must be a loss (coefficient
-        >= 0: a negative one removes loss the model has, the loss scales' own physics), so a
-        tie keeps the library's effect. A calibration effect the selection named that is not
-        chosen here stood in for a loss of another law: ``(ids, note, text)`` for the stages
-        to run again without it and without the calibration effects the joint selection did
-        not choose (another scale would take the withdrawn one's place), else None. The laws
-        replace the scales only where the joint selection's BIC is lower by ``DELTA_BIC``
-        than that of the same selection with the calibration effects alone as candidates."""
+        A calibration effect scales the model's own loss map and the drag is a law of speed
+        alone: their laws over speed and load are fixed by the physics (``RIVALLED``). A loss
+        of another law that grows with the load (the load or speed*load families of the
+        discovery's dictionary, ``LOAD_FAMILIES``) is taken up by them in part, and beside them
+        what is left can lie within the twins. So the selection is run once more from the
+        other named effects (``other``, forced; the friction level among them), with the
+        rivalled effects and the dictionary's load laws as candidates side by side
+        (``selection.stepwise``: BIC by ``DELTA_BIC`` and ``min_explained`` of held-out RMS to
+        enter or stay). A law of the dictionary counts its exponent(s) as parameters chosen on
+        a grid, and it must be a loss (coefficient >= 0: a negative one removes loss the model
+        has, the loss scales' own physics). The laws replace the library's effects only on
+        very strong evidence: the joint selection's BIC must be lower by ``DELTA_BIC`` than
+        that of the same selection with the library's effects alone as candidates (a tie, a
+        law that is a scale's own look-alike in this recording, keeps the library's effect).
+        A named effect (``named``) not chosen there stood in for a loss of another law:
+        ``(ids, note, text, drop)`` for the stages to run again without the rivalled effects
+        the joint selection did not choose (``drop``: another scale would take the withdrawn
+        one's place), else None."""
         from dataclasses import replace as _replace
         from .discover import Library, _signals
         from .selection import GramProblem, Term, stepwise
         s, m = _signals(rec.time, rec.speed_in, rec.torque_out, P.m, self.block, None, None,
                         self.mode, self.design.z1)
         feats = [f for f in Library.default().features if f.family in LOAD_FAMILIES]
-        lib = Library(feats)
-        cols = lib.block_columns(s, m, self.bandwidth)
+        cols = Library(feats).block_columns(s, m, self.bandwidth)
         n = min(len(P.y), len(cols[0]))
-        family = list(cal) + [sel.opts[e][0] for e in CALIBRATION_EFFECTS
-                              if e not in {t.effect for t in cal} and sel.opts.get(e)]
-        own = [c for t in other + family for c in t.cols]
+        ids = {t.effect for t in named}
+        family = {}
+        for e in RIVALLED:      # a named one at its shape, or over its grid where it has one
+            mine = [t for t in named if t.effect == e]
+            grid = list(sel.opts.get(e) or ()) if (e in SHAPED_LAWS or not mine) else []
+            family[e] = list(dict.fromkeys(mine + grid))
+        family = {e: v for e, v in family.items() if v}
+        own = list(dict.fromkeys(c for t in other for c in t.cols))
+        own += list(dict.fromkeys(c for v in family.values() for t in v for c in t.cols
+                                  if c not in own))
+        at = {c: i for i, c in enumerate(own)}
         X = np.column_stack([P.X[:n, own]] + [c[:n].reshape(n, -1) for c in cols])
         prob = GramProblem(X, P.y[:n], np.asarray(sel.weights, float)[:n], self.n_folds)
-        i, terms = 0, []
-        for t in other + family:
-            terms.append(_replace(t, cols=tuple(range(i, i + len(t.cols)))))
-            i += len(t.cols)
-        forced, mine = tuple(terms[:len(other)]), terms[len(other):]
-        options = {t.effect: [t] for t in mine}
+
+        def moved(t):
+            return _replace(t, cols=tuple(at[c] for c in t.cols))
+        forced = tuple(moved(t) for t in other)
+        mine = {e: [moved(t) for t in v] for e, v in family.items()}
+        options, i = dict(mine), len(own)
         for f in feats:
             options.setdefault(f"law: {f.family}", []).append(
                 Term(f"law: {f.family}", f.shape, (i,), (f.name,), ("N*m",), (0.0,),
                      (np.inf,), f.n_shape))
             i += 1
         got = stepwise(prob, options, sel.min_expl, cv=True, forced=forced).fit
-        gone = [t.effect for t in cal if t.effect not in got.ids]
+        gone = [e for e in ids if e not in got.ids]
         laws = [x for x in got.terms if x.effect.startswith("law: ")]
         if not gone or not laws:
             return None
-        # the laws replace a library scale only on very strong evidence: the same selection
-        # with the calibration effects alone as candidates must be worse by DELTA_BIC (a tie,
-        # a law that is the scale's own look-alike in this recording, keeps the library's)
-        lib_only = stepwise(prob, {t.effect: [t] for t in mine}, sel.min_expl, cv=True,
-                            forced=forced).fit
+        lib_only = stepwise(prob, mine, sel.min_expl, cv=True, forced=forced).fit
         gap = lib_only.bic - got.bic
         if gap < DELTA_BIC:
             return None
-        drop = tuple(e for e in CALIBRATION_EFFECTS if e not in got.ids)
+        drop = tuple(e for e in RIVALLED if e not in got.ids)
         law = ", ".join(x.names[0] for x in laws)
         text = (f"{' and '.join(gone)} stood in for it: a load law of another form ({law}) "
                 "takes its place when both are candidates (BIC and held-out error)")
         note = (f"{', '.join(gone)} withdrawn: chosen again side by side with the load laws "
                 f"of the discovery's dictionary, the recording prefers {law} to "
                 f"{'it' if len(gone) == 1 else 'them'} (BIC lower by {gap:.0f} than with the "
-                f"loss scales alone, at least {DELTA_BIC:g} needed; held-out error); a free "
-                "scale of the model's losses stood in for a loss of another law")
+                f"library's effects alone, at least {DELTA_BIC:g} needed; held-out error); a "
+                "steady loss law of the library stood in for a loss of another law")
         return gone, note, text, drop
 
     def _stand_in_form(self, rec, P, sel, resid, ocols):
