@@ -34,6 +34,7 @@ from dataclasses import replace
 import numpy as np
 
 from model_core import DriveDesign
+from model_core.errors import CycloidInputError
 from model_core.effects import (CALIBRATION_EFFECTS, CALIBRATION_FIELDS, DEFAULT_CANDIDATES,
                                 EFFECTS)
 from model_core.kinematics import parse_mode
@@ -246,7 +247,8 @@ class Diagnoser:
             self._notes = notes + [n for n in self._notes if n not in notes]
         if self._viscosity_far(P, rem.S):
             notes = self._notes
-            P, sel, J, rem = self._relinearise_viscosity(rec, P, sel, rem, rel1)
+            P, sel, J_nu, rem = self._relinearise_viscosity(rec, P, sel, rem, rel1)
+            J = J_nu or J       # None where no pass could be replayed
             self._notes = notes + [n for n in self._notes if n not in notes]
         rem.unexplained["_rejected"] = J.rejected
         self._stage("report")
@@ -589,9 +591,18 @@ class Diagnoser:
             t = next(t for t in rem.S.terms if t.effect == "viscosity_drift")
             c = float(rem.S.of(t)[0][0])
             design = scale_friction_level(self.design, 1 + rel1) if rel1 else self.design
-            P.sig["nu_steps"] = viscosity_steps(design, self.mode, rec.speed_in,
-                                                -rec.torque_out,
-                                                c * viscosity_span(P.sig, t.shape))
+            try:
+                P.sig["nu_steps"] = viscosity_steps(design, self.mode, rec.speed_in,
+                                                    -rec.torque_out,
+                                                    c * viscosity_span(P.sig, t.shape))
+            except CycloidInputError as err:
+                # the fitted change takes the lubricant where the design refuses it (thinner
+                # than any oil): the drift stays at its linearisation, and the note says so
+                self._notes.append(
+                    f"viscosity_drift kept at its linearisation: its fitted change of "
+                    f"ln(viscosity) {c:+.3g} cannot be replayed ({err}); a drift that large "
+                    "is doubtful")
+                break
             P.sig["nu_secant"] = c
             n = len(P.y) * P.m
             sig = {k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == rec.time.shape
