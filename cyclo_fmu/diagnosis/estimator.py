@@ -15,7 +15,11 @@ typed result:
    bursts at events and spectral peaks, each judged against twins; effects the unknown could
    hold withdrawn;
 5. ``discover`` (``discover.discover``, when that module exists): a closed form for a
-   confirmed remainder, put in ``unexplained.proposed``. Before it, a calibration effect
+   confirmed remainder, put in ``unexplained.proposed``. Before it, the library's steady loss
+   laws (``RIVALLED``: the calibration effects and the drag) are chosen again side by side
+   with the dictionary's load laws (``_calibration_against_rivals``): one the joint selection
+   does not keep stood in for a loss of another law and stages 2-5 run again without it; then a
+   calibration effect
    (``mesh_loss``, ``idle_loss_scale``: candidates unless ``calibrate=False``) that stands is
    put against the dictionary's closed form for what it holds (``_calibration_against_forms``,
    BIC): where the form wins, the calibration effects stood in for a loss of another law and
