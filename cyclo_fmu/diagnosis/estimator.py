@@ -85,6 +85,8 @@ SPEED_FAMILIES = ("coulomb", "speed")
 #: the drag, a law of speed alone. Their laws over speed and load are fixed by the physics;
 #: a loss of another law that grows with the load is taken up by them in part
 RIVALLED = CALIBRATION_EFFECTS + ("load_independent_loss",)
+#: the note of a loss law withdrawn beside the load laws (kept over the viscosity's passes)
+RIVAL_NOTE = "chosen again side by side with the load laws of the discovery's dictionary"
 #: of those, the effects with a shape chosen on a grid (all shapes are candidates there)
 SHAPED_LAWS = ("load_independent_loss",)
 #: re-linearisation passes of the calibration at most (Gauss-Newton on the replay; the
@@ -482,8 +484,7 @@ class Diagnoser:
         law = ", ".join(x.names[0] for x in laws)
         text = (f"{' and '.join(gone)} stood in for it: a load law of another form ({law}) "
                 "takes its place when both are candidates (BIC and held-out error)")
-        note = (f"{', '.join(gone)} withdrawn: chosen again side by side with the load laws "
-                f"of the discovery's dictionary, the recording prefers {law} to "
+        note = (f"{', '.join(gone)} withdrawn: {RIVAL_NOTE}, the recording prefers {law} to "
                 f"{'it' if len(gone) == 1 else 'them'} (BIC lower by {gap:.0f} than with the "
                 f"library's effects alone, at least {DELTA_BIC:g} needed; held-out error); a "
                 "steady loss law of the library stood in for a loss of another law")
@@ -597,6 +598,7 @@ class Diagnoser:
         from .problem import masked_means
         eff = EFFECTS["viscosity_drift"]
         J = None
+        kept, gone = [], []
         for _ in range(NU_PASSES):
             if not self._viscosity_far(P, rem.S):
                 break
@@ -626,6 +628,12 @@ class Diagnoser:
             # the loss laws meet the dictionary's load laws here, once the drift's column is
             # taken at its fitted size (``_calibration_against_rivals``)
             P, sel, J, rem = self._judge(rec, P, sel, rel1, compete="rivals")
+            # a loss law withdrawn beside the load laws in an earlier pass stays reported
+            # (each pass starts its notes anew)
+            kept += [x for x in self._notes if RIVAL_NOTE in x and x not in kept]
+            gone += [e for e in rem.withdrawn if e in self._stood_in and e not in gone]
+        rem.withdrawn += [e for e in gone if e not in rem.withdrawn and e not in rem.S.ids]
+        self._notes += [x for x in kept if x not in self._notes]
         return P, sel, J, rem
 
     @staticmethod
