@@ -10,6 +10,11 @@ the summed PSS of the process tree (sampled every 50 ms) and the command's max R
 
 - 600 000 samples: a 10-minute recording at 1 kHz written by ``synth`` (a thermal drift).
   Target: <= 4 s, <= 0.5 GB.
+- ``--stribeck``: the 600 000 samples as a four-quadrant recording (speed reversals,
+  back-driving) with a hidden Stribeck friction of 25 mN*m (w_s = 30 rad/s, delta = 2, a
+  reversal width w_r = 1.5 rad/s; ``synth``, seed 81), so the diagnosis names
+  ``low_speed_friction`` and refines its width and exponent on the larger candidate set.
+  Same targets.
 - ``--big``: 36 million samples (1 h at 10 kHz, 1.4 GB CSV, ``bench_read.write_big``; the
   command reads it as 10 ms block means). Target: <= 120 s, <= 2 GB. Long: opt-in.
 
@@ -26,7 +31,7 @@ timed inside one process for the 600 000 samples.
 no folder, figure or report; the form issue 18's target names).
 
     python benchmarks/bench_diagnosis.py [--repeat 3] [--big] [--keep DIR] [--before PATH]
-                                          [--json]
+                                          [--json] [--stribeck]
 """
 from __future__ import annotations
 
@@ -47,6 +52,13 @@ def write_600k(path):
     sys.path.insert(0, str(ROOT))
     from cyclo_fmu.synth import synthesize, write_synth
     write_synth(path, synthesize("thermal_drift", 1, "S1", "large"))
+
+
+def write_600k_stribeck(path):
+    sys.path.insert(0, str(ROOT))
+    from cyclo_fmu.synth import synthesize, write_synth
+    write_synth(path, synthesize("low_speed_friction", 81, "S1", "large", plan="four_quadrant",
+                                 effect_values={"T_stribeck": 0.025}, shape=(30.0, 2.0, 1.5)))
 
 
 def write_36m(path):
@@ -175,6 +187,8 @@ def main():
     ap.add_argument("--keep", type=Path, help="write the recordings here (reused if present)")
     ap.add_argument("--before", help="a copy of older code to run alternately (PYTHONPATH)")
     ap.add_argument("--inprocess", action="store_true")
+    ap.add_argument("--stribeck", action="store_true",
+                    help="the 600 000 samples: four quadrants with a hidden Stribeck friction")
     ap.add_argument("--json", action="store_true",
                     help="run the command with --json (printed, no folder) instead of --out")
     a = ap.parse_args()
@@ -187,9 +201,9 @@ def main():
         print(f"machine: {os.cpu_count()} CPUs; load average {os.getloadavg()}")
         show("reference: bare imports", reference_imports())
         if not a.only_big:
-            f = d / "diagnosis_600k.csv"
+            f = d / ("diagnosis_600k_stribeck.csv" if a.stribeck else "diagnosis_600k.csv")
             if not f.exists():
-                write_600k(f)
+                (write_600k_stribeck if a.stribeck else write_600k)(f)
             print(f"600 000 samples ({f.stat().st_size / 1e6:.0f} MB CSV):")
             series("600k", f, out / "600k", a.repeat, a.before, "(target <= 4 s, <= 0.5 GB)")
             if a.inprocess:

@@ -3,7 +3,8 @@ recordings from two versions of the code, compared key by key.
 
 A speed-up must not change what the diagnosis says. This script writes a set of recordings
 (clean ones of two plans, library effects alone and in pairs, S2, a temperature column, a
-remainder outside the library, the 600 000-sample benchmark recording, and recordings of the
+remainder outside the library, the 600 000-sample benchmark recordings (a thermal drift; a
+Stribeck friction in a four-quadrant plan), and recordings of the
 independent generator in its file dialects: German CSV, catman text, MDF4, UTF-16 with units in
 the names), diagnoses each with ``cyclo-fmu diagnose FILE --mode auto --out DIR`` under one
 version of the code, and compares two such runs: every key present in both, strings and
@@ -58,6 +59,11 @@ def make(out: Path):
         "s_windage_remainder": dict(effect="none", seed=7, added_torque=_windage),
         "s_large_thermal_600k": dict(effect="thermal_drift", seed=1, size="large"),
         "s_mesh_loss_calibrate": dict(effect="mesh_loss", seed=9),
+        # bench_diagnosis.py --stribeck: the width refinement and the re-linearised problem
+        # whose compared samples move in a few blocks
+        "s_stribeck_4q_600k": dict(effect="low_speed_friction", seed=81, size="large",
+                                   plan="four_quadrant", effect_values={"T_stribeck": 0.025},
+                                   shape=(30.0, 2.0, 1.5)),
     }
     extra_args = {"s_mesh_loss_calibrate": ["--calibrate"]}
     cases = []

@@ -735,6 +735,10 @@ def cmd_diagnose(args) -> int:
         raise _recording_error(args.recording, exc) from None
     if args.verify:
         result["verify"] = _verify_updated(rec, mode, design, d)
+    # the stages' results (the problem's matrix and sample-level signals, the selection's
+    # scaled columns: ~200 MB at 600 000 samples) are read by nothing the command writes or
+    # prints: released before the figure is drawn
+    d.stages = {}
     if args.out:
         from .diagnosis import write_diagnosis
         write_diagnosis(args.out, d, design, result, source=str(args.recording))

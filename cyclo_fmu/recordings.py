@@ -23,6 +23,11 @@ REQUIRED = ("time_s", "speed_in_rpm", "torque_in_Nm", "speed_out_rpm", "torque_o
 OPTIONAL = ("temperature_C",)
 SCHEMA = REQUIRED + OPTIONAL
 MAX_EXCLUDED = 0.20          # share of samples that may be excluded for NaN
+#: [s] a time column whose first stamp lies in this range is Unix time (seconds since
+#: 1970-01-01 UTC: 2001-09-09 to 2099-12-04), as data loggers write it; it is referred to its
+#: first stamp. A bench run does not last 31 years: a relative time there is no measurement
+#: (``io.checks.ABSURD``)
+UNIX_TIME_S = (1e9, 4.1e9)
 RAD_S_PER_RPM = math.pi / 30
 
 
@@ -145,6 +150,21 @@ def recording_from_arrays(time, speed_in_rpm, torque_in_Nm, speed_out_rpm, torqu
     return rec
 
 
+def _unix_time(data: dict, notes) -> tuple:
+    """(data, notes) with a Unix time column (``UNIX_TIME_S``) referred to its first stamp and
+    a note naming that stamp; unchanged otherwise."""
+    t = data["time_s"]
+    fin = np.flatnonzero(np.isfinite(t))
+    if not fin.size or not UNIX_TIME_S[0] <= t[fin[0]] <= UNIX_TIME_S[1]:
+        return data, notes
+    import datetime
+    t0 = float(t[fin[0]])
+    start = datetime.datetime.fromtimestamp(t0, datetime.timezone.utc)
+    note = (f"time_s read as Unix time (s since 1970-01-01 UTC): referred to its first stamp, "
+            f"{start.isoformat(timespec='milliseconds').replace('+00:00', ' UTC')}")
+    return dict(data, time_s=t - t0), tuple(notes) + (note,)
+
+
 def _check(data: dict, source: str, where, min_duration: float, min_samples: int,
            pre_exclusions=(), notes=(), units=None, raw_samples=None,
            magnitudes=None) -> Recording:
@@ -153,6 +173,7 @@ def _check(data: dict, source: str, where, min_duration: float, min_samples: int
     n = len(data["time_s"])
     if n == 0:
         raise RecordingError(f"recording {source!r} has no samples")
+    data, notes = _unix_time(data, notes)
     if magnitudes is not None:
         magnitudes(data, where)
     t = data["time_s"]

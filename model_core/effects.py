@@ -97,9 +97,23 @@ class Effect:
             return self.parameters[:len(RIPPLE_ORDERS) * 2]
         return self.parameters
 
-    def basis(self, s: dict, shape=None) -> np.ndarray:
-        """Columns (n_samples, n_params) whose combination with the parameters is the torque."""
+    def basis(self, s: dict, shape=None, lead=None) -> np.ndarray:
+        """Columns (n_samples, n_params) whose combination with the parameters is the torque.
+        ``lead``: (shape, its basis) of another shape whose columns this basis begins with
+        (``leads``): they are copied, not evaluated again (the same numbers)."""
+        if lead is not None and self.leads(shape, lead[0]):
+            return _BASIS_AFTER[self.id](s, shape, lead[1])
         return _BASIS[self.id](s, shape)
+
+    @property
+    def nested(self) -> bool:
+        """True where the basis at one shape may begin with the basis at another (``leads``)."""
+        return self.id in _BASIS_AFTER
+
+    def leads(self, shape, other) -> bool:
+        """Does the basis at ``shape`` begin with the columns of the basis at ``other`` (the
+        mesh ripple's load law 1, a + b |tau_out|/T_REF, with law 0's, a)?"""
+        return self.id in _BASIS_AFTER and bool(shape) and not other
 
     def torque(self, s: dict, values, shape=None) -> np.ndarray:
         """The effect's torque at the input shaft for parameter values (N*m)."""
@@ -229,20 +243,24 @@ def _ripple(s, shape):
     return _mesh_ripple(s, None)
 
 
-def _mesh_ripple(s, shape):
+def _mesh_ripple(s, shape, lead=None):
     """Ripple at the shaft orders (RIPPLE_ORDERS), amplitude a (``shape`` 0 or None) or
     a + b |tau_out| / T_REF (``shape`` 1: a transmission error times the mesh stiffness):
     columns sin(k th), cos(k th) per order, then (law 1) the same times |tau_out|/T_REF.
-    Filled in place (a long recording's basis is its largest array: no stacked copies)."""
+    Filled in place (a long recording's basis is its largest array: no stacked copies).
+    ``lead``: the basis at law 0 of these signals (law 1's first columns, copied)."""
     th = s["theta_in"]
     ks = ripple_orders(s)
     m = 2 * len(ks)
     B = np.empty((len(th), 2 * m if shape else m))
-    arg = np.empty(len(th))
-    for i, k in enumerate(ks):
-        np.multiply(k, th, out=arg)
-        np.sin(arg, out=B[:, 2 * i])
-        np.cos(arg, out=B[:, 2 * i + 1])
+    if lead is not None:
+        B[:, :m] = lead
+    else:
+        arg = np.empty(len(th))
+        for i, k in enumerate(ks):
+            np.multiply(k, th, out=arg)
+            np.sin(arg, out=B[:, 2 * i])
+            np.cos(arg, out=B[:, 2 * i + 1])
     if shape:
         from .discovered import T_REF
         v = np.abs(s["tau_out"]) / T_REF
@@ -294,6 +312,9 @@ def _none(s, shape):
     return np.zeros((len(s["t"]), 0))
 
 
+#: {effect: basis(s, shape, lead)} of the effects whose basis at one shape begins with the
+#: basis at another (``Effect.leads``): the later one from the earlier one's columns
+_BASIS_AFTER = {"mesh_ripple": _mesh_ripple}
 _BASIS = {"load_independent_loss": _drag, "thermal_drift": _thermal,
           "viscosity_drift": _viscosity, "inertia": _inertia, "mesh_ripple": _mesh_ripple,
           "low_speed_friction": _stribeck, "torque_sensor_offset": _offset,

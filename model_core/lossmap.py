@@ -41,6 +41,38 @@ if (_N_GEAR, _N_IDLE) != (5, 3):
                       "load-independent partial losses")
 
 
+def grid_cell(g, x, nodes=False):
+    """The cell of the increasing grid ``g`` each ``x`` lies in, ``np.clip(np.searchsorted(g,
+    x, side="right") - 1, 0, len(g) - 2)``: for a grid of equal steps (the maps' log grids)
+    from the step, checked (the cell is the only i with g[i] <= x < g[i + 1], the outer cells
+    open outwards) and where rounding put a value in a neighbour moved by one node;
+    ``searchsorted`` itself where a value is not placed so (a NaN, a grid of unequal steps).
+    The same indices, a third of the time of a binary search per value (a replay looks up
+    every sample's torque). ``nodes``: return (i, g[i], g[i + 1])."""
+    n = len(g)
+    i = None
+    if n > 2:
+        step = (g[-1] - g[0]) / (n - 1)
+        with np.errstate(invalid="ignore"):
+            k = np.floor((x - g[0]) / step)
+        np.fmin(np.fmax(k, 0, out=k), n - 2, out=k)        # (a NaN to 0: checked below)
+        i = k.astype(np.intp)
+        for again in (True, False):
+            lo, hi = g.take(i), g.take(i + 1)
+            below, above = (lo <= x) | (i == 0), (x < hi) | (i == n - 2)
+            if np.all(below & above):
+                break
+            if not again:
+                i = None
+                break
+            i = i - ~below + ~above                          # (one node either way)
+            np.clip(i, 0, n - 2, out=i)
+    if i is None:
+        i = np.clip(np.searchsorted(g, x, side="right") - 1, 0, n - 2)
+        lo, hi = g[i], g[i + 1]
+    return (i, lo, hi) if nodes else i
+
+
 class ModeMap:
     """eta0 and loss shares of one mode over |tau| x |w_in|, both flow directions, and the
     drag at the shafts over |w_in|.
@@ -282,8 +314,8 @@ class ModeMap:
         aw = np.abs(w_in)
         with np.errstate(divide="ignore"):
             lw = np.clip(np.log(aw), gw[0], gw[-1])
-        j = np.clip(np.searchsorted(gw, lw, side="right") - 1, 0, len(gw) - 2)
-        fw = (lw - gw[j]) / (gw[j + 1] - gw[j])
+        j, g0, g1 = grid_cell(gw, lw, nodes=True)
+        fw = (lw - g0) / (g1 - g0)
         below = aw < self._w_low
         low = (below, np.minimum(aw[below] / self._w_low, 1.0)) if below.any() else None
         return j, fw, low, np.sign(w_in)
@@ -310,7 +342,7 @@ class ModeMap:
 
         def drag(x):       # sgn * q[..., 3 + x] of solve_arrays
             col = idle[:, 3 + x]
-            q = g * col[j] + fw * col[j + 1]
+            q = g * col.take(j) + fw * col.take(j + 1)
             if low is not None:
                 q[low[0]] = col[0] * low[1]
             return sgn * q
@@ -321,8 +353,8 @@ class ModeMap:
         gt = np.asarray(self._lt)
         with np.errstate(divide="ignore"):
             lt = np.clip(np.log(np.abs(tau)), gt[0], gt[-1])
-        i = np.clip(np.searchsorted(gt, lt, side="right") - 1, 0, len(gt) - 2)
-        ft = (lt - gt[i]) / (gt[i + 1] - gt[i])
+        i, g0, g1 = grid_cell(gt, lt, nodes=True)
+        ft = (lt - g0) / (g1 - g0)
         # both directions' eta0 tables stacked: one gather per corner
         tabs = getattr(self, "_eta0_stack", None)
         if tabs is None:
@@ -331,8 +363,8 @@ class ModeMap:
         nw, nt = self._arrays[True].shape[:2]
         flat = forward * (nw * nt) + j * nt + i
         h = 1 - ft
-        eta0 = g * (h * tabs[flat] + ft * tabs[flat + 1]) \
-            + fw * (h * tabs[flat + nt] + ft * tabs[flat + nt + 1])
+        eta0 = g * (h * tabs.take(flat) + ft * tabs.take(flat + 1)) \
+            + fw * (h * tabs.take(flat + nt) + ft * tabs.take(flat + nt + 1))
         wf, wb = self._wdir[True], self._wdir[False]
         if wf > 0 and wb > 0:
             e = eta0
@@ -353,8 +385,8 @@ class ModeMap:
             shares = self._load_share_stack = np.stack(
                 [self._arrays[False][..., 1:1 + len(LOSS_NAMES)].sum(-1),
                  self._arrays[True][..., 1:1 + len(LOSS_NAMES)].sum(-1)]).ravel()
-        share = g * (h * shares[flat] + ft * shares[flat + 1]) \
-            + fw * (h * shares[flat + nt] + ft * shares[flat + nt + 1])
+        share = g * (h * shares.take(flat) + ft * shares.take(flat + 1)) \
+            + fw * (h * shares.take(flat + nt) + ft * shares.take(flat + nt + 1))
         r = self.ratio
         T_load = np.where(w_in != 0, share * T1 * (r[0] + c[1] * r[1] + c[2] * r[2]), 0.0)
         return T1 * c[a_] + d_a, T_load

@@ -150,3 +150,55 @@ def test_replays_sharing_their_speed_look_ups_give_the_same_torques():
             ref = replay_input_torque(d, mode, w, tau, grid)
             assert all(np.array_equal(a, b) for a, b in zip(got, ref))
         assert len(located) == 2
+
+
+def test_a_ripple_law_from_the_constant_laws_columns_is_the_whole_one():
+    """The mesh ripple's load law (a + b |tau_out|) begins with the constant law's columns
+    (a): its basis built from them (``Effect.basis(lead=)``), and the diagnosis's block-mean
+    columns that filter and average only the load columns, are the whole ones to the bit."""
+    from cyclo_fmu.diagnosis.problem import _candidates, _edge_samples
+    from cyclo_fmu.diagnosis.replay import first_order
+    from model_core.effects import EFFECTS
+    rng = np.random.default_rng(5)
+    n, dt, m = 4000, 1e-3, 10
+    w = 150.0 * np.sin(np.linspace(0.0, 9.0, n)) + rng.normal(0.0, 0.5, n)
+    sig = {"t": np.arange(n) * dt, "w_in": w, "theta_in": np.cumsum(w) * dt,
+           "tau_out": -4.0 - 3.0 * np.sin(np.linspace(0.0, 5.0, n)), "ratio_out": -1 / 14,
+           "order_roller": 15.0}
+    e = EFFECTS["mesh_ripple"]
+    assert e.nested and e.leads(1.0, 0.0) and not e.leads(0.0, 1.0)
+    assert not EFFECTS["low_speed_friction"].nested
+    a = e.basis(sig, 0.0)
+    whole = e.basis(sig, 1.0)
+    assert np.array_equal(e.basis(sig, 1.0, (0.0, a)), whole)
+    assert np.array_equal(whole[:, :a.shape[1]], a)
+    mask = rng.random(n) > 0.05
+    counts = mask.reshape(-1, m).sum(1)
+    edges = np.array([2, 7, 100, 399])
+    _, options, columns = _candidates(sig, ("mesh_ripple",), True, dt, 1000.0, mask, m,
+                                      counts=counts, edges=edges)
+    assert [t.shape for t in options["mesh_ripple"]] == [0.0, 1.0]
+    y = first_order(whole, dt, 1000.0)
+    assert np.array_equal(columns[("mesh_ripple", 1.0)][1], masked_means(y, mask, m, counts))
+    assert np.array_equal(columns[("mesh_ripple", 1.0)][2], _edge_samples(y, edges, m))
+
+
+def test_grid_cells_are_searchsorteds():
+    """The replay's look-up of each sample's cell on a map's grid (``lossmap.grid_cell``:
+    from the step of a grid of equal steps, checked) gives searchsorted's cells, clipped to
+    the grid's cells, for values on the nodes, next to them, outside the grid, infinite or
+    NaN, and on grids of unequal steps."""
+    from model_core.lossmap import grid_cell
+    rng = np.random.default_rng(7)
+    for trial in range(200):
+        n = int(rng.integers(2, 50))
+        g = (np.log(np.geomspace(rng.uniform(1e-3, 1.0), rng.uniform(2.0, 1e3), n))
+             if trial % 3 else np.unique(rng.normal(size=n)))
+        x = np.concatenate([rng.uniform(g[0] - 1, g[-1] + 1, 2000), g, np.nextafter(g, 9.0),
+                            np.nextafter(g, -9.0), [np.nan, np.inf, -np.inf]])
+        for xx in (x, x[np.isfinite(x)], np.clip(x[np.isfinite(x)], g[0], g[-1])):
+            ref = np.clip(np.searchsorted(g, xx, side="right") - 1, 0, len(g) - 2)
+            assert np.array_equal(grid_cell(g, xx), ref)
+            i, lo, hi = grid_cell(g, xx, nodes=True)
+            assert np.array_equal(i, ref) and np.array_equal(lo, g[ref])
+            assert np.array_equal(hi, g[ref + 1])

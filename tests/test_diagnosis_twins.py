@@ -195,6 +195,90 @@ def test_the_relinearised_problem_reuses_columns_to_the_bit(monkeypatch):
     assert P0.columns is None                     # released with the earlier problem
 
 
+def test_columns_averaged_again_where_the_compared_samples_moved_are_the_fresh_ones():
+    """Where the re-linearised replay compares other samples in a few blocks (a step of the
+    model crossed the jump threshold), the reused columns are averaged again in those blocks
+    only, from the filtered samples kept there (the edge blocks), Stribeck columns widened
+    through the reversals included: every column the same, bit for bit, as computed afresh
+    with the new mask, at 1 kHz and at 200 Hz."""
+    from cyclo_fmu.diagnosis import problem
+    from model_core.effects import DEFAULT_CANDIDATES, EFFECTS
+    for rate in (1000.0, 200.0):
+        r = synthesize("low_speed_friction", 81, "S1", "tiny", plan="four_quadrant",
+                       settings=SynthSettings(sample_rate=rate))
+        rec = as_recording(r)
+        cands = tuple(c for c in DEFAULT_CANDIDATES if c != "none")
+        P0 = problem.build_problem(rec, DriveDesign(), "S1", cands, 1000.0, 0.01)
+        m, n = P0.m, len(P0.y) * P0.m
+        sig = {k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == P0.mask.shape
+                   else v) for k, v in P0.sig.items()}
+        refined = {"low_speed_friction": EFFECTS["low_speed_friction"].shapes(
+            sig, around=(30.0, 2.0, 0.0))}
+        # edge blocks: the slowest (next to the reversals, where the widened columns differ
+        # from the sharp one) and a few others; the mask moves in some of them
+        wb = np.abs(P0.blocks["w_in"])
+        edges = np.unique(np.r_[np.argsort(wb)[:12], [3, len(wb) // 2, len(wb) - 2]])
+        changed = edges[::2]
+        mask_a = P0.mask[:n].copy()
+        mask_b = mask_a.copy()
+        for b in changed:                   # a compared sample dropped, a dropped one back
+            mask_b[b * m + (b % m)] ^= True
+        args = (sig, cands, P0.loaded, P0.dt, P0.bandwidth)
+
+        def counts(mk):
+            return mk.reshape(-1, m).sum(1)
+        _, _, cols_a = problem._candidates(*args, mask_a, m, None, counts(mask_a), refined,
+                                           edges)
+        _, opts, fresh = problem._candidates(*args, mask_b, m, None, counts(mask_b), refined,
+                                             edges)
+        _, _, patched = problem._candidates(*args, mask_b, m, (sig, cols_a, changed),
+                                            counts(mask_b), refined, edges)
+        assert len(opts["low_speed_friction"]) > 20
+        assert patched.keys() == fresh.keys()
+        kinds = set()
+        for key, (_, B, Y) in fresh.items():
+            got = patched[key][1]
+            kinds.add(type(got).__name__)
+            assert np.array_equal(np.asarray(got), B), key
+            assert np.array_equal(patched[key][2], Y), key
+        assert "_Patched" in kinds        # (reused and averaged again, not recomputed)
+
+
+@pytest.mark.parametrize("effect, seed, plan, edge_share", [
+    ("thermal_drift", 3, "one_speed", None),        # the same samples compared
+    ("low_speed_friction", 81, "four_quadrant", None),   # a few blocks moved: averaged again
+    ("low_speed_friction", 81, "four_quadrant", 0.0)])   # no edge blocks kept: computed again
+def test_the_relinearised_problem_is_written_over_the_released_matrix(monkeypatch, effect,
+                                                                       seed, plan, edge_share):
+    """The re-linearised problem of an earlier one whose matrix its owner released (the
+    estimator does, before the second replay) is written over that matrix (no second one
+    held at the peak), whether its columns are reused, averaged again where the compared
+    samples moved, or computed again: the same numbers as a problem built afresh."""
+    from cyclo_fmu.diagnosis import problem
+    from model_core.design import scale_friction_level
+    from model_core.effects import DEFAULT_CANDIDATES
+    if edge_share is not None:
+        monkeypatch.setattr(problem, "EDGE_SHARE", edge_share)
+    rec = as_recording(synthesize(effect, seed, "S1", "tiny", plan=plan))
+    cands = tuple(c for c in DEFAULT_CANDIDATES if c != "none")
+    design = DriveDesign()
+    P0 = problem.build_problem(rec, design, "S1", cands, 1000.0, 0.01)
+    changed = scale_friction_level(design, 1.08)
+    sens = (P0.sig["sens_mu"], None)
+    fresh = problem.build_problem(rec, changed, "S1", cands, 1000.0, 0.01, sens)
+    moved = (P0.mask != fresh.mask).any()
+    assert moved == (plan == "four_quadrant")
+    assert (len(P0.edges) > 0) == (edge_share is None)
+    n, m = len(P0.y) * P0.m, P0.m
+    blocks = np.flatnonzero((P0.mask[:n] != fresh.mask[:n]).reshape(-1, m).any(1))
+    assert np.isin(blocks, P0.edges).all() == (edge_share is None)   # averaged again there
+    buffer = P0.X
+    P0.X = None
+    reused = problem.build_problem(rec, changed, "S1", cands, 1000.0, 0.01, sens, reuse=P0)
+    assert reused.X is buffer
+    assert np.array_equal(reused.X, fresh.X) and np.array_equal(reused.y, fresh.y)
+
+
 def test_a_run_in_no_distance_can_resolve_is_left_out():
     """A run-in is scanned only at distances the first fold does not run through (a fifth of
     the recording's distance); an hour at speed runs through every distance of the grid, and

@@ -84,3 +84,32 @@ def test_friction_level_names_the_coefficients_that_act(profile):
     base, a, b = (operating_point(d, "S1", w, T) for d in (design, level, only))
     assert abs(float(a.eta) - float(base.eta)) > 1e-3           # the level acts
     assert np.isclose(float(a.eta), float(b.eta), rtol=0, atol=1e-12)
+
+
+def test_long_residual_series_drawn_as_their_envelope():
+    """A residual series longer than LINE_POINTS is drawn through the smallest and largest
+    block mean of each run of consecutive blocks: at most LINE_POINTS points, every run's
+    extremes (NaN blocks aside) in it, in time order; a short series is drawn whole."""
+    import numpy as np
+    from cyclo_fmu.diagnosis.report import LINE_POINTS, _envelope
+    rng = np.random.default_rng(2)
+    n = 60_001
+    t = np.arange(n) * 0.01
+    y = np.cumsum(rng.normal(size=n))
+    y[1234] = np.nan
+    te, ye = _envelope(t, y)
+    assert len(te) == len(ye) <= LINE_POINTS and np.all(np.diff(te) >= 0)
+    assert np.nanmax(ye) == np.nanmax(y) and np.nanmin(ye) == np.nanmin(y)
+    runs = LINE_POINTS // 2
+    starts = (np.arange(runs) * n) // runs
+    for k in (0, 7, runs // 2, runs - 1):
+        seg = y[starts[k]:(starts[k + 1] if k + 1 < runs else n)]
+        assert (ye[2 * k], ye[2 * k + 1]) == (np.nanmin(seg), np.nanmax(seg))
+    short = y[:LINE_POINTS]
+    assert _envelope(t[:LINE_POINTS], short)[1] is short
+
+
+def test_decade_ticks_as_plain_text():
+    from cyclo_fmu.diagnosis.report import _decade
+    assert [_decade(v) for v in (0.0, 10.0, 1e5, 2.5, -100.0)] == [
+        "0", "10¹", "10⁵", "2.5", "−10²"]

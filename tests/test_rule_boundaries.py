@@ -137,7 +137,7 @@ def test_absurd_cell_boundary(key, limit):
     if key == "time":            # time may reach 1e9 s (the schema's limit), not beyond
         d["time"] = d["time"] + (1e9 - 10.0)
         recording_from_arrays(**d, check=False)
-        d["time"] = d["time"] + 20.0
+        d["time"] = d["time"] + 5.0      # starts below 1e9 s, ends above it: no Unix time
         with pytest.raises(RecordingError, match="is not a measurement"):
             recording_from_arrays(**d, check=False)
         return
@@ -478,3 +478,20 @@ def test_power_balance_efficiency_is_scale_free(T_in):
     f = checks.check_units(recording_from_arrays(**d, check=False))
     msg = [x for x in f if x["id"] == "power_balance"][-1]["message"]
     assert "back-driven: 1000 samples, efficiency 0.8;" in msg + ";", msg
+
+
+# --- Unix time stamps (recordings.UNIX_TIME_S) ------------------------------------------------
+def test_unix_time_is_referred_to_its_first_stamp():
+    """A logger's Unix time (s since 1970, first stamp 2025-11-26 08:00:00 UTC) is read as the
+    time since its first stamp, to the sample interval, with a note naming the stamp; a first
+    stamp beyond 2099 (4.1e9 s) is no Unix time and no measurement: refused."""
+    from cyclo_fmu.recordings import UNIX_TIME_S
+    d = s1()
+    rel = d["time"] - d["time"][0]
+    d["time"] = rel + 1764144000.0
+    r = recording_from_arrays(**d, check=False)
+    np.testing.assert_allclose(r.time, rel, atol=1e-6)
+    assert any("Unix time" in n and "2025-11-26T08:00:00.000 UTC" in n for n in r.notes)
+    d["time"] = rel + UNIX_TIME_S[1] + 1.0
+    with pytest.raises(RecordingError, match="is not a measurement"):
+        recording_from_arrays(**d, check=False)

@@ -269,8 +269,12 @@ class Diagnoser:
         if not refined:
             return P0, first
         self._refined = refined
-        P0 = refine_problem(P0, self.candidates, refined)
-        return P0, select(P0, self.n_folds)
+        P1 = refine_problem(P0, self.candidates, refined)
+        # the coarse problem's matrix and its selection's scaled columns are not read again
+        # (the refined problem holds its own copy): freed before the selection's peak, which
+        # would hold both (about 100 MB at 600 000 samples)
+        P0.X, first.prob.Xs = None, None
+        return P1, select(P1, self.n_folds)
 
     def _judge(self, rec, P, sel, rel1, compete=True):
         """Stages ``twins``, ``remainder`` and ``discover`` on one selection (with

@@ -76,8 +76,11 @@ class Problem:
     valid: np.ndarray = field(repr=False, default=None)
     noise_sample: float = 0.0
     bandwidth: float = 0.0
-    #: {(effect, shape): (signals its basis read, block-mean column)} (``_candidates``)
+    #: {(effect, shape): (signals its basis read, block-mean column, its filtered samples of
+    #: the ``edges`` blocks)} (``_candidates``)
     columns: dict = field(repr=False, default=None)
+    #: the blocks whose compared samples may move with the model's steps (``edge_blocks``)
+    edges: np.ndarray = field(repr=False, default=None)
 
     def __getitem__(self, key):          # the dict interface of earlier versions
         return getattr(self, key)
@@ -99,6 +102,52 @@ def jump_mask(t, w_in, T_model, noise, dt) -> np.ndarray:
     lo = np.clip(np.arange(n) - k - 1, 0, n)
     hi = np.clip(np.arange(n) + k + 1, 0, n)
     return (c[hi] - c[lo]) == 0
+
+
+#: [1] a step of the model's input torque between two samples within this factor of the jump
+#: threshold (``JUMP_NOISE`` times the sample noise) may cross it in the re-linearised replay
+#: (the friction level corrected by a few per cent moves the model's steps by less): the blocks
+#: within the settling window of such a step keep their filtered samples of every column
+#: (``edge_blocks``), so that a problem replayed at another level recomputes only the blocks
+#: whose compared samples changed. Speed only, never a result: where a block outside them
+#: changes, every column is computed again (the same numbers either way)
+STEP_MARGIN = 2.0
+#: [1] the edge blocks' filtered samples are kept only while the edge blocks are at most this
+#: share of the blocks (their samples then cost at most this share of the matrix's memory;
+#: measured: 0.15 % of a 10-minute four-quadrant recording's blocks, 2.3 % of a 42-s one):
+#: where the model steps near the threshold all along (an hour read as 10 ms block means, one
+#: sample a block: half its blocks, 190 MB), a change of the mask is as likely outside them,
+#: and every column is computed again anyway. Speed and memory only, never a result
+EDGE_SHARE = 0.1
+
+
+def edge_blocks(w_in, T_model, noise, dt, m, n_blocks) -> np.ndarray:
+    """Indices of the blocks (of ``m`` samples, the first ``n_blocks``) whose compared samples
+    (``jump_mask``) may change when the model's steps change by less than ``STEP_MARGIN``:
+    those within the settling window of a sample interval whose step lies within that factor
+    of the jump threshold (a reversal of the speed is a jump at any level); none where they
+    are more than ``EDGE_SHARE`` of the blocks."""
+    d = np.abs(np.diff(T_model))
+    thr = JUMP_NOISE * max(noise, 1e-12)
+    s = np.signbit(w_in)
+    near = np.flatnonzero((d > thr / STEP_MARGIN) & (d <= thr * STEP_MARGIN)
+                          & (s[1:] == s[:-1]))
+    if not len(near):
+        return np.zeros(0, np.intp)
+    k = int(np.ceil(SETTLE_S / dt)) + 1
+    first = np.maximum(near - k, 0) // m
+    last = np.minimum(near + k + 1, n_blocks * m - 1) // m
+    hit = np.zeros(n_blocks + 1, np.intp)
+    np.add.at(hit, first[first < n_blocks], 1)
+    np.add.at(hit, np.minimum(last[first < n_blocks], n_blocks - 1) + 1, -1)
+    edges = np.flatnonzero(np.cumsum(hit[:-1]) > 0)
+    return edges if len(edges) <= EDGE_SHARE * n_blocks else np.zeros(0, np.intp)
+
+
+def _edge_samples(y, edges, m):
+    """The filtered samples ``y`` (n x columns) of the blocks ``edges``: (len(edges) * m,
+    columns), a copy."""
+    return y[:len(y) // m * m].reshape(-1, m, *y.shape[1:])[edges].reshape(-1, *y.shape[1:])
 
 
 def masked_means(x, mask, m, counts=None):
@@ -211,14 +260,17 @@ class _Widened:
     CPU; the widest width, 4 rad/s, changes the 35 % of its samples below 80 rad/s). One sharp
     column is held at a time (the grid lists a sharp shape's widths together)."""
 
-    def __init__(self, sig, dt, bandwidth, mask, m, counts):
+    def __init__(self, sig, dt, bandwidth, mask, m, counts, edges):
         self.sig, self.dt, self.bandwidth = sig, dt, bandwidth
-        self.mask, self.m, self.counts = mask, m, counts
+        self.mask, self.m, self.counts, self.edges = mask, m, counts, edges
         self.key = self.absw = None
+        # the samples of the edge blocks (``edge_blocks``), in order
+        self.at = (edges[:, None] * m + np.arange(m)).reshape(-1)
 
     def column(self, eff, shape, k, known):
-        """(signals read, block-mean column) of ``shape`` (width ``shape[k]`` > 0); ``known``:
-        {shape: (keys, column)} of the effect's columns so far (the sharp one's, if there)."""
+        """(signals read, block-mean column, filtered samples of the edge blocks) of ``shape``
+        (width ``shape[k]`` > 0); ``known``: {shape: (keys, column, edge samples)} of the
+        effect's columns so far (the sharp one's, if there)."""
         sharp = shape[:k] + (0.0,) + shape[k + 1:]
         if self.key != (eff.id, sharp):
             self.sig.read = set()
@@ -228,9 +280,10 @@ class _Widened:
                 raise ValueError(f"{eff.id}: a reversal-width basis reads {sorted(keys)}")
             y0 = first_order(x0, self.dt, self.bandwidth)
             got = known.get(sharp)
-            B0 = (got[1] if got is not None and got[0] == keys else
+            B0 = (np.asarray(got[1]) if got is not None and got[0] == keys else
                   masked_means(y0, self.mask, self.m, self.counts))
             self.key, self.keys, self.x0, self.y0, self.B0 = (eff.id, sharp), keys, x0, y0, B0
+            self.Y0 = _edge_samples(y0, self.edges, self.m)
         w = self.sig["w_in"]
         if self.absw is None:
             self.absw = np.abs(w)
@@ -239,9 +292,9 @@ class _Widened:
         xs = eff.basis({"w_in": w[near]}, shape)
         changed = xs[:, 0] != x0[near, 0]
         idx, vals = near[changed], xs[changed]
-        B = self.B0.copy()
+        B, Y = self.B0.copy(), self.Y0.copy()
         if not len(idx):
-            return self.keys, B
+            return self.keys, B, Y
         # runs of changed samples: a new one where the gap to the last exceeds the tail
         cut = np.flatnonzero(np.diff(idx) > _TAIL) + 1
         starts, ends = idx[np.r_[0, cut]], idx[np.r_[cut - 1, len(idx) - 1]] + 1
@@ -270,6 +323,8 @@ class _Widened:
         touched = np.zeros(len(B), bool)
         for a, yw in windows:
             touched[a // m:(a + len(yw) - 1) // m + 1] = True
+            j0, j1 = np.searchsorted(self.at, [a, a + len(yw)])
+            Y[j0:j1] = yw[self.at[j0:j1] - a]
         rows = np.flatnonzero(touched)
         yb = y0.reshape(-1, m, *y0.shape[1:])[rows]          # (a copy: the touched blocks)
         flat = yb.reshape(-1, *y0.shape[1:])
@@ -278,27 +333,71 @@ class _Widened:
             flat[at:at + len(yw)] = yw
         mb = self.mask.reshape(-1, m)[rows].reshape(-1)
         B[rows] = masked_means(flat, mb, m, None if self.counts is None else self.counts[rows])
-        return self.keys, B
+        return self.keys, B, Y
+
+
+class _Patched:
+    """A reused block-mean column (a view of the earlier problem's matrix) whose blocks
+    ``rows`` are averaged again (``values``): written into the new matrix by ``_assemble``
+    (in place, where the earlier matrix is reused) without a copy of the whole column."""
+
+    def __init__(self, base, rows, values):
+        self.base, self.rows, self.values = base, rows, values
+        self.shape = base.shape
+
+    def __array__(self, dtype=None, copy=None):
+        out = np.array(self.base, dtype=dtype, copy=True)
+        out[self.rows] = self.values
+        return out
+
+    def write(self, view):
+        if not (view.__array_interface__ == self.base.__array_interface__):
+            view[...] = self.base
+        view[self.rows] = self.values
+
+
+def _fresh(x, k, B0, Y0, dt, bandwidth, mask, m, counts, edges):
+    """(block means, filtered samples of the edge blocks) of the basis ``x`` (n x columns)
+    through the low pass; its first ``k`` columns' are ``B0`` and ``Y0`` (another shape's,
+    whose basis they are: ``Effect.leads``). The low pass and the block means act column by
+    column, so only the other columns are filtered and averaged: the same numbers, where
+    both parts have at least two columns and are averaged as a basis of several columns is
+    (``masked_means``); else all are."""
+    if k and (k < 2 or x.shape[1] - k < 2):
+        k = 0
+    y = first_order(x[:, k:] if k else x, dt, bandwidth)
+    B, Y = masked_means(y, mask, m, counts), _edge_samples(y, edges, m)
+    return (np.hstack([B0, B]), np.hstack([Y0, Y])) if k else (B, Y)
 
 
 def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, counts=None,
-                refined=None):
+                refined=None, edges=None):
     """Every candidate's block-mean columns (each shape's basis at sample level, through the
     transducer's low pass, block-averaged over the compared samples) and its Terms. ``reuse``:
-    (signals, columns) of an earlier problem with the same samples, mask and block length (the
-    re-linearised replay): a column whose basis read only signals equal to that problem's (the
-    recording's own speed, angle, time, load) is that problem's column, the same numbers; the
-    ones that read the model (its loss, sensitivities, torque) are computed again.
+    (signals, columns[, changed]) of an earlier problem with the same samples and block
+    length (the re-linearised replay): a column whose basis read only signals equal to that
+    problem's (the recording's own speed, angle, time, load) is that problem's column, the
+    same numbers; the ones that read the model (its loss, sensitivities, torque) are computed
+    again. ``changed``: the blocks whose compared samples differ from that problem's (the
+    mask moved with the model's steps), all among its edge blocks: there a reused column is
+    averaged again from its filtered samples kept there (``edge_blocks``).
     ``counts``: ``mask``'s compared samples per block (``masked_means``). ``refined``:
     {effect: shapes} scanned instead of ``Effect.shapes`` (a refinement of a selected
-    effect's shape, ``Effect.refine``). Returns
-    (cols, options, columns) with columns {(effect, shape): (signals read, column)}."""
+    effect's shape, ``Effect.refine``). ``edges``: the edge blocks (sorted) whose filtered
+    samples each column keeps. Returns (cols, options, columns) with columns
+    {(effect, shape): (signals read, column, filtered samples of the edge blocks)}."""
     cols, options, columns = [], {}, {}
     sig = _Reads(P_sig)
-    old_sig, old_cols = reuse if reuse is not None else ({}, {})
+    edges = np.zeros(0, np.intp) if edges is None else edges
+    old_sig, old_cols, changed = (tuple(reuse) + (None,))[:3] if reuse is not None else (
+        {}, {}, None)
     same = {}
-    widened = _Widened(sig, dt, bandwidth, mask, m, counts)
+    widened = _Widened(sig, dt, bandwidth, mask, m, counts, edges)
     saturates = _tanh_saturates()
+    if changed is not None:
+        at = np.searchsorted(edges, changed)       # the changed blocks among the edge blocks
+        mask_c = mask.reshape(-1, m)[changed].reshape(-1)
+        counts_c = None if counts is None else counts[changed]
 
     def unchanged(keys):
         for k in keys:
@@ -307,6 +406,13 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, c
             if not same[k]:
                 return False
         return True
+
+    def patched(B, Y):
+        if changed is None or not len(changed):
+            return B, Y
+        return _Patched(B, changed, masked_means(
+            Y.reshape(len(edges), m, -1)[at].reshape(-1, Y.shape[1]), mask_c, m,
+            counts_c)), Y
     for eid in candidates:
         eff = EFFECTS[eid]
         if any(P_sig.get(r) is None for r in eff.requires):
@@ -314,6 +420,8 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, c
         if not loaded and eid in _DRIFT_LOADED:
             continue
         terms = []
+        prev = None        # (shape, basis, block means, edge samples, signals read) of the
+        #                    last shape computed (an Effect.nested effect's)
         for shape in (refined or {}).get(eid) or eff.shapes(P_sig):
             if shape is None and eff.shape and not (eff.temperature_form
                                                     and P_sig.get("temperature") is not None):
@@ -325,16 +433,26 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, c
             old = old_cols.get((eid, shape))
             k = _REVERSAL_WIDTH.get(eid)
             if old is not None and unchanged(old[0]):
-                keys, B = old
+                keys = old[0]
+                B, Y = patched(*old[1:])
             elif k is not None and isinstance(shape, tuple) and shape[k] > 0 and saturates:
-                keys, B = widened.column(eff, shape, k, {s: c for (e, s), c in columns.items()
-                                                         if e == eid})
+                keys, B, Y = widened.column(eff, shape, k, {s: c for (e, s), c in
+                                                            columns.items() if e == eid})
             else:
+                lead = prev if prev is not None and eff.leads(shape, prev[0]) else None
+                prev = None
                 sig.read = set()
-                B = masked_means(first_order(eff.basis(sig, shape), dt, bandwidth), mask, m,
-                                 counts)
-                keys = frozenset(sig.read)
-            columns[(eid, shape)] = (keys, B)
+                x = eff.basis(sig, shape) if lead is None else eff.basis(sig, shape, lead[:2])
+                keys = frozenset(sig.read) | (lead[4] if lead is not None else frozenset())
+                k_lead, B0, Y0 = (0, None, None) if lead is None else (
+                    lead[1].shape[1], lead[2], lead[3])
+                lead = None                   # (released before this basis is filtered)
+                B, Y = _fresh(x, k_lead, B0, Y0, dt, bandwidth, mask, m, counts, edges)
+                # kept for the effect's next shape, whose basis may begin with this one
+                # (Effect.leads: the mesh ripple's load law a + b |T| begins with a's)
+                prev = (shape, x, B, Y, keys) if eff.nested else None
+                del x
+            columns[(eid, shape)] = (keys, B, Y)
             k0 = sum(c.shape[1] for c in cols)
             cols.append(B)
             par = eff.parameters_for(shape)
@@ -397,14 +515,27 @@ def build_problem(rec, design, mode, candidates, bandwidth, block,
     loaded = float(np.max(np.abs(rec.torque_out))) >= MIN_LOAD
     sig_n = {k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == t.shape else v)
              for k, v in sig.items()}
-    prior = None
+    prior, edges, into = None, None, None
     if (reuse is not None and reuse.columns is not None and reuse.m == m and reuse.dt == dt
-            and reuse.bandwidth == bandwidth and reuse.mask.shape == mask.shape
-            and np.array_equal(reuse.mask, mask)):
-        prior = ({k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == t.shape else v)
-                  for k, v in reuse.sig.items()}, reuse.columns)
+            and reuse.bandwidth == bandwidth and reuse.mask.shape == mask.shape):
+        # the blocks whose compared samples moved with the model's steps: reused columns are
+        # averaged again there from their kept samples (all of them edge blocks), or, where
+        # another block changed, computed afresh
+        changed = np.flatnonzero((reuse.mask[:n] != mask_b).reshape(-1, m).any(1))
+        if not len(changed) or (reuse.edges is not None
+                                and np.isin(changed, reuse.edges).all()):
+            prior = ({k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == t.shape
+                          else v) for k, v in reuse.sig.items()}, reuse.columns, changed)
+            edges = reuse.edges        # (the kept samples do not depend on the mask)
+    if reuse is not None and reuse.columns is not None:
+        # the earlier matrix, released by its owner, is written over (its columns are read,
+        # where reused, before the new matrix is written)
+        into = _released_matrix(reuse)
+        into = None if into is None else (reuse.options, into)
+    if edges is None:
+        edges = edge_blocks(rec.speed_in[:n], rp.T_model[:n], noise, dt, m, n // m)
     parts = _assemble(sig_n, candidates, loaded, dt, bandwidth, mask_b, m, prior, counts,
-                      refined, blocks)
+                      refined, blocks, edges, into)
     if reuse is not None:
         reuse.columns = None       # (views of the earlier problem's X: released with it)
     # the replay's temporaries are freed: their heap pages go back before the next stage's peak
@@ -412,26 +543,62 @@ def build_problem(rec, design, mode, candidates, bandwidth, block,
     release_free_heap()
     return Problem(rp=rp, sig=sig, y=y, blocks=blocks, m=m, dt=dt, T_model_f=T_model_f,
                    loaded=loaded, mask=mask, valid=valid, noise_sample=noise,
-                   bandwidth=bandwidth, **parts)
+                   bandwidth=bandwidth, edges=edges, **parts)
 
 
 def _assemble(sig_n, candidates, loaded, dt, bandwidth, mask_b, m, prior, counts, refined,
-              blocks) -> dict:
+              blocks, edges, into=None) -> dict:
     """The candidates' columns and the generic basis as one matrix ``X`` with their Terms
-    (the Problem's fields X, options, generic, steady, structure, groups, columns)."""
+    (the Problem's fields X, options, generic, steady, structure, groups, columns).
+    ``into``: (Terms, matrix) of an earlier problem whose matrix its owner released (the
+    re-linearised replay's): where the Terms lie in the same columns, the new matrix is
+    written over it (the reused columns are already in place) instead of allocated."""
     cols, options, columns = _candidates(sig_n, candidates, loaded, dt, bandwidth, mask_b, m,
-                                         prior, counts, refined)
+                                         prior, counts, refined, edges)
     Gb, groups = R.generic_basis(blocks)
     k0 = sum(c.shape[1] for c in cols)
     generic, steady, structure = _structure(Gb, groups, k0)
-    X = np.hstack(cols + [Gb]) if cols else Gb
+    cols.clear()
+    if not columns:
+        return dict(X=Gb, options=options, generic=generic, steady=steady,
+                    structure=structure, groups=groups, columns=columns)
+    shape = (len(Gb), k0 + Gb.shape[1])
+    if into is not None and into[1].shape == shape and _layout(into[0]) == _layout(options):
+        X = into[1]
+    else:
+        X = np.empty(shape)
+    # (np.hstack's numbers, each column written into place and released as it goes: the
+    # columns and the matrix are not both held at once, 66 MB at 600 000 samples)
     for eid, terms in options.items():   # kept for a re-linearised problem: views of X
         for term in terms:
-            keys, B = columns[(eid, term.shape)]
-            columns[(eid, term.shape)] = (keys, X[:, list(term.cols)] if not term.cols else
-                                          X[:, term.cols[0]:term.cols[-1] + 1])
+            keys, B, Y = columns[(eid, term.shape)]
+            view = (X[:, list(term.cols)] if not term.cols else
+                    X[:, term.cols[0]:term.cols[-1] + 1])
+            if isinstance(B, _Patched):
+                B.write(view)
+            elif term.cols and view.__array_interface__ != B.__array_interface__:
+                view[...] = B
+            columns[(eid, term.shape)] = (keys, view, Y)
+            del B
+    X[:, k0:] = Gb
     return dict(X=X, options=options, generic=generic, steady=steady, structure=structure,
                 groups=groups, columns=columns)
+
+
+def _layout(options) -> list:
+    return [(eid, t.shape, t.cols) for eid, terms in options.items() for t in terms]
+
+
+def _released_matrix(P):
+    """The matrix of problem ``P`` when its owner released it (``P.X`` None) and only its
+    columns' views hold it; else None."""
+    if P.X is not None or not P.columns:
+        return None
+    base = next(iter(P.columns.values()))[1].base
+    ok = (isinstance(base, np.ndarray) and base.ndim == 2 and base.base is None
+          and base.flags.c_contiguous and base.flags.writeable
+          and all(c[1].base is base for c in P.columns.values()))
+    return base if ok else None
 
 
 def refine_problem(P: Problem, candidates, refined: dict) -> Problem:
@@ -446,6 +613,6 @@ def refine_problem(P: Problem, candidates, refined: dict) -> Problem:
     mask_b = P.mask[:n]
     counts = mask_b.reshape(-1, P.m).sum(1)
     parts = _assemble(sig_n, candidates, P.loaded, P.dt, P.bandwidth, mask_b, P.m,
-                      (sig_n, P.columns), counts, refined, P.blocks)
+                      (sig_n, P.columns), counts, refined, P.blocks, P.edges)
     P.columns = None               # (views of the earlier X: released with it)
     return _replace(P, **parts)
