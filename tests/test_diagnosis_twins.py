@@ -525,3 +525,29 @@ def _false_alarms(P, spikes, rng, fs, kind, alpha, draws=300):
         _, claims = burst_claims(P, flicker(rng, n, fs, 4e-3), spikes, rng)
         hits += claims[kind][0].p_value <= alpha
     return hits, draws * alpha + 2.5 * math.sqrt(draws * alpha * (1 - alpha))
+
+
+def test_bursts_read_the_compared_blocks_only():
+    """Blocks with no compared sample (at rest, through a jump) keep their plain mean in the
+    record but are no evidence: 40 mN*m in the 0.3 s dwell at rest at each speed reversal of
+    a plan of runs in alternating directions (a static friction the replay cannot know) is no
+    burst when those blocks are left out (valid 0), and is one when they count (valid 1)."""
+    from cyclo_fmu.diagnosis.remainder import burst_claims
+    fs, n = 100.0, 12_000
+    t = np.arange(n) / fs
+    rng = np.random.default_rng(3)
+    # runs of 2-5 s in alternating directions, a 0.3 s dwell at rest between them
+    ends = np.cumsum(rng.uniform(2.3, 5.3, 60))
+    k = np.searchsorted(ends, t, side="right")
+    since = t - np.concatenate([[0.0], ends])[k]
+    w = np.where(since < 0.3, 0.0, np.where(k % 2 == 0, 100.0, -100.0))
+    rest = w == 0.0
+    r = rng.normal(0, 2e-3, n) + np.where(rest, 40e-3 * rng.choice([-1, 1], n), 0.0)
+    P = _burst_problem(t, w, np.full(n, 2.0))
+    P.valid = np.where(rest, 0.0, 1.0)
+    spikes = np.zeros(n, bool)
+    b, claims = burst_claims(P, r, spikes, rng)
+    assert "speed reversals" not in b["tied"]
+    P.valid = np.ones(n)
+    b, claims = burst_claims(P, r, spikes, rng)
+    assert "speed reversals" in b["tied"]

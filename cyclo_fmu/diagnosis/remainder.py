@@ -262,19 +262,24 @@ def burst_claims(P, r, spikes, rng):
     T_in = P.blocks["T_in"] - P.y       # the model's input torque (block means of the replay)
     b = R.bursts(t, spikes, w, T, T_in)
     ev = R.burst_events(t, w, T, T_in)
-    r2 = r * r
+    # only the blocks compared (a block whose samples the replay cannot judge, at rest or
+    # through a jump, keeps its plain mean for the record, not as evidence; the series of the
+    # kept blocks is shifted against its events)
+    valid = getattr(P, "valid", None)
+    keep = np.ones(len(t), bool) if valid is None else np.asarray(valid) > 0
+    r2 = (r * r)[keep]
     n = len(r2)
     # the statistic is the mean rank of |r| near the events (a few random spikes move a rank
     # mean by little, a transient at every event by much; no clipping constant needed)
     from .twins import average_ranks
-    rk = average_ranks(r2) / n
+    rk = average_ranks(r2) / max(n, 1)
     alpha = FALSE_ALARM / len(ev)
-    taken = np.zeros(n, bool)
+    taken = np.zeros(len(t), bool)
     claims, windows = {}, {}
     for kind, times in ev.items():
         before = taken.copy()
         taken |= R._near(t, times, R.EVENT_WINDOW) & ~before
-        claim = _burst_claim(t, times, rk, r2, before, alpha)
+        claim = _burst_claim(t, times, rk, r2, before, alpha, keep)
         if claim is not None:
             claims[kind], windows[kind] = claim[:2], claim[2]
     b["tied"] = [k for k, (c, e) in claims.items() if c.stands and e >= MIN_EXPLAINED_NM]
@@ -283,18 +288,20 @@ def burst_claims(P, r, spikes, rng):
     return b, claims
 
 
-def _burst_claim(t, times, rk, r2, taken, alpha):
-    """(Check, RMS of the burst excess, the window [s]) of the events at ``times`` over ``BURST_SCALES``, or
-    None where the blocks are too few. Each window's statistic and its shift twins as in
-    ``burst_claims``; the claim's p-value is the share of shifts whose smallest p-value over
-    the windows is at or below the recording's (each shift's p-values from its rank among the
-    shifts of the same window), the size and the reported statistic those of the recording's
-    best window."""
+def _burst_claim(t, times, rk, r2, taken, alpha, keep):
+    """(Check, RMS of the burst excess, the window [s]) of the events at ``times`` over
+    ``BURST_SCALES``, or None where the blocks are too few. Each window's statistic and its
+    shift twins as in ``burst_claims``; the claim's p-value is the share of shifts whose
+    smallest p-value over the windows is at or below the recording's (each shift's p-values
+    from its rank among the shifts of the same window), the size and the reported statistic
+    those of the recording's best window. ``rk`` and ``r2`` hold the kept blocks (``keep``,
+    over all blocks ``t``) only."""
     n = len(rk)
     per = []
     for k in BURST_SCALES:
         near = R._near(t, times, k * R.EVENT_WINDOW) & ~taken
-        flank = R._near(t, times, k * FLANK_WINDOW) & ~near & ~taken
+        flank = (R._near(t, times, k * FLANK_WINDOW) & ~near & ~taken)[keep]
+        near = near[keep]
         if near.sum() < 3 or flank.sum() < 3 or n <= 20:
             return None
         stat, twins = shift_twins(rk, near / near.sum() - flank / flank.sum())
