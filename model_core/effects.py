@@ -50,8 +50,39 @@ W_REF = 300.0   # rad/s, reference input speed of the drag law (about 2860 r/min
 DRAG_EXPONENT = 2.0 / 3.0
 DRAG_EXPONENTS = (0.0, 1.0 / 3.0, 0.5, 2.0 / 3.0, 0.85, 1.0, 1.5, 2.0)
 #: [K] temperature step of the temperature form of the warm-up terms (per 10 K, as catalogue
-#: viscosity and transducer drift figures are quoted)
-T_STEP = 10.0
+#: viscosity and transducer drift figures are quoted; defined with the law in model_core.thermal)
+from .thermal import T_STEP, loss_temperature_law  # noqa: E402
+
+#: [K] temperature scales theta of the warm-up's exponential temperature law scanned beside the
+#: linear one (thermal.loss_temperature_law; the linear law is theta -> infinity, the shape
+#: None): a loss that follows the viscosity has theta = 1/|m d ln nu/dT|, 17 K for the whole
+#: of a loss proportional to the default grease's viscosity at 40 degC (d ln nu/dT = -0.058
+#: 1/K) and more for losses that follow it less than in proportion (m < 1: EHL film
+#: friction ~ nu^0.2-0.7, churning ~ nu^0.2-1); a factor 2 apart, as TAU_GRID, from 10 K (the
+#: steepest lubricant) to 80 K (beyond it the law differs from the linear one by less than
+#: dT/(2 theta) = 12 % of the change over a 20 K warm-up, which the held-out test rarely sees)
+THETA_GRID = (10.0, 20.0, 40.0, 80.0)
+
+
+class TemperatureScale(float):
+    """A shape value of a warm-up's temperature form: the temperature scale theta [K] of the
+    exponential temperature law (thermal.loss_temperature_law). A float, told apart from the
+    time constant [s] the same effect has in its time form: equal only to another
+    TemperatureScale of the same value."""
+
+    __slots__ = ()
+
+    def __repr__(self):
+        return f"TemperatureScale({float(self)!r})"
+
+    def __eq__(self, other):
+        return isinstance(other, TemperatureScale) and float(self) == float(other)
+
+    def __ne__(self, other):
+        return not self == other
+
+    def __hash__(self):
+        return hash(("theta", float(self)))
 
 
 @dataclass(frozen=True)
@@ -89,6 +120,10 @@ class Effect:
     #: effect is selected (a refinement: the Stribeck friction's transition width through a
     #: reversal): a function of the selected shape giving the shapes; None if none
     refine: object = None
+    #: grid of the temperature form's shape (with a temperature column): the temperature
+    #: scale theta [K] of the exponential law, scanned beside the linear law (shape None);
+    #: () keeps the linear law alone
+    temperature_shape: tuple = ()
 
     def parameters_for(self, shape=None) -> tuple:
         """The linear parameters the basis has at ``shape`` (the mesh ripple's constant
@@ -113,7 +148,7 @@ class Effect:
         ``around`` (a shape selected on the grid), the finer grid ``refine(around)`` where the
         effect has one, the grid itself included."""
         if self.temperature_form and s.get("temperature") is not None:
-            return (None,)
+            return (None,) + tuple(TemperatureScale(x) for x in self.temperature_shape)
         grid = self.shape
         if around is not None and self.refine is not None:
             grid = tuple(dict.fromkeys(self.shape + tuple(self.refine(around))))
@@ -141,12 +176,16 @@ class Effect:
 
     def shape_parameters(self, shape) -> dict:
         """{name: (value, unit)} of a shape value."""
+        if isinstance(shape, TemperatureScale):
+            return {"theta": (float(shape), "K")}
         vals = shape if isinstance(shape, tuple) else (shape,)
         units = [u.strip() for u in self.shape_unit.split(",")]
         return {n: (float(v), u) for n, v, u in zip(self.shape_names, vals, units)}
 
     def shape_from(self, values: dict):
         """The shape value from reported parameters ({name: value}); None if absent."""
+        if self.temperature_shape and values.get("theta") is not None:
+            return TemperatureScale(values["theta"])
         got = [values.get(n) for n in self.shape_names]
         if not got or any(g is None for g in got):
             return None
@@ -159,7 +198,12 @@ class Effect:
 
 # -- the terms --------------------------------------------------------------------------------
 def _warm(s, shape):
-    """Warm-up shape: (T - T0)/10 K with a temperature column, else 1 - exp(-(t - t0)/tau)."""
+    """Warm-up shape: (T - T0)/10 K with a temperature column (``shape`` None), or its
+    exponential law at the temperature scale ``shape`` (a TemperatureScale:
+    thermal.loss_temperature_law), else 1 - exp(-(t - t0)/tau)."""
+    if isinstance(shape, TemperatureScale):
+        T = s["temperature"]
+        return loss_temperature_law(T - T[0], float(shape))
     if s.get("temperature") is not None and shape is None:
         T = s["temperature"]
         return (T - T[0]) / T_STEP
@@ -476,7 +520,8 @@ EFFECTS = {
                    "(or per 10 K with a temperature column)"),),
         shape=TAU_GRID, shape_name="tau", shape_unit="s",
         separating_run="a cold start held at one operating point, with a temperature channel",
-        synth_default=({"loss_change": 0.12}, 150.0), temperature_form=True, time_drift=True),
+        synth_default=({"loss_change": 0.12}, 150.0), temperature_form=True, time_drift=True,
+        temperature_shape=THETA_GRID),
     "viscosity_drift": Effect(
         "viscosity_drift",
         "the lubricant's viscosity changes as the drive warms (first order in time, or with the "
@@ -756,11 +801,17 @@ def _apply_thermal(design, v, shape, temperature):
         # in K where the diagnosis gives it (cyclo_fmu.diagnosis.report.updated_design)
         ref = (float(temperature) if not isinstance(temperature, bool)
                else design.extra.thermal_T_ref)
-        return _with_extra(design, thermal_loss_per_10K=v["loss_change"], thermal_T_ref=ref), [
-            f"extra.thermal_loss_per_10K, thermal_T_ref = {ref - 273.15:.4g} degC: the losses "
-            "change per 10 K of the grease temperature from the temperature column's first "
-            "value, against the model held at one temperature (reducer FMUs: at their T_oil, "
-            "T_oil_in or the heat balance's, their losses held at T_oil_start: one warm-up)"
+        # the exponential law's temperature scale (a TemperatureScale), 0 the linear law
+        theta = float(shape) if isinstance(shape, TemperatureScale) else 0.0
+        law = (f", thermal_T_scale = {theta:g} K: the exponential law (the change levels off "
+               "as the grease warms, as a viscosity's does)" if theta else "")
+        return _with_extra(design, thermal_loss_per_10K=v["loss_change"], thermal_T_ref=ref,
+                           thermal_T_scale=theta), [
+            f"extra.thermal_loss_per_10K, thermal_T_ref = {ref - 273.15:.4g} degC{law}: the "
+            "losses change per 10 K of the grease temperature from the temperature column's "
+            "first value, against the model held at one temperature (reducer FMUs: at their "
+            "T_oil, T_oil_in or the heat balance's, their losses held at T_oil_start: one "
+            "warm-up)"
             + ("" if not isinstance(temperature, bool) else
                " (no reference temperature given: the design's thermal_T_ref is kept)")]
     # one warm-up (docs/explanation/thermal.md): the FMUs hold the losses at T_oil_start while

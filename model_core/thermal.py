@@ -174,6 +174,50 @@ def housing_step(temperature, loss_power, dt, ambient, heat_capacity, resistance
     return steady + (temperature - steady) * math.exp(-dt / (resistance * heat_capacity))
 
 
+#: [K] step of the warm-up's temperature law (its coefficient is quoted per 10 K, as catalogue
+#: viscosity and transducer drift figures are; model_core.effects.T_STEP)
+T_STEP = 10.0
+#: [K] smallest temperature scale the exponential law accepts (``loss_temperature_law``): a
+#: lubricant's viscosity changes at most by about 10 % per K (d ln nu/dT of mineral and
+#: synthetic gear oils at 0-100 degC: -0.02 ... -0.1 1/K, ASTM D341 lines), so a loss that
+#: follows it has theta = 1/|m d ln nu/dT| of 10 K and more; 1 K keeps exp(-dT/theta) finite
+#: over the valid temperatures (|dT| < 300 K: exp(300) ~ 2e130) while leaving a decade of margin
+T_SCALE_MIN = 1.0
+
+
+def loss_temperature_law(dT, scale=0.0):
+    """Shape g of the warm-up's temperature law: the losses scale by 1 + c g(T - T_ref), c the
+    relative change per 10 K at the reference (model_core.effects 'thermal_drift', its
+    temperature form; design.ExtraPhysics.thermal_per_10K_torque).
+
+    .. math:: g(\\Delta T) = \\frac{\\theta}{10\\,K}\\left(1 - e^{-\\Delta T/\\theta}\\right),
+              \\qquad g(\\Delta T) \\to \\frac{\\Delta T}{10\\,K} \\;(\\theta \\to \\infty).
+
+    A lubricant's viscosity falls nearly exponentially with the temperature over a few tens of
+    kelvin (Vogel's law; Walther's line of ASTM D341 has d ln nu/dT = -0.058 1/K at 40 degC for
+    the default grease, flattening as it warms). A part a of the losses that goes as nu^m then
+    changes by a (exp(-dT/theta) - 1), theta = 1/|m d ln nu/dT|: the law above with
+    c = -10 K a/theta. The linear per-10 K law is its first term. g has the slope 1/(10 K) at
+    dT = 0 for every theta, so c keeps its meaning (the change per 10 K at the reference); the
+    change levels off as the grease warms (theta > 0) and grows faster below the reference.
+
+    Parameters
+    ----------
+    dT : float or array
+        Temperature above the reference, T - T_ref [K].
+    scale : float
+        theta [K]; 0 selects the linear law dT/10 K (theta -> infinity), the default. Else at
+        least ``T_SCALE_MIN``.
+
+    Returns
+    -------
+    g : float or array [1]
+    """
+    if not scale:
+        return dT / T_STEP
+    return scale / T_STEP * -np.expm1(-np.asarray(dT, float) / scale)
+
+
 def heat_to_ambient(temperature, ambient, resistance):
     """Heat flow from the housing to the ambient (T - T_amb)/R [W]."""
     return (temperature - ambient) / resistance
