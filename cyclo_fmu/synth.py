@@ -24,7 +24,7 @@ import numpy as np
 from model_core import DriveDesign
 from model_core.errors import CycloidInputError
 from model_core.effects import (EFFECT_ALIASES, EFFECTS, MODEL_PARAMETER_EFFECTS, effect_signals,
-                                TemperatureScale,
+                                HeatBalanceTau, TemperatureScale,
                                 resolve_effect, switch_on)
 from model_core.kinematics import parse_mode, shaft_speeds
 from model_core.lossmap import replay_input_torque
@@ -221,6 +221,14 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
             math.log(1.05) - math.log(0.95))
     sig = effect_signals(t, w_in, loss_in, mode, design.z1, temperature, T_in_model=tau_in,
                          sens_nu=sens_nu, tau_out=tau_out, load_loss_in=load_loss_in)
+    # the housing whose heat balance a warm-up driven by the loss power integrates
+    # (effects.HeatBalanceTau)
+    from model_core.thermal import housing_resistance
+    sig["housing_R"] = housing_resistance(true_design)
+    if "thermal_drift" in hidden and isinstance(hidden["thermal_drift"][1], HeatBalanceTau):
+        # the heat is the loss, the warm-up's change included (the FMUs' heat balance):
+        # the rise of a warm-up of its size (effects.heat_balance_rise)
+        sig["heat_secant"] = hidden["thermal_drift"][0].get("loss_change", 0.0)
     if sens_nu is not None and hidden["viscosity_drift"][0].get("ln_viscosity_change"):
         # the viscosity drift through the core at its size (the quadratic in ln(nu) through
         # replays at the drift's end and middle: effects._viscosity)
@@ -360,6 +368,11 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
         ex = EFFECTS[effect].apply(replace(true_design, extra=ex), values,
                                    shape if isinstance(shape, TemperatureScale) else None,
                                    temperature=true_design.operating_temperature)[0].extra
+    elif effect == "thermal_drift" and isinstance(shape, HeatBalanceTau):
+        # a warm-up driven by the loss power: the reducer FMU's own heat balance (housing's C
+        # and ambient, the losses per 10 K of its T_oil: effects._apply_heat_balance)
+        true_design = EFFECTS[effect].apply(replace(true_design, extra=ex), values, shape)[0]
+        ex = true_design.extra
     elif effect not in ("torque_sensor_offset", "torque_sensor_gain", "torque_sensor_drift"):
         ex = switch_on(ex, effect, values, shape)
     design = replace(true_design, extra=ex)

@@ -85,6 +85,45 @@ class TemperatureScale(float):
         return hash(("theta", float(self)))
 
 
+class HeatBalanceTau(float):
+    """A shape value of a warm-up in time driven by the loss power: the time constant tau = R C
+    [s] of the housing's lumped heat balance (thermal.housing_path), heated by the replayed
+    model's loss power; told apart from the plain first-order time constant (a float) of the
+    same value: equal only to another HeatBalanceTau of the same value."""
+
+    __slots__ = ()
+
+    def __repr__(self):
+        return f"HeatBalanceTau({float(self)!r})"
+
+    def __eq__(self, other):
+        return isinstance(other, HeatBalanceTau) and float(self) == float(other)
+
+    def __ne__(self, other):
+        return not self == other
+
+    def __hash__(self):
+        return hash(("tau_housing", float(self)))
+
+
+def heat_balance_rise(s, tau):
+    """Temperature rise [K] over the recording of the housing's lumped heat balance (tau = R
+    C [s], R the design's ``housing_R`` in the signals, else the default design's) from a
+    cold start (T = T_amb at the recording's start), heated by the model's loss power loss_in w_in
+    (thermal.housing_path: the FMUs' own step); with ``heat_secant`` c0 in the signals, by
+    that power changed by the warm-up at the size c0 per 10 K (the FMUs' heat balance runs on
+    their loss, warm-up included: the rise of a warm-up of size c0, a re-linearisation at the
+    fitted size as the viscosity drift's)."""
+    from . import thermal
+    R = s.get("housing_R")
+    if R is None:
+        from .design import DriveDesign
+        R = thermal.housing_resistance(DriveDesign())
+    P = np.asarray(s["loss_in"], float) * np.asarray(s["w_in"], float)
+    return thermal.housing_path(s["t"], P, 0.0, 0.0, float(tau) / R, R,
+                                float(s.get("heat_secant") or 0.0), 0.0)
+
+
 @dataclass(frozen=True)
 class Parameter:
     name: str
@@ -178,6 +217,8 @@ class Effect:
         """{name: (value, unit)} of a shape value."""
         if isinstance(shape, TemperatureScale):
             return {"theta": (float(shape), "K")}
+        if isinstance(shape, HeatBalanceTau):
+            return {"tau_housing": (float(shape), "s")}
         vals = shape if isinstance(shape, tuple) else (shape,)
         units = [u.strip() for u in self.shape_unit.split(",")]
         return {n: (float(v), u) for n, v, u in zip(self.shape_names, vals, units)}
@@ -186,6 +227,8 @@ class Effect:
         """The shape value from reported parameters ({name: value}); None if absent."""
         if self.temperature_shape and values.get("theta") is not None:
             return TemperatureScale(values["theta"])
+        if values.get("tau_housing") is not None:
+            return HeatBalanceTau(values["tau_housing"])
         got = [values.get(n) for n in self.shape_names]
         if not got or any(g is None for g in got):
             return None
@@ -204,6 +247,8 @@ def _warm(s, shape):
     if isinstance(shape, TemperatureScale):
         T = s["temperature"]
         return loss_temperature_law(T - T[0], float(shape))
+    if isinstance(shape, HeatBalanceTau):
+        return heat_balance_rise(s, shape) / T_STEP
     if s.get("temperature") is not None and shape is None:
         T = s["temperature"]
         return (T - T[0]) / T_STEP
@@ -518,7 +563,8 @@ EFFECTS = {
         "column): every loss scaled",
         (Parameter("loss_change", "1", -0.9, 1.0, "relative change of the losses when warm "
                    "(or per 10 K with a temperature column)"),),
-        shape=TAU_GRID, shape_name="tau", shape_unit="s",
+        shape=TAU_GRID + tuple(HeatBalanceTau(x) for x in TAU_GRID), shape_name="tau",
+        shape_unit="s",
         separating_run="a cold start held at one operating point, with a temperature channel",
         synth_default=({"loss_change": 0.12}, 150.0), temperature_form=True, time_drift=True,
         temperature_shape=THETA_GRID),
@@ -744,6 +790,14 @@ def extra_torque(extra, s: dict) -> np.ndarray:
         # the column is in degC; the design's reference (thermal_T_ref) in K
         from .design import KELVIN
         total += extra.thermal_per_10K_torque(np.asarray(temp, float) + KELVIN, s["loss_in"])
+    elif extra.thermal_loss_per_10K and s.get("housing") is not None:
+        # no temperature column: the grease temperature of the FMUs' own heat balance from
+        # T_oil_start (the operating temperature), heated by the model's loss power
+        from . import thermal
+        T0, T_amb, C, R = s["housing"]
+        T = thermal.housing_path(s["t"], np.asarray(s["loss_in"], float) * s["w_in"], T0,
+                                 T_amb, C, R, extra.thermal_loss_per_10K, extra.thermal_T_ref)
+        total += extra.thermal_per_10K_torque(T, s["loss_in"])
     # (through the replays at the drift's size where the signals carry them: effects._viscosity)
     if extra.viscosity_ln_change and s.get("sens_nu") is not None:
         total += EFFECTS["viscosity_drift"].torque({**s, "nu_secant": extra.viscosity_ln_change},
@@ -814,6 +868,8 @@ def _apply_thermal(design, v, shape, temperature):
             "warm-up)"
             + ("" if not isinstance(temperature, bool) else
                " (no reference temperature given: the design's thermal_T_ref is kept)")]
+    if isinstance(shape, HeatBalanceTau):
+        return _apply_heat_balance(design, v, shape)
     # one warm-up (docs/explanation/thermal.md): the FMUs hold the losses at T_oil_start while
     # a warm-up in time is in the design (it was fitted against the model held at one
     # temperature), and their heat balance warms T_oil with the fitted time constant: it is
@@ -826,6 +882,29 @@ def _apply_thermal(design, v, shape, temperature):
                  f"the warm-up's time constant {shape:g} s diagnosed is the housing's R C; the "
                  "FMUs' losses follow the fitted warm-up in time, held at T_oil_start (one "
                  "warm-up, not also through the grease temperature)"]
+
+
+def _apply_heat_balance(design, v, shape):
+    """The warm-up driven by the loss power onto the FMUs' own heat balance: the losses change
+    by c per 10 K of the grease temperature T_oil (``thermal_loss_per_10K``, linear law), which
+    the FMUs' heat balance integrates from T_oil_start with their own loss (one warm-up: the
+    losses held at T_oil_start); a cold start, the drive at the ambient when the recording
+    begins: ``ambient_temperature`` = ``thermal_T_ref`` = the operating temperature (the
+    FMUs' default T_oil_start); tau = R C with the design's R: ``housing_heat_capacity`` =
+    tau / R."""
+    from . import thermal
+    T0 = design.operating_temperature
+    C = float(shape) / thermal.housing_resistance(design)
+    new = replace(_with_extra(design, thermal_loss_per_10K=v["loss_change"], thermal_T_ref=T0,
+                              thermal_T_scale=0.0, thermal_loss_change=0.0),
+                  housing_heat_capacity=C, ambient_temperature=T0)
+    return new, [f"extra.thermal_loss_per_10K {v['loss_change']:.4g} with the FMUs' heat "
+                 f"balance: housing_heat_capacity {C:.4g} J/K (tau = R C = {float(shape):g} s "
+                 f"diagnosed, R = {thermal.housing_resistance(design):.4g} K/W of the design), "
+                 f"ambient_temperature = thermal_T_ref = {T0 - 273.15:.4g} degC (a cold start: "
+                 "the drive at the ambient when the recording begins, the FMUs' T_oil_start): "
+                 "the losses change per 10 K of the grease temperature the loss power warms "
+                 "(leave use_T_oil_input false)"]
 
 
 def _apply_viscosity(design, v, shape, temperature):

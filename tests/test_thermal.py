@@ -555,3 +555,28 @@ def test_fmi3_reducer_carries_the_temperature_as_the_fmi2_one(tmp_path):
             assert np.all(b["T_oil"] == 345.0)
         else:
             assert b["T_oil"][-1] > 300.0          # warmed up by its own losses
+
+
+@pytest.mark.parametrize("per_10K", [0.0, -0.2])
+def test_housing_path_is_the_fmus_step_repeated(per_10K):
+    """thermal.housing_path (the diagnosis's heat balance driven by the loss power) equals
+    housing_step repeated sample by sample with the power of each step's start held, the
+    power changed by the warm-up c (T - T_ref)/10 K where c is given (the FMUs' heat balance
+    runs on their loss, warm-up included), on equal steps (the vectorised filter) and across a
+    logger gap and a duplicated stamp (step by step); at a constant power it is the closed
+    form T_amb + P R (1 - e^(-t/tau)) from a cold start."""
+    t = np.arange(0.0, 200.0, 0.05)
+    P = 18.0 + 6.0 * np.sin(t / 9.0) + 4.0 * (t > 80.0)
+    R, C, amb, T_ref = 1.126, 60.0 / 1.126, 300.0, 300.0
+    for tt in (t, np.concatenate([t[:1500], t[1500:1501], t[1500:] + 4.2])):
+        PP = np.resize(P, tt.size)
+        got = thermal.housing_path(tt, PP, amb, amb, C, R, per_10K, T_ref)
+        want = [amb]
+        for k in range(1, tt.size):
+            Pk = PP[k - 1] * (1.0 + per_10K * (want[-1] - T_ref) / 10.0)
+            want.append(thermal.housing_step(want[-1], Pk, tt[k] - tt[k - 1], amb, C, R))
+        assert np.max(np.abs(got - np.array(want))) < 1e-9
+    if not per_10K:
+        flat = thermal.housing_path(t, np.full(t.size, 20.0), amb, amb, C, R)
+        assert np.allclose(flat - amb, 20.0 * R * (1 - np.exp(-t / 60.0)), rtol=1e-12,
+                           atol=1e-12)

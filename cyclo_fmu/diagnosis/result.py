@@ -6,7 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from model_core.effects import EFFECTS, LOOKALIKE_GROUPS, SENSOR_EFFECTS, TemperatureScale
+from model_core.effects import (EFFECTS, LOOKALIKE_GROUPS, SENSOR_EFFECTS, HeatBalanceTau,
+                                TemperatureScale)
 
 from . import residual as R
 from .replay import block_means, first_order
@@ -189,7 +190,9 @@ def _entry(t, S, prob, P, first, rel1, base_rss, stability, check, offset=0.0):
              "form": ("per 10 K of the temperature column" + (
                           f", exponential law (theta {float(t.shape):g} K)"
                           if isinstance(t.shape, TemperatureScale) else "")) if form else
-                     ("time" if eff.shape else "")}
+                     ("time, the housing's heat balance driven by the model's loss power"
+                      if isinstance(t.shape, HeatBalanceTau) else
+                      ("time" if eff.shape else ""))}
     if form:
         # the per-10 K form is referred to the column's first value (model_core.effects._warm):
         # the updated design carries it as extra.thermal_T_ref
