@@ -559,10 +559,11 @@ EFFECTS = {
         synth_default=({"T_drag": 0.012}, None)),
     "thermal_drift": Effect(
         "thermal_drift",
-        "the losses drift as the drive warms (first order in time, or with the temperature "
-        "column): every loss scaled",
+        "the losses drift as the drive warms (first order in time, or following the "
+        "housing's heat balance driven by the loss power, or with the temperature column, "
+        "linearly or exponentially as a viscosity): every loss scaled",
         (Parameter("loss_change", "1", -0.9, 1.0, "relative change of the losses when warm "
-                   "(or per 10 K with a temperature column)"),),
+                   "(or per 10 K of the temperature column or of the heat balance's rise)"),),
         shape=TAU_GRID + tuple(HeatBalanceTau(x) for x in TAU_GRID), shape_name="tau",
         shape_unit="s",
         separating_run="a cold start held at one operating point, with a temperature channel",
