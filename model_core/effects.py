@@ -120,7 +120,8 @@ def heat_balance_rise(s, tau):
         from .design import DriveDesign
         R = thermal.housing_resistance(DriveDesign())
     P = np.asarray(s["loss_in"], float) * np.asarray(s["w_in"], float)
-    return thermal.housing_path(s["t"], P, 0.0, 0.0, float(tau) / R, R,
+    P *= R      # the power in K of steady rise: housing_path's R P, at R = 1 (one array less)
+    return thermal.housing_path(s["t"], P, 0.0, 0.0, float(tau), 1.0,
                                 float(s.get("heat_secant") or 0.0), 0.0)
 
 
@@ -248,7 +249,9 @@ def _warm(s, shape):
         T = s["temperature"]
         return loss_temperature_law(T - T[0], float(shape))
     if isinstance(shape, HeatBalanceTau):
-        return heat_balance_rise(s, shape) / T_STEP
+        g = heat_balance_rise(s, shape)
+        g /= T_STEP
+        return g
     if s.get("temperature") is not None and shape is None:
         T = s["temperature"]
         return (T - T[0]) / T_STEP

@@ -253,31 +253,48 @@ def housing_path(t, loss_power, start, ambient, heat_capacity, resistance, per_1
     """
     from scipy.signal import lfilter
     t = np.asarray(t, float)
-    x = resistance * np.asarray(loss_power, float)
+    x = np.asarray(loss_power, float)
+    if resistance != 1.0:
+        x = resistance * x
     tau = resistance * heat_capacity
     y = np.empty_like(t)
     if not len(t):
         return y
-    dt = np.diff(t)
     y0 = float(start) - ambient
     y[0] = y0
     k = per_10K / T_STEP
     off = 0.0 if not per_10K else ambient - T_ref    # T - T_ref = y + off
-    if len(dt) and np.ptp(dt) <= 1e-9 * max(float(np.max(np.abs(dt))), 1e-300):
-        a = math.exp(-float(dt[0]) / tau)
+    h = _equal_step(t)
+    if h is not None:
+        a = math.exp(-h / tau)
         y[1:] = lfilter([1.0 - a], [1.0, -a], x[:-1], zi=[a * y0])[0]
         for _ in range(_FEEDBACK_PASSES if per_10K else 0):
             prev = y.copy()
             y[1:] = lfilter([1.0 - a], [1.0, -a], x[:-1] * (1.0 + k * (prev[:-1] + off)),
                             zi=[a * y0])[0]
             if np.max(np.abs(y - prev)) <= 1e-12 * max(float(np.max(np.abs(y))), 1.0):
-                return ambient + y
+                y += ambient
+                return y
         if not per_10K:
-            return ambient + y
-    a = np.exp(-dt / tau)
+            y += ambient     # (in place: a long recording's arrays are the peak)
+            return y
+    a = np.exp(-np.diff(t) / tau)
     for j in range(1, len(t)):
         y[j] = a[j - 1] * y[j - 1] + (1.0 - a[j - 1]) * x[j - 1] * (1.0 + k * (y[j - 1] + off))
-    return ambient + y
+    y += ambient
+    return y
+
+
+def _equal_step(t, chunk=1 << 16):
+    """The step of ``t`` [s] if all its steps are equal (within 1e-9 of the largest), else
+    None; read in chunks (a long recording's differences are not held at once)."""
+    if len(t) < 2:
+        return None
+    lo, hi = math.inf, -math.inf
+    for i in range(0, len(t) - 1, chunk):
+        d = np.diff(t[i:i + chunk + 1])
+        lo, hi = min(lo, float(d.min())), max(hi, float(d.max()))
+    return float(t[1] - t[0]) if hi - lo <= 1e-9 * max(abs(lo), abs(hi), 1e-300) else None
 
 
 #: fixed-point passes of ``housing_path``'s warm-up feedback before it steps sample by sample:
