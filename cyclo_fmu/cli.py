@@ -766,7 +766,10 @@ def cmd_diagnose(args) -> int:
         print("effects: none - " + (EFFECTS_NONE_LEFT if d.unexplained["present"]
                                     else EFFECTS_NONE))
     for e in d.effects:
-        form = f"; fitted {e['form']}" if e.get("form", "").startswith("per") else ""
+        # the forms beyond a plain time constant: per 10 K of the column (linear or the
+        # exponential law), and the heat balance driven by the loss power
+        form = (f"; fitted {e['form']}" if e.get("form", "").startswith(("per", "time, "))
+                else "")
         print(f"effect: {e['id']} - {e['description']} (explains {1e3 * e['explained_rms_Nm']:.2f}"
               f" mN*m of the 10 ms means; its torque {1e3 * e['torque_rms_Nm']:.2f} mN*m RMS"
               f"{form})")

@@ -24,6 +24,7 @@ import numpy as np
 from model_core import DriveDesign
 from model_core.errors import CycloidInputError
 from model_core.effects import (EFFECT_ALIASES, EFFECTS, MODEL_PARAMETER_EFFECTS, effect_signals,
+                                HeatBalanceTau, TemperatureScale,
                                 resolve_effect, switch_on)
 from model_core.kinematics import parse_mode, shaft_speeds
 from model_core.lossmap import replay_input_torque
@@ -125,16 +126,24 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
                design: DriveDesign = None, settings: SynthSettings = SynthSettings(),
                friction_error: float = None, effect_values: dict = None, shape=None,
                plan: str = "full", engine: str = "fast", fmu_dir=None, added_torque=None,
-               temperature_rise: float = None, duration: float = None, progress=False) -> dict:
+               temperature_rise: float = None, duration: float = None, progress=False,
+               temperature_tau: float = None) -> dict:
     """A recording dict (schema columns, edge units r/min and N*m) plus ``truth``.
 
     ``effect``: one effect id, a list of ids or {id: (values, shape)} (several hidden at
     once; ``effect_values``/``shape`` apply to a single id). ``added_torque(signals)``: a
     torque (N*m) at the input of physics outside the library (for tests of the diagnosis's
     'unexplained'). ``temperature_rise`` [K]: the recording carries a temperature column
-    warming by this much with the first warm-up time constant (25 degC start), and
-    temperature-form effects follow it. ``duration`` [s] overrides the size."""
+    warming by this much with the first warm-up time constant (25 degC start), or with
+    ``temperature_tau`` [s] where given, and temperature-form effects follow it: linearly per
+    10 K, or, a warm-up whose shape is a ``model_core.effects.TemperatureScale`` theta, by the
+    exponential temperature law (``thermal.loss_temperature_law``). ``duration`` [s]
+    overrides the size."""
     hidden = _hidden(effect, effect_values, shape)
+    for eid, (_, sh) in hidden.items():
+        if isinstance(sh, TemperatureScale) and temperature_rise is None:
+            raise ValueError(f"{eid}: a temperature scale (the exponential temperature law) "
+                             "needs a temperature column (temperature_rise)")
     if size not in SIZES:
         raise ValueError(f"size = {size!r}: must be one of {', '.join(SIZES)}")
     a, b, h = parse_mode(mode)
@@ -193,13 +202,14 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
         (eid, (values, eff_shape)), = hidden.items()
         return _through_the_bench(eid, values, eff_shape, true_design, plan, hold, mode,
                                   duration, seed, settings, friction_error, fmu_dir, progress,
-                                  temperature_rise)
+                                  temperature_rise, temperature_tau)
     tau_in, loss_in, load_loss_in = replay_input_torque(true_design, mode, w_in, tau_out,
                                                         load_loss=True)
     temperature = None
     if temperature_rise is not None:
-        tau_T = next((sh for e, (v, sh) in hidden.items() if EFFECTS[e].temperature_form),
-                     None) or 300.0
+        tau_T = temperature_tau or next(
+            (sh for e, (v, sh) in hidden.items() if EFFECTS[e].temperature_form
+             and not isinstance(sh, TemperatureScale)), None) or 300.0
         temperature = 25.0 + temperature_rise * (1 - np.exp(-t / tau_T))
     sens_nu = None
     if "viscosity_drift" in hidden:
@@ -211,6 +221,14 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
             math.log(1.05) - math.log(0.95))
     sig = effect_signals(t, w_in, loss_in, mode, design.z1, temperature, T_in_model=tau_in,
                          sens_nu=sens_nu, tau_out=tau_out, load_loss_in=load_loss_in)
+    # the housing whose heat balance a warm-up driven by the loss power integrates
+    # (effects.HeatBalanceTau)
+    from model_core.thermal import housing_resistance
+    sig["housing_R"] = housing_resistance(true_design)
+    if "thermal_drift" in hidden and isinstance(hidden["thermal_drift"][1], HeatBalanceTau):
+        # the heat is the loss, the warm-up's change included (the FMUs' heat balance):
+        # the rise of a warm-up of its size (effects.heat_balance_rise)
+        sig["heat_secant"] = hidden["thermal_drift"][0].get("loss_change", 0.0)
     if sens_nu is not None and hidden["viscosity_drift"][0].get("ln_viscosity_change"):
         # the viscosity drift through the core at its size (the quadratic in ln(nu) through
         # replays at the drift's end and middle: effects._viscosity)
@@ -235,7 +253,10 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
         if eid == "torque_sensor_gain":
             gain += values["gain_error"]
             continue
-        sh = None if (eff.temperature_form and temperature is not None) else eff_shape
+        sh = eff_shape
+        if eff.temperature_form and temperature is not None:
+            # the temperature form: linear (None) or the exponential law at its scale theta
+            sh = eff_shape if isinstance(eff_shape, TemperatureScale) else None
         extra += eff.torque(sig, [values.get(p.name, 0.0) for p in eff.parameters_for(sh)],
                             sh)
     if added_torque is not None:
@@ -303,7 +324,8 @@ def paper_like(mode: str = "S1", seed: int = 1, size: str = "small", **kw) -> di
 
 
 def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, duration, seed,
-                       settings, friction_error, fmu_dir, progress=False, temperature_rise=None):
+                       settings, friction_error, fmu_dir, progress=False, temperature_rise=None,
+                       temperature_tau=None):
     """The recording from the bench's FMUs (motor, reducer, brake, transducers): the hidden
     effect switched on in the reducer FMU's extra physics (or the transducer's zero offset),
     the setpoints of the plan as the motor's and brake's schedules.
@@ -343,8 +365,14 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
     elif effect == "thermal_drift" and temperature_rise is not None:
         # the losses change per 10 K of the grease temperature from where the column starts
         # (the design's operating temperature): the registry's per-10 K form
-        ex = EFFECTS[effect].apply(replace(true_design, extra=ex), values, None,
+        ex = EFFECTS[effect].apply(replace(true_design, extra=ex), values,
+                                   shape if isinstance(shape, TemperatureScale) else None,
                                    temperature=true_design.operating_temperature)[0].extra
+    elif effect == "thermal_drift" and isinstance(shape, HeatBalanceTau):
+        # a warm-up driven by the loss power: the reducer FMU's own heat balance (housing's C
+        # and ambient, the losses per 10 K of its T_oil: effects._apply_heat_balance)
+        true_design = EFFECTS[effect].apply(replace(true_design, extra=ex), values, shape)[0]
+        ex = true_design.extra
     elif effect not in ("torque_sensor_offset", "torque_sensor_gain", "torque_sensor_drift"):
         ex = switch_on(ex, effect, values, shape)
     design = replace(true_design, extra=ex)
@@ -366,7 +394,8 @@ def _through_the_bench(effect, values, shape, true_design, steps, hold, mode, du
     signals = temperature = None
     if temperature_rise is not None:
         from model_core.design import KELVIN
-        tau_T = shape or 300.0
+        tau_T = temperature_tau or (None if isinstance(shape, TemperatureScale)
+                                    else shape) or 300.0
         grid = np.arange(int(round(duration / dt)) + 1) * dt
 
         def temperature(t):     # degC

@@ -298,6 +298,13 @@ class ExtraPhysics:
                                     "tanh(w/w_r) exp(-(|w|/w_s)^delta) (pre-sliding, "
                                     "model_core.friction.reversal_sign; 0: the sharp sign "
                                     "sgn(w); 0 or more)")
+    thermal_T_scale: float = _f(0.0, "K", "temperature scale theta of the warm-up's "
+                                "temperature law (model_core.thermal.loss_temperature_law): "
+                                "the losses change by c (theta/10 K)(1 - exp(-(T - "
+                                "thermal_T_ref)/theta)), c = thermal_loss_per_10K, exponential "
+                                "as a lubricant's viscosity (a loss following nu^m: theta = "
+                                "1/|m d ln nu/dT|); 0: the linear law c (T - thermal_T_ref)/10 K "
+                                "(theta -> infinity); else at least 1 K")
 
     #: fields no FMU carries: the diagnosis's replay uses them. Where the same physics has a
     #: form the FMUs carry, the diagnosis writes that too (model_core.effects): a viscosity
@@ -404,11 +411,16 @@ class ExtraPhysics:
         """Loss change per 10 K at the driving shaft (N*m): c (T - T_ref)/(10 K) loss_in, with
         T the grease temperature (K), T_ref ``thermal_T_ref`` and loss_in the model's loss
         torque referred to the driving shaft (N*m), the model held at one temperature: the
-        losses scale by (1 + c (T - T_ref)/10 K) (model_core.effects 'thermal_drift', its
+        losses scale by (1 + c (T - T_ref)/10 K); with ``thermal_T_scale`` theta > 0 by
+        1 + c g(T - T_ref), g the exponential law (thermal.loss_temperature_law, the one
+        implementation) (model_core.effects 'thermal_drift', its
         temperature form, referred to the column's first value; the FMUs hold their losses at
         T_oil_start meanwhile: one warm-up). Scalars or arrays."""
-        from .effects import T_STEP   # (model_core imports it with the package)
-        return self.thermal_loss_per_10K * (T - self.thermal_T_ref) / T_STEP * loss_in
+        from .thermal import T_STEP, loss_temperature_law
+        if not self.thermal_T_scale:   # the linear law (as before the exponential one)
+            return self.thermal_loss_per_10K * (T - self.thermal_T_ref) / T_STEP * loss_in
+        return (self.thermal_loss_per_10K
+                * loss_temperature_law(T - self.thermal_T_ref, self.thermal_T_scale) * loss_in)
 
     def dynamic_torque(self, alpha, theta, order, elapsed, loss_in):
         """Inertia, ripple and warm-up torque at the driving shaft (N*m): J*alpha +
@@ -715,6 +727,11 @@ def validate_design(d: DriveDesign) -> None:
         if not 173.15 < v < 473.15:   # echoed in degC, as the file gives it
             raise CycloidInputError(f"[extra].{name}_degC", float(f"{v - KELVIN:.10g}"),
                                     "must lie between -100 and 200 degC")
+    from .thermal import T_SCALE_MIN
+    if not (d.extra.thermal_T_scale == 0.0 or T_SCALE_MIN <= d.extra.thermal_T_scale < math.inf):
+        raise CycloidInputError("extra.thermal_T_scale", d.extra.thermal_T_scale,
+                                f"must be 0 (the linear law) or at least {T_SCALE_MIN:g} K "
+                                "(model_core.thermal.T_SCALE_MIN)")
     if not d.extra.run_in_change >= -1.0:
         raise CycloidInputError("extra.run_in_change", d.extra.run_in_change,
                                 "must be at least -1 (the losses cannot fall below zero)")

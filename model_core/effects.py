@@ -50,8 +50,79 @@ W_REF = 300.0   # rad/s, reference input speed of the drag law (about 2860 r/min
 DRAG_EXPONENT = 2.0 / 3.0
 DRAG_EXPONENTS = (0.0, 1.0 / 3.0, 0.5, 2.0 / 3.0, 0.85, 1.0, 1.5, 2.0)
 #: [K] temperature step of the temperature form of the warm-up terms (per 10 K, as catalogue
-#: viscosity and transducer drift figures are quoted)
-T_STEP = 10.0
+#: viscosity and transducer drift figures are quoted; defined with the law in model_core.thermal)
+from .thermal import T_STEP, loss_temperature_law  # noqa: E402
+
+#: [K] temperature scales theta of the warm-up's exponential temperature law scanned beside the
+#: linear one (thermal.loss_temperature_law; the linear law is theta -> infinity, the shape
+#: None): a loss that follows the viscosity has theta = 1/|m d ln nu/dT|, 17 K for the whole
+#: of a loss proportional to the default grease's viscosity at 40 degC (d ln nu/dT = -0.058
+#: 1/K) and more for losses that follow it less than in proportion (m < 1: EHL film
+#: friction ~ nu^0.2-0.7, churning ~ nu^0.2-1); a factor 2 apart, as TAU_GRID, from 10 K (the
+#: steepest lubricant) to 80 K (beyond it the law differs from the linear one by less than
+#: dT/(2 theta) = 12 % of the change over a 20 K warm-up, which the held-out test rarely sees)
+THETA_GRID = (10.0, 20.0, 40.0, 80.0)
+
+
+class TemperatureScale(float):
+    """A shape value of a warm-up's temperature form: the temperature scale theta [K] of the
+    exponential temperature law (thermal.loss_temperature_law). A float, told apart from the
+    time constant [s] the same effect has in its time form: equal only to another
+    TemperatureScale of the same value."""
+
+    __slots__ = ()
+
+    def __repr__(self):
+        return f"TemperatureScale({float(self)!r})"
+
+    def __eq__(self, other):
+        return isinstance(other, TemperatureScale) and float(self) == float(other)
+
+    def __ne__(self, other):
+        return not self == other
+
+    def __hash__(self):
+        return hash(("theta", float(self)))
+
+
+class HeatBalanceTau(float):
+    """A shape value of a warm-up in time driven by the loss power: the time constant tau = R C
+    [s] of the housing's lumped heat balance (thermal.housing_path), heated by the replayed
+    model's loss power; told apart from the plain first-order time constant (a float) of the
+    same value: equal only to another HeatBalanceTau of the same value."""
+
+    __slots__ = ()
+
+    def __repr__(self):
+        return f"HeatBalanceTau({float(self)!r})"
+
+    def __eq__(self, other):
+        return isinstance(other, HeatBalanceTau) and float(self) == float(other)
+
+    def __ne__(self, other):
+        return not self == other
+
+    def __hash__(self):
+        return hash(("tau_housing", float(self)))
+
+
+def heat_balance_rise(s, tau):
+    """Temperature rise [K] over the recording of the housing's lumped heat balance (tau = R
+    C [s], R the design's ``housing_R`` in the signals, else the default design's) from a
+    cold start (T = T_amb at the recording's start), heated by the model's loss power loss_in w_in
+    (thermal.housing_path: the FMUs' own step); with ``heat_secant`` c0 in the signals, by
+    that power changed by the warm-up at the size c0 per 10 K (the FMUs' heat balance runs on
+    their loss, warm-up included: the rise of a warm-up of size c0, a re-linearisation at the
+    fitted size as the viscosity drift's)."""
+    from . import thermal
+    R = s.get("housing_R")
+    if R is None:
+        from .design import DriveDesign
+        R = thermal.housing_resistance(DriveDesign())
+    P = np.asarray(s["loss_in"], float) * np.asarray(s["w_in"], float)
+    P *= R      # the power in K of steady rise: housing_path's R P, at R = 1 (one array less)
+    return thermal.housing_path(s["t"], P, 0.0, 0.0, float(tau), 1.0,
+                                float(s.get("heat_secant") or 0.0), 0.0)
 
 
 @dataclass(frozen=True)
@@ -89,6 +160,10 @@ class Effect:
     #: effect is selected (a refinement: the Stribeck friction's transition width through a
     #: reversal): a function of the selected shape giving the shapes; None if none
     refine: object = None
+    #: grid of the temperature form's shape (with a temperature column): the temperature
+    #: scale theta [K] of the exponential law, scanned beside the linear law (shape None);
+    #: () keeps the linear law alone
+    temperature_shape: tuple = ()
 
     def parameters_for(self, shape=None) -> tuple:
         """The linear parameters the basis has at ``shape`` (the mesh ripple's constant
@@ -127,7 +202,7 @@ class Effect:
         ``around`` (a shape selected on the grid), the finer grid ``refine(around)`` where the
         effect has one, the grid itself included."""
         if self.temperature_form and s.get("temperature") is not None:
-            return (None,)
+            return (None,) + tuple(TemperatureScale(x) for x in self.temperature_shape)
         grid = self.shape
         if around is not None and self.refine is not None:
             grid = tuple(dict.fromkeys(self.shape + tuple(self.refine(around))))
@@ -155,12 +230,20 @@ class Effect:
 
     def shape_parameters(self, shape) -> dict:
         """{name: (value, unit)} of a shape value."""
+        if isinstance(shape, TemperatureScale):
+            return {"theta": (float(shape), "K")}
+        if isinstance(shape, HeatBalanceTau):
+            return {"tau_housing": (float(shape), "s")}
         vals = shape if isinstance(shape, tuple) else (shape,)
         units = [u.strip() for u in self.shape_unit.split(",")]
         return {n: (float(v), u) for n, v, u in zip(self.shape_names, vals, units)}
 
     def shape_from(self, values: dict):
         """The shape value from reported parameters ({name: value}); None if absent."""
+        if self.temperature_shape and values.get("theta") is not None:
+            return TemperatureScale(values["theta"])
+        if values.get("tau_housing") is not None:
+            return HeatBalanceTau(values["tau_housing"])
         got = [values.get(n) for n in self.shape_names]
         if not got or any(g is None for g in got):
             return None
@@ -173,7 +256,16 @@ class Effect:
 
 # -- the terms --------------------------------------------------------------------------------
 def _warm(s, shape):
-    """Warm-up shape: (T - T0)/10 K with a temperature column, else 1 - exp(-(t - t0)/tau)."""
+    """Warm-up shape: (T - T0)/10 K with a temperature column (``shape`` None), or its
+    exponential law at the temperature scale ``shape`` (a TemperatureScale:
+    thermal.loss_temperature_law), else 1 - exp(-(t - t0)/tau)."""
+    if isinstance(shape, TemperatureScale):
+        T = s["temperature"]
+        return loss_temperature_law(T - T[0], float(shape))
+    if isinstance(shape, HeatBalanceTau):
+        g = heat_balance_rise(s, shape)
+        g /= T_STEP
+        return g
     if s.get("temperature") is not None and shape is None:
         T = s["temperature"]
         return (T - T[0]) / T_STEP
@@ -491,13 +583,16 @@ EFFECTS = {
         synth_default=({"T_drag": 0.012}, None)),
     "thermal_drift": Effect(
         "thermal_drift",
-        "the losses drift as the drive warms (first order in time, or with the temperature "
-        "column): every loss scaled",
+        "the losses drift as the drive warms (first order in time, or following the "
+        "housing's heat balance driven by the loss power, or with the temperature column, "
+        "linearly or exponentially as a viscosity): every loss scaled",
         (Parameter("loss_change", "1", -0.9, 1.0, "relative change of the losses when warm "
-                   "(or per 10 K with a temperature column)"),),
-        shape=TAU_GRID, shape_name="tau", shape_unit="s",
+                   "(or per 10 K of the temperature column or of the heat balance's rise)"),),
+        shape=TAU_GRID + tuple(HeatBalanceTau(x) for x in TAU_GRID), shape_name="tau",
+        shape_unit="s",
         separating_run="a cold start held at one operating point, with a temperature channel",
-        synth_default=({"loss_change": 0.12}, 150.0), temperature_form=True, time_drift=True),
+        synth_default=({"loss_change": 0.12}, 150.0), temperature_form=True, time_drift=True,
+        temperature_shape=THETA_GRID),
     "viscosity_drift": Effect(
         "viscosity_drift",
         "the lubricant's viscosity changes as the drive warms (first order in time, or with the "
@@ -720,6 +815,14 @@ def extra_torque(extra, s: dict) -> np.ndarray:
         # the column is in degC; the design's reference (thermal_T_ref) in K
         from .design import KELVIN
         total += extra.thermal_per_10K_torque(np.asarray(temp, float) + KELVIN, s["loss_in"])
+    elif extra.thermal_loss_per_10K and s.get("housing") is not None:
+        # no temperature column: the grease temperature of the FMUs' own heat balance from
+        # T_oil_start (the operating temperature), heated by the model's loss power
+        from . import thermal
+        T0, T_amb, C, R = s["housing"]
+        T = thermal.housing_path(s["t"], np.asarray(s["loss_in"], float) * s["w_in"], T0,
+                                 T_amb, C, R, extra.thermal_loss_per_10K, extra.thermal_T_ref)
+        total += extra.thermal_per_10K_torque(T, s["loss_in"])
     # (through the replays at the drift's size where the signals carry them: effects._viscosity)
     if extra.viscosity_ln_change and s.get("sens_nu") is not None:
         total += EFFECTS["viscosity_drift"].torque({**s, "nu_secant": extra.viscosity_ln_change},
@@ -777,13 +880,21 @@ def _apply_thermal(design, v, shape, temperature):
         # in K where the diagnosis gives it (cyclo_fmu.diagnosis.report.updated_design)
         ref = (float(temperature) if not isinstance(temperature, bool)
                else design.extra.thermal_T_ref)
-        return _with_extra(design, thermal_loss_per_10K=v["loss_change"], thermal_T_ref=ref), [
-            f"extra.thermal_loss_per_10K, thermal_T_ref = {ref - 273.15:.4g} degC: the losses "
-            "change per 10 K of the grease temperature from the temperature column's first "
-            "value, against the model held at one temperature (reducer FMUs: at their T_oil, "
-            "T_oil_in or the heat balance's, their losses held at T_oil_start: one warm-up)"
+        # the exponential law's temperature scale (a TemperatureScale), 0 the linear law
+        theta = float(shape) if isinstance(shape, TemperatureScale) else 0.0
+        law = (f", thermal_T_scale = {theta:g} K: the exponential law (the change levels off "
+               "as the grease warms, as a viscosity's does)" if theta else "")
+        return _with_extra(design, thermal_loss_per_10K=v["loss_change"], thermal_T_ref=ref,
+                           thermal_T_scale=theta), [
+            f"extra.thermal_loss_per_10K, thermal_T_ref = {ref - 273.15:.4g} degC{law}: the "
+            "losses change per 10 K of the grease temperature from the temperature column's "
+            "first value, against the model held at one temperature (reducer FMUs: at their "
+            "T_oil, T_oil_in or the heat balance's, their losses held at T_oil_start: one "
+            "warm-up)"
             + ("" if not isinstance(temperature, bool) else
                " (no reference temperature given: the design's thermal_T_ref is kept)")]
+    if isinstance(shape, HeatBalanceTau):
+        return _apply_heat_balance(design, v, shape)
     # one warm-up (docs/explanation/thermal.md): the FMUs hold the losses at T_oil_start while
     # a warm-up in time is in the design (it was fitted against the model held at one
     # temperature), and their heat balance warms T_oil with the fitted time constant: it is
@@ -796,6 +907,29 @@ def _apply_thermal(design, v, shape, temperature):
                  f"the warm-up's time constant {shape:g} s diagnosed is the housing's R C; the "
                  "FMUs' losses follow the fitted warm-up in time, held at T_oil_start (one "
                  "warm-up, not also through the grease temperature)"]
+
+
+def _apply_heat_balance(design, v, shape):
+    """The warm-up driven by the loss power onto the FMUs' own heat balance: the losses change
+    by c per 10 K of the grease temperature T_oil (``thermal_loss_per_10K``, linear law), which
+    the FMUs' heat balance integrates from T_oil_start with their own loss (one warm-up: the
+    losses held at T_oil_start); a cold start, the drive at the ambient when the recording
+    begins: ``ambient_temperature`` = ``thermal_T_ref`` = the operating temperature (the
+    FMUs' default T_oil_start); tau = R C with the design's R: ``housing_heat_capacity`` =
+    tau / R."""
+    from . import thermal
+    T0 = design.operating_temperature
+    C = float(shape) / thermal.housing_resistance(design)
+    new = replace(_with_extra(design, thermal_loss_per_10K=v["loss_change"], thermal_T_ref=T0,
+                              thermal_T_scale=0.0, thermal_loss_change=0.0),
+                  housing_heat_capacity=C, ambient_temperature=T0)
+    return new, [f"extra.thermal_loss_per_10K {v['loss_change']:.4g} with the FMUs' heat "
+                 f"balance: housing_heat_capacity {C:.4g} J/K (tau = R C = {float(shape):g} s "
+                 f"diagnosed, R = {thermal.housing_resistance(design):.4g} K/W of the design), "
+                 f"ambient_temperature = thermal_T_ref = {T0 - 273.15:.4g} degC (a cold start: "
+                 "the drive at the ambient when the recording begins, the FMUs' T_oil_start): "
+                 "the losses change per 10 K of the grease temperature the loss power warms "
+                 "(leave use_T_oil_input false)"]
 
 
 def _apply_viscosity(design, v, shape, temperature):

@@ -174,6 +174,135 @@ def housing_step(temperature, loss_power, dt, ambient, heat_capacity, resistance
     return steady + (temperature - steady) * math.exp(-dt / (resistance * heat_capacity))
 
 
+#: [K] step of the warm-up's temperature law (its coefficient is quoted per 10 K, as catalogue
+#: viscosity and transducer drift figures are; model_core.effects.T_STEP)
+T_STEP = 10.0
+#: [K] smallest temperature scale the exponential law accepts (``loss_temperature_law``): a
+#: lubricant's viscosity changes at most by about 10 % per K (d ln nu/dT of mineral and
+#: synthetic gear oils at 0-100 degC: -0.02 ... -0.1 1/K, ASTM D341 lines), so a loss that
+#: follows it has theta = 1/|m d ln nu/dT| of 10 K and more; 1 K keeps exp(-dT/theta) finite
+#: over the valid temperatures (|dT| < 300 K: exp(300) ~ 2e130) while leaving a decade of margin
+T_SCALE_MIN = 1.0
+
+
+def loss_temperature_law(dT, scale=0.0):
+    """Shape g of the warm-up's temperature law: the losses scale by 1 + c g(T - T_ref), c the
+    relative change per 10 K at the reference (model_core.effects 'thermal_drift', its
+    temperature form; design.ExtraPhysics.thermal_per_10K_torque).
+
+    .. math:: g(\\Delta T) = \\frac{\\theta}{10\\,K}\\left(1 - e^{-\\Delta T/\\theta}\\right),
+              \\qquad g(\\Delta T) \\to \\frac{\\Delta T}{10\\,K} \\;(\\theta \\to \\infty).
+
+    A lubricant's viscosity falls nearly exponentially with the temperature over a few tens of
+    kelvin (Vogel's law; Walther's line of ASTM D341 has d ln nu/dT = -0.058 1/K at 40 degC for
+    the default grease, flattening as it warms). A part a of the losses that goes as nu^m then
+    changes by a (exp(-dT/theta) - 1), theta = 1/|m d ln nu/dT|: the law above with
+    c = -10 K a/theta. The linear per-10 K law is its first term. g has the slope 1/(10 K) at
+    dT = 0 for every theta, so c keeps its meaning (the change per 10 K at the reference); the
+    change levels off as the grease warms (theta > 0) and grows faster below the reference.
+
+    Parameters
+    ----------
+    dT : float or array
+        Temperature above the reference, T - T_ref [K].
+    scale : float
+        theta [K]; 0 selects the linear law dT/10 K (theta -> infinity), the default. Else at
+        least ``T_SCALE_MIN``.
+
+    Returns
+    -------
+    g : float or array [1]
+    """
+    if not scale:
+        return dT / T_STEP
+    return scale / T_STEP * -np.expm1(-np.asarray(dT, float) / scale)
+
+
+def housing_path(t, loss_power, start, ambient, heat_capacity, resistance, per_10K=0.0,
+                 T_ref=None):
+    """Grease/housing temperature [K] at the times ``t`` [s] of the lumped heat balance driven
+    by the loss power ``loss_power`` [W] at those times: ``housing_step`` from each time to the
+    next with the power of the earlier one held (zero-order hold, as the FMUs take the loss of
+    a step's inputs over the step), from ``start`` [K] at the first time:
+
+    .. math:: y_{k} = a_k\\,y_{k-1} + (1 - a_k)\\,R\\,P_{k-1}
+              \\left(1 + c\\,\\frac{T_{k-1} - T_{ref}}{10\\,K}\\right), \\qquad
+              a_k = e^{-(t_k - t_{k-1})/(R C)}, \\qquad y = T - T_{amb}.
+
+    With ``per_10K`` c the losses that heat the housing change per 10 K of its temperature from
+    ``T_ref`` [K] (the warm-up per 10 K, ``design.ExtraPhysics.thermal_loss_per_10K``, linear
+    law): the FMUs' heat balance runs on their loss, warm-up included. Vectorised (a
+    first-order recursive filter, the warm-up's feedback by fixed-point iteration) where the
+    steps are equal, step by step otherwise (a logger gap, duplicated stamps: a step of 0
+    keeps T).
+
+    Parameters
+    ----------
+    t : array
+        Times [s], non-decreasing.
+    loss_power : array
+        Loss power heating the housing at each time, at T_ref [W].
+    start : float
+        Temperature at the first time, K.
+    ambient, heat_capacity, resistance : float
+        T_amb in K, C in J/K, R in K/W (``housing_step``).
+    per_10K : float
+        c [1 per 10 K]; 0: the losses do not depend on the temperature.
+    T_ref : float
+        Reference temperature of ``per_10K``, K.
+    """
+    from scipy.signal import lfilter
+    t = np.asarray(t, float)
+    x = np.asarray(loss_power, float)
+    if resistance != 1.0:
+        x = resistance * x
+    tau = resistance * heat_capacity
+    y = np.empty_like(t)
+    if not len(t):
+        return y
+    y0 = float(start) - ambient
+    y[0] = y0
+    k = per_10K / T_STEP
+    off = 0.0 if not per_10K else ambient - T_ref    # T - T_ref = y + off
+    h = _equal_step(t)
+    if h is not None:
+        a = math.exp(-h / tau)
+        y[1:] = lfilter([1.0 - a], [1.0, -a], x[:-1], zi=[a * y0])[0]
+        for _ in range(_FEEDBACK_PASSES if per_10K else 0):
+            prev = y.copy()
+            y[1:] = lfilter([1.0 - a], [1.0, -a], x[:-1] * (1.0 + k * (prev[:-1] + off)),
+                            zi=[a * y0])[0]
+            if np.max(np.abs(y - prev)) <= 1e-12 * max(float(np.max(np.abs(y))), 1.0):
+                y += ambient
+                return y
+        if not per_10K:
+            y += ambient     # (in place: a long recording's arrays are the peak)
+            return y
+    a = np.exp(-np.diff(t) / tau)
+    for j in range(1, len(t)):
+        y[j] = a[j - 1] * y[j - 1] + (1.0 - a[j - 1]) * x[j - 1] * (1.0 + k * (y[j - 1] + off))
+    y += ambient
+    return y
+
+
+def _equal_step(t, chunk=1 << 16):
+    """The step of ``t`` [s] if all its steps are equal (within 1e-9 of the largest), else
+    None; read in chunks (a long recording's differences are not held at once)."""
+    if len(t) < 2:
+        return None
+    lo, hi = math.inf, -math.inf
+    for i in range(0, len(t) - 1, chunk):
+        d = np.diff(t[i:i + chunk + 1])
+        lo, hi = min(lo, float(d.min())), max(hi, float(d.max()))
+    return float(t[1] - t[0]) if hi - lo <= 1e-9 * max(abs(lo), abs(hi), 1e-300) else None
+
+
+#: fixed-point passes of ``housing_path``'s warm-up feedback before it steps sample by sample:
+#: each pass shrinks the error by about c times the temperature rise per 10 K (0.1 to 0.3 for
+#: a warm-up the diagnosis reports), so 30 passes reach 1e-12 well within it
+_FEEDBACK_PASSES = 30
+
+
 def heat_to_ambient(temperature, ambient, resistance):
     """Heat flow from the housing to the ambient (T - T_amb)/R [W]."""
     return (temperature - ambient) / resistance

@@ -392,10 +392,35 @@ def test_temperature_form_is_written_as_fitted():
     assert named(d) == {"thermal_drift"}
     e = d.effects[0]
     assert e["form"].startswith("per 10 K") and "tau" not in e["parameters"]
+    # the linear law (the exponential one's limit theta -> infinity) is chosen for it
+    assert "theta" not in e["parameters"] and e["form"] == "per 10 K of the temperature column"
     assert e["parameters"]["loss_change"]["value"] == pytest.approx(0.04, rel=0.15)
     fixed, _ = updated_design(DriveDesign(), d)
     assert fixed.extra.thermal_loss_per_10K == pytest.approx(e["parameters"]["loss_change"]["value"])
-    assert fixed.extra.thermal_loss_change == 0.0
+    assert fixed.extra.thermal_loss_change == 0.0 and fixed.extra.thermal_T_scale == 0.0
+    again = diagnose(r, "S1", fixed)
+    assert named(again) == set() and not again.unexplained["present"]
+
+
+@pytest.mark.parametrize("theta", [10.0, 40.0])
+def test_a_warm_up_exponential_in_temperature_is_named_with_its_scale(theta):
+    """A warm-up whose losses follow the temperature as a viscosity does, c (theta/10 K)(1 -
+    exp(-dT/theta)) (model_core.thermal.loss_temperature_law), the temperature rising 30 K:
+    the diagnosis chooses theta on its grid (linear, 10, 20, 40, 80 K) by BIC and held-out
+    error, with c (the change per 10 K at the column's first value) within its size, and
+    writes both; the design it writes leaves nothing (the replay evaluates the same law)."""
+    from model_core.effects import TemperatureScale
+    r = synthesize("thermal_drift", 53, "S1", "small", temperature_rise=30.0,
+                   temperature_tau=40.0, shape=TemperatureScale(theta),
+                   effect_values={"loss_change": -0.2})
+    d = diagnose(r, "S1")
+    assert named(d) == {"thermal_drift"}
+    e = d.effects[0]
+    assert e["parameters"]["theta"] == {"value": theta, "unit": "K", "ci95": None}
+    assert e["form"] == f"per 10 K of the temperature column, exponential law (theta {theta:g} K)"
+    assert e["parameters"]["loss_change"]["value"] == pytest.approx(-0.2, rel=0.15)
+    fixed, _ = updated_design(DriveDesign(), d)
+    assert fixed.extra.thermal_T_scale == theta
     again = diagnose(r, "S1", fixed)
     assert named(again) == set() and not again.unexplained["present"]
 
@@ -617,3 +642,37 @@ def test_a_drift_set_aside_is_offered_for_what_remains():
         d.unexplained["present"] and "viscosity_drift" in d.unexplained["could_include"]
         and any(n.startswith("viscosity_drift not named") for n in d.notes)), d.unexplained
     assert not set(named(d)) - {"viscosity_drift"}
+
+
+def test_a_warm_up_driven_by_the_loss_power_is_told_from_one_in_time():
+    """Without a temperature column a warm-up is first order in time (1 - e^(-t/tau)) or
+    follows the housing's lumped heat balance heated by the loss power (tau = R C, the FMUs'
+    own: effects.HeatBalanceTau, thermal.housing_path, the heat being the loss with the
+    warm-up in it). The plan's power changes with its stairs, so the two differ; the
+    diagnosis chooses between them on the same grid of tau by BIC and held-out error, names
+    the power-driven one with tau_housing and c per 10 K of the rise, and writes it onto the
+    FMUs' heat balance (C = tau/R, a cold start at the operating temperature); the design it
+    writes leaves nothing. The warm-up in time stays in time."""
+    from model_core import thermal
+    from model_core.effects import HeatBalanceTau
+    r = synthesize("thermal_drift", 54, "S1", "small", shape=HeatBalanceTau(60.0),
+                   effect_values={"loss_change": -0.15}, friction_error=0.0)
+    d = diagnose(r, "S1")
+    assert named(d) == {"thermal_drift"}
+    e = d.effects[0]
+    assert e["parameters"]["tau_housing"]["value"] == 60.0 and "tau" not in e["parameters"]
+    assert e["form"].startswith("time, the housing's heat balance")
+    assert e["parameters"]["loss_change"]["value"] == pytest.approx(-0.15, rel=0.03)
+    fixed, _ = updated_design(DriveDesign(), d)
+    R = thermal.housing_resistance(fixed)
+    assert fixed.housing_heat_capacity == pytest.approx(60.0 / R, rel=1e-12)
+    assert fixed.ambient_temperature == fixed.extra.thermal_T_ref == \
+        DriveDesign().operating_temperature
+    assert fixed.extra.thermal_loss_change == 0.0
+    again = diagnose(r, "S1", fixed)
+    assert named(again) == set() and not again.unexplained["present"]
+    plain = diagnose(synthesize("thermal_drift", 54, "S1", "small", shape=150.0,
+                                effect_values={"loss_change": 0.12}, friction_error=0.0), "S1")
+    assert named(plain) == {"thermal_drift"}
+    assert plain.effects[0]["parameters"]["tau"]["value"] == 150.0
+    assert "tau_housing" not in plain.effects[0]["parameters"]

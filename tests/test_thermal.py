@@ -345,10 +345,21 @@ def test_a_warm_up_in_time_is_counted_once(preset_fmus):
         x.close()
 
 
-def test_a_warm_up_per_10K_follows_T_oil(preset_fmus):
+def _per_10K_law(c, T, T_ref, theta):
+    """The warm-up's relative loss change, closed form: c (T - T_ref)/10 K (theta 0), or the
+    exponential law c (theta/10 K)(1 - exp(-(T - T_ref)/theta))."""
+    if not theta:
+        return c * (T - T_ref) / 10.0
+    return c * theta / 10.0 * (1.0 - math.exp(-(T - T_ref) / theta))
+
+
+@pytest.mark.parametrize("theta", [0.0, 25.0])
+def test_a_warm_up_per_10K_follows_T_oil(preset_fmus, theta):
     """The warm-up's per-10 K form (thermal_loss_per_10K c, thermal_T_ref T_ref: what a
     diagnosis fits with a temperature column against the model held at one temperature): one
-    warm-up, the model's losses held at T_oil_start times (1 + c (T_oil - T_ref)/10 K). Along
+    warm-up, the model's losses held at T_oil_start times (1 + c (T_oil - T_ref)/10 K), or with
+    thermal_T_scale theta = 25 K times (1 + c (theta/10 K)(1 - exp(-(T_oil - T_ref)/theta)))
+    (the exponential law; not given: the linear law, as before it existed). Along
     a T_oil_in trajectory (12 to 85 degC, all four quadrants) tau_in is the held model's plus
     c (T_oil - T_ref)/10 K times its loss torque, the extra loss appears in P_loss and P_extra
     (tau_in w_in + tau_out w_out = P_loss: the energy balance exact), the gear's partial
@@ -357,7 +368,8 @@ def test_a_warm_up_per_10K_follows_T_oil(preset_fmus):
     losses, PL_mesh)."""
     native, python = preset_fmus
     c, T_ref = 0.08, 301.4
-    extra = dict(thermal_loss_per_10K=c, thermal_T_ref=T_ref)
+    extra = dict(thermal_loss_per_10K=c, thermal_T_ref=T_ref,
+                 **({"thermal_T_scale": theta} if theta else {}))
     T0 = 305.0      # T_oil_start: the temperature the model is held at
     n, p = (Inst(x, use_T_oil_input=True, T_oil_in=T_ref, T_oil_start=T0, **extra)
             for x in preset_fmus)
@@ -372,7 +384,7 @@ def test_a_warm_up_per_10K_follows_T_oil(preset_fmus):
             assert a[key] == pytest.approx(b[key], rel=RTOL, abs=ATOL), (k, key)
         w_out = p.fmu.getReal([p.vr["w_out"]])[0]
         loss_in = m["tau_in"] + t * w_out / w if w else 0.0
-        change = c * (T_in - T_ref) / 10.0 * loss_in
+        change = _per_10K_law(c, T_in, T_ref, theta) * loss_in
         assert b["tau_in"] == pytest.approx(m["tau_in"] + change, rel=1e-12, abs=1e-14), k
         assert b["P_loss"] == pytest.approx(b["tau_in"] * w + t * w_out, rel=1e-12, abs=1e-12)
         assert b["P_loss"] - m["P_loss"] == pytest.approx(change * w, rel=1e-9, abs=1e-12)
@@ -415,6 +427,29 @@ def test_a_reference_temperature_out_of_range_is_refused_by_its_file_key(tmp_pat
     with pytest.raises(CycloidInputError, match=r"thermal_T_ref_degC = 500.0: must lie between "
                                                 r"-100 and 200 degC"):
         design_from_toml(p)
+
+
+def test_the_temperature_law_s_scale_is_carried_and_checked_by_the_design_file(tmp_path):
+    """extra.thermal_T_scale (K): written and read back; 0 (the linear law) or at least
+    thermal.T_SCALE_MIN, anything else refused naming the field. The law itself: slope
+    1/(10 K) at the reference for every theta, the linear law its limit, and exactly
+    (theta/10 K)(1 - 1/e) one theta above the reference."""
+    from model_core.design import design_from_toml, design_to_toml, ExtraPhysics
+    from model_core.errors import CycloidInputError
+    text = design_to_toml(DriveDesign(extra=ExtraPhysics(thermal_T_scale=20.0)))
+    assert "thermal_T_scale = 20.0" in text
+    p = tmp_path / "d.toml"
+    p.write_text(text)
+    assert design_from_toml(p).extra.thermal_T_scale == 20.0
+    for bad in ("0.5", "-20.0", "nan"):
+        p.write_text(text.replace("thermal_T_scale = 20.0", f"thermal_T_scale = {bad}"))
+        with pytest.raises(CycloidInputError, match="thermal_T_scale"):
+            design_from_toml(p)
+    g = thermal.loss_temperature_law
+    for theta in (10.0, 20.0, 80.0):
+        assert (g(1e-4, theta) - g(-1e-4, theta)) / 2e-4 == pytest.approx(0.1, rel=1e-6)
+        assert g(theta, theta) == pytest.approx(theta / 10.0 * (1 - math.exp(-1.0)), rel=1e-14)
+    assert g(7.0, 1e7) == pytest.approx(g(7.0), rel=1e-6) and g(7.0) == 0.7
 
 
 @pytest.mark.parametrize("which", ["native", "python"])
@@ -520,3 +555,28 @@ def test_fmi3_reducer_carries_the_temperature_as_the_fmi2_one(tmp_path):
             assert np.all(b["T_oil"] == 345.0)
         else:
             assert b["T_oil"][-1] > 300.0          # warmed up by its own losses
+
+
+@pytest.mark.parametrize("per_10K", [0.0, -0.2])
+def test_housing_path_is_the_fmus_step_repeated(per_10K):
+    """thermal.housing_path (the diagnosis's heat balance driven by the loss power) equals
+    housing_step repeated sample by sample with the power of each step's start held, the
+    power changed by the warm-up c (T - T_ref)/10 K where c is given (the FMUs' heat balance
+    runs on their loss, warm-up included), on equal steps (the vectorised filter) and across a
+    logger gap and a duplicated stamp (step by step); at a constant power it is the closed
+    form T_amb + P R (1 - e^(-t/tau)) from a cold start."""
+    t = np.arange(0.0, 200.0, 0.05)
+    P = 18.0 + 6.0 * np.sin(t / 9.0) + 4.0 * (t > 80.0)
+    R, C, amb, T_ref = 1.126, 60.0 / 1.126, 300.0, 300.0
+    for tt in (t, np.concatenate([t[:1500], t[1500:1501], t[1500:] + 4.2])):
+        PP = np.resize(P, tt.size)
+        got = thermal.housing_path(tt, PP, amb, amb, C, R, per_10K, T_ref)
+        want = [amb]
+        for k in range(1, tt.size):
+            Pk = PP[k - 1] * (1.0 + per_10K * (want[-1] - T_ref) / 10.0)
+            want.append(thermal.housing_step(want[-1], Pk, tt[k] - tt[k - 1], amb, C, R))
+        assert np.max(np.abs(got - np.array(want))) < 1e-9
+    if not per_10K:
+        flat = thermal.housing_path(t, np.full(t.size, 20.0), amb, amb, C, R)
+        assert np.allclose(flat - amb, 20.0 * R * (1 - np.exp(-t / 60.0)), rtol=1e-12,
+                           atol=1e-12)

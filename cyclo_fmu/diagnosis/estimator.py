@@ -40,6 +40,7 @@ import numpy as np
 from model_core import DriveDesign
 from model_core.errors import CycloidInputError
 from model_core.effects import (CALIBRATION_EFFECTS, CALIBRATION_FIELDS, DEFAULT_CANDIDATES,
+                                HeatBalanceTau,
                                 EFFECTS)
 from model_core.kinematics import parse_mode
 
@@ -114,6 +115,13 @@ VISCOSITY_RELINEARISE = 0.01
 #: re-linearisation passes of the viscosity drift at most (a secant iteration; two settle a
 #: drift of ln 0.5 on the independent recordings)
 NU_PASSES = 3
+#: [1 per 10 K] a warm-up driven by the loss power (``effects.HeatBalanceTau``) is evaluated
+#: again at its fitted size c where it lies this far from the size its columns were built at:
+#: the heat that warms the housing is the loss, warm-up included, so the rise of a warm-up of
+#: size c is the model's rise times about (1 + c g) (g the rise per 10 K). 0.005 per 10 K
+#: changes the rise by at most 0.5 % per 10 K of it, below the 95 % half-width of the fitted
+#: size on the independent recordings (0.0004-0.002 per 10 K); passes at most: NU_PASSES
+HEAT_RELINEARISE = 0.005
 #: [s] at least this much moving recording (below it nothing can be separated)
 MIN_MOVING_S = 2.0
 #: [rad/s] a recording whose input never exceeds this speed (about 10 r/min) stands still
@@ -255,6 +263,10 @@ class Diagnoser:
             notes = self._notes
             P, sel, J_nu, rem = self._relinearise_viscosity(rec, P, sel, rem, rel1)
             J = J_nu or J       # None where no pass could be replayed
+            self._notes = notes + [n for n in self._notes if n not in notes]
+        if self._heat_far(P, rem.S):
+            notes = self._notes
+            P, sel, J, rem = self._relinearise_heat(rec, P, sel, rem, rel1)
             self._notes = notes + [n for n in self._notes if n not in notes]
         rem.unexplained["_rejected"] = J.rejected
         self._stage("report")
@@ -647,6 +659,37 @@ class Diagnoser:
             gone += [e for e in rem.withdrawn if e in self._stood_in and e not in gone]
         rem.withdrawn += [e for e in gone if e not in rem.withdrawn and e not in rem.S.ids]
         self._notes += [x for x in kept if x not in self._notes]
+        return P, sel, J, rem
+
+    @staticmethod
+    def _heat_far(P, S):
+        c = next((float(S.of(t)[0][0]) for t in S.terms if t.effect == "thermal_drift"
+                  and isinstance(t.shape, HeatBalanceTau)), None)
+        return c is not None and abs(c - (P.sig.get("heat_secant") or 0.0)) > HEAT_RELINEARISE
+
+    def _relinearise_heat(self, rec, P, sel, rem, rel1):
+        """The warm-up driven by the loss power evaluated at its fitted size c: its columns
+        become the rise of the heat balance heated by the loss with that warm-up in it
+        (``effects.heat_balance_rise``, ``heat_secant``: what the FMUs' heat balance does),
+        the selection and the stages after it run again; repeated while c moves by more than
+        ``HEAT_RELINEARISE`` (``NU_PASSES`` at most). Returns ``(P, sel, J, rem)``."""
+        from .problem import masked_means
+        eff = EFFECTS["thermal_drift"]
+        J = None
+        for _ in range(NU_PASSES):
+            if not self._heat_far(P, rem.S):
+                break
+            t = next(t for t in rem.S.terms if t.effect == "thermal_drift")
+            P.sig["heat_secant"] = float(rem.S.of(t)[0][0])
+            n = len(P.y) * P.m
+            sig = {k: (v[:n] if isinstance(v, np.ndarray) and v.shape[:1] == rec.time.shape
+                       else v) for k, v in P.sig.items()}
+            for t in P.options["thermal_drift"]:
+                if isinstance(t.shape, HeatBalanceTau):
+                    P.X[:, list(t.cols)] = masked_means(first_order(
+                        eff.basis(sig, t.shape), P.dt, P.bandwidth), P.mask[:n], P.m)
+            sel = select(P, self.n_folds, forced=sel.forced)
+            P, sel, J, rem = self._judge(rec, P, sel, rel1, compete=False)
         return P, sel, J, rem
 
     @staticmethod

@@ -261,6 +261,13 @@ def replay(design: DriveDesign, mode: str, rec, bandwidth: float = 0.0,
         # from it by that delay times the speed: advanced by the delay of the same filter the
         # torque is compared through (first_order), not the continuous 1/(2 pi f_c)
         sig["theta_in"] = sig["theta_in"] + w_s * transducer_delay(bandwidth, dt)
+    # the design's housing: the heat balance the warm-up driven by the loss power integrates
+    # (effects.heat_balance_rise), and where a design's warm-up per 10 K meets a recording
+    # without a temperature column, the FMUs' own from T_oil_start (effects.extra_torque)
+    from model_core import thermal
+    sig["housing_R"] = thermal.housing_resistance(design)
+    sig["housing"] = (design.operating_temperature, design.ambient_temperature,
+                      design.housing_heat_capacity, sig["housing_R"])
     ex = design.extra
     per_10K = bool(ex.viscosity_ln_per_10K) and sig.get("temperature") is not None
     if bool(ex.viscosity_ln_change) != per_10K:

@@ -6,7 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from model_core.effects import EFFECTS, LOOKALIKE_GROUPS, SENSOR_EFFECTS
+from model_core.effects import (EFFECTS, LOOKALIKE_GROUPS, SENSOR_EFFECTS, HeatBalanceTau,
+                                TemperatureScale)
 
 from . import residual as R
 from .replay import block_means, first_order
@@ -172,7 +173,10 @@ def _entry(t, S, prob, P, first, rel1, base_rss, stability, check, offset=0.0):
             val, se = (1 + rel1) * (1 + val) - 1, (1 + rel1) * se
         params[name] = {"value": float(val), "unit": unit,
                         "ci95": [float(val - 1.96 * se), float(val + 1.96 * se)]}
-    form = eff.temperature_form and t.shape is None and sig.get("temperature") is not None
+    # the temperature form: the linear law (shape None) or the exponential one at a
+    # temperature scale theta (a TemperatureScale), per 10 K at the column's first value
+    form = (eff.temperature_form and (t.shape is None or isinstance(t.shape, TemperatureScale))
+            and sig.get("temperature") is not None)
     if form:
         for x in params.values():
             x["unit"] = f"{x['unit']} per 10 K"
@@ -183,8 +187,12 @@ def _entry(t, S, prob, P, first, rel1, base_rss, stability, check, offset=0.0):
              "explained_rms_Nm": expl, "torque_rms_Nm": float(np.sqrt(np.mean(torque ** 2))),
              "share_of_residual": share, "stability": stability.get(t.effect, 1.0),
              "separating_run": eff.separating_run,
-             "form": "per 10 K of the temperature column" if form else
-                     ("time" if eff.shape else "")}
+             "form": ("per 10 K of the temperature column" + (
+                          f", exponential law (theta {float(t.shape):g} K)"
+                          if isinstance(t.shape, TemperatureScale) else "")) if form else
+                     ("time, the housing's heat balance driven by the model's loss power"
+                      if isinstance(t.shape, HeatBalanceTau) else
+                      ("time" if eff.shape else ""))}
     if form:
         # the per-10 K form is referred to the column's first value (model_core.effects._warm):
         # the updated design carries it as extra.thermal_T_ref

@@ -143,7 +143,8 @@ def run_stepwise(prob, opts, min_expl, forced_terms, folds=None, cv=True, exclud
     skip = {f.effect for f in forced_terms} | set(exclude)
     rest = {k: v for k, v in opts.items() if k not in skip}
     start = (rest["friction_miscalibrated"][0],) if "friction_miscalibrated" in rest else ()
-    return stepwise(prob, rest, min_expl, folds=folds, cv=cv, forced=forced_terms, start=start)
+    return stepwise(prob, rest, min_expl, folds=folds, cv=cv, forced=forced_terms, start=start,
+                    pairs=True)
 
 
 def best_next_to(prob, terms, bases):

@@ -362,7 +362,11 @@ def _neighbours(options, t) -> list:
     if t.shape is None or len(opts) < 2:
         return []
     vec = lambda s: s if isinstance(s, tuple) else (s,)
-    axes = [sorted({vec(o.shape)[i] for o in opts}) for i in range(len(vec(t.shape)))]
+    # by value, then by kind: a warm-up's plain time constant and the heat balance's
+    # (effects.HeatBalanceTau) of the same value are two shapes, ordered the same in every
+    # process (a set's order of equal values follows string hashes, randomised per process)
+    axes = [sorted({vec(o.shape)[i] for o in opts}, key=lambda a: (a, type(a).__name__))
+            for i in range(len(vec(t.shape)))]
     out = []
     for o in opts:
         d = [abs(axes[i].index(a) - axes[i].index(b))

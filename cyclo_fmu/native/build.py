@@ -123,7 +123,11 @@ EXTRA = (
         ("_load_phase", "rad", "Angle", None, "phase of the load-scaled part"))) + (
     ("stribeck_transition", "rad/s", "AngularVelocity", 0.0, False, "transition width w_r of "
      "the standstill friction's sign through a speed reversal, tanh(w/w_r) (pre-sliding; 0: "
-     "the sharp sign; >= 0)"),)
+     "the sharp sign; >= 0)"),
+    ("thermal_T_scale", "K", "TemperatureDifference", 0.0, False, "temperature scale theta "
+     "of the warm-up's temperature law: the losses times (1 + c (theta/10 K)(1 - exp(-(T_oil "
+     "- thermal_T_ref)/theta))), c = thermal_loss_per_10K (model_core.thermal."
+     "loss_temperature_law); 0: the linear law; else at least 1 K"),)
 #: value references of EXTRA: its first EXTRA_FIRST at 30.., the others at EXTRA_VR1..
 #: (50..59 were taken when they came; fmi2_cycloid.c's extra_index)
 EXTRA_FIRST = 20

@@ -236,10 +236,16 @@ double cd_dynamic_torque(const CDExtra *x, double alpha, double theta, double or
            + x->thermal_loss_change * (1.0 - exp(-elapsed / x->thermal_tau)) * loss_in;
 }
 
-/* ExtraPhysics.thermal_per_10K_torque: c (T - T_ref)/(10 K) loss_in, T the grease temperature */
+/* ExtraPhysics.thermal_per_10K_torque: c g(T - T_ref) loss_in, T the grease temperature, g
+ * the warm-up's temperature law (model_core.thermal.loss_temperature_law): (T - T_ref)/10 K
+ * with thermal_T_scale 0, else (theta/10 K)(1 - exp(-(T - T_ref)/theta)) */
 double cd_thermal_per_10K_torque(const CDExtra *x, double T, double loss_in)
 {
-    return x->thermal_loss_per_10K * (T - x->thermal_T_ref) / 10.0 * loss_in;
+    double theta = x->thermal_T_scale;
+    if (theta == 0.0)
+        return x->thermal_loss_per_10K * (T - x->thermal_T_ref) / 10.0 * loss_in;
+    return x->thermal_loss_per_10K * (theta / 10.0 * -expm1(-(T - x->thermal_T_ref) / theta))
+           * loss_in;
 }
 
 /* ThermalMap.locate, ThermalMap.solve and lossmap.blend_solutions */

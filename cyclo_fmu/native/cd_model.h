@@ -62,9 +62,12 @@ typedef struct {
     /* the standstill friction's sign through a speed reversal, tanh(w/w_r) (0: sgn(w)),
      * rad/s (model_core.friction.reversal_sign) */
     double stribeck_transition;
+    /* the warm-up's temperature law: its temperature scale theta, K (0: the linear law;
+     * model_core.thermal.loss_temperature_law) */
+    double thermal_T_scale;
 } CDExtra;
 
-#define CD_N_EXTRA 33
+#define CD_N_EXTRA 34
 
 /* A discovered loss term (design [[extra.discovered]], model_core.discovered): the torque
  * coefficient * sgn(w) (|w|/300 rad/s)^speed_exponent (|tau_out|/10 N*m)^load_exponent. */
@@ -102,7 +105,7 @@ void cd_solve(const CDMap *map, int mode, double w_in, double tau_out, CDSolutio
 double cd_steady_torque(const CDExtra *x, double w);
 
 /* ExtraPhysics.thermal_per_10K_torque: the loss change per 10 K of the grease temperature T
- * (K) from thermal_T_ref (N*m). */
+ * (K) from thermal_T_ref (N*m), linear or (thermal_T_scale > 0) the exponential law. */
 double cd_thermal_per_10K_torque(const CDExtra *x, double T, double loss_in);
 
 /* ExtraPhysics.dynamic_torque: inertia, ripple and warm-up torque (N*m). */

@@ -11,7 +11,7 @@
  *            10..29 outputs, in the order of OUT_NAMES
  *            30..49 extra physics parameters, in the order of CDExtra (its first 20)
  *            60..71 its fields 20..31 (the ripple at 2x, output 1x and 2x), 72 its field
- *            32 (stribeck_transition)
+ *            32 (stribeck_transition), 73 its field 33 (thermal_T_scale)
  *            50 J_out, 51 alpha_ref (parameters of the output inertia)
  *            52 PL_mesh (output: the calibrated mesh loss; out[O_PL_MESH])
  *            53 T_oil, 54 Q_ambient (outputs of the temperature)
@@ -41,6 +41,9 @@
 #define N_OUT_ALL (N_OUT + 3)  /* out[]: the 20, PL_mesh, T_oil, Q_ambient */
 /* K, the grease temperatures accepted (cycloid_drive.T_OIL_RANGE: -100 to 200 degC) */
 #define T_OIL_MIN 173.15
+/* K, the smallest temperature scale of the warm-up's exponential law (model_core.thermal.
+ * T_SCALE_MIN; 0 is the linear law) */
+#define CD_T_SCALE_MIN 1.0
 #define T_OIL_MAX 473.15
 #define VR_OUT0 10
 #define N_OUT 20               /* outputs at value references 10..29 */
@@ -76,7 +79,7 @@ static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "thermal_loss_per_10K", "thermal_T_ref", "ripple_2x", "ripple_2x_phase", "ripple_2x_load",
     "ripple_2x_load_phase", "ripple_out_1x", "ripple_out_1x_phase", "ripple_out_1x_load",
     "ripple_out_1x_load_phase", "ripple_out_2x", "ripple_out_2x_phase", "ripple_out_2x_load",
-    "ripple_out_2x_load_phase", "stribeck_transition"};
+    "ripple_out_2x_load_phase", "stribeck_transition", "thermal_T_scale"};
 
 /* index into CDExtra of a value reference, or -1 */
 static int extra_index(fmi2ValueReference r)
@@ -88,10 +91,11 @@ static int extra_index(fmi2ValueReference r)
 }
 
 #define STATE_MAGIC 0x43444e53u   /* "CDNS" */
-#define STATE_VERSION 8u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
+#define STATE_VERSION 9u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
                               * load ripple, CDState.distance; 5: the oil temperature;
                               * 6: CDExtra's warm-up per 10 K; 7: the ripple at 2x, output
-                              * 1x and 2x; 8: CDExtra.stribeck_transition */
+                              * 1x and 2x; 8: CDExtra.stribeck_transition;
+                              * 9: CDExtra.thermal_T_scale */
 
 /* Everything that defines the instance's behaviour from here on: inputs, parameters,
  * outputs and the dynamic state. Plain data: copied and serialised as it is. */
@@ -176,6 +180,7 @@ static double *extra_field(CDExtra *x, int i)
     f[27] = &x->ripple_out_1x_load_phase; f[28] = &x->ripple_out_2x;
     f[29] = &x->ripple_out_2x_phase; f[30] = &x->ripple_out_2x_load;
     f[31] = &x->ripple_out_2x_load_phase; f[32] = &x->stribeck_transition;
+    f[33] = &x->thermal_T_scale;
     return f[i];
 }
 
@@ -202,6 +207,9 @@ static const char *extra_problem(int i, double v)
     case 19:
         return (v > T_OIL_MIN && v < T_OIL_MAX) ? NULL
                : "must lie between 173.15 and 473.15 K (-100 to 200 degC)";
+    case 33:   /* model_core.thermal.T_SCALE_MIN */
+        return (v == 0.0 || v >= CD_T_SCALE_MIN) ? NULL
+               : "must be 0 (the linear law) or at least 1 K";
     default:
         return NULL;
     }

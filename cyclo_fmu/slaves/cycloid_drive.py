@@ -161,7 +161,12 @@ LATE_DESIGN_PARAMETERS = [
     # reversal_sign)
     ("stribeck_transition", "extra", "stribeck_transition", "rad/s", "transition width w_r of "
      "the standstill friction's sign through a speed reversal, tanh(w/w_r) (pre-sliding; 0: "
-     "the sharp sign; >= 0)", Real)]
+     "the sharp sign; >= 0)", Real),
+    # the warm-up's exponential temperature law (model_core.thermal.loss_temperature_law)
+    ("thermal_T_scale", "extra", "thermal_T_scale", "K", "temperature scale theta of the "
+     "warm-up's temperature law: the losses times (1 + c (theta/10 K)(1 - exp(-(T_oil - "
+     "thermal_T_ref)/theta))), c = thermal_loss_per_10K; 0: the linear law (1 + c (T_oil - "
+     "thermal_T_ref)/10 K); else at least 1 K", Real)]
 ALL_DESIGN_PARAMETERS = DESIGN_PARAMETERS + LATE_DESIGN_PARAMETERS
 #: design parameters of the heat balance only (run-time in both FMUs; not in the loss map)
 THERMAL_PARAMETERS = ("ambient_temperature", "housing_heat_capacity", "housing_heat_transfer",
@@ -204,7 +209,7 @@ PARAMETER_LIMITS = dict(
                                 "drag_torque", "stribeck_torque", "input_inertia",
                                 "ripple_2x", "ripple_2x_load", "ripple_out_1x",
                                 "ripple_out_1x_load", "ripple_out_2x", "ripple_out_2x_load",
-                                "stribeck_transition")},
+                                "stribeck_transition", "thermal_T_scale")},
     # must be positive: FMI's min is inclusive, so the smallest positive normal double
     **{n: (sys.float_info.min, None) for n in ("stribeck_speed", "thermal_tau")},
     mu_boundary=(0.0, 1.0), mu_rolling=(0.0, 1.0), thermal_loss_change=(-1.0, None),
@@ -520,6 +525,11 @@ class CycloidDrive(UnitSlave):
             idx = {"1": 0, "2": 1, "S": 2}
             self._shaft_index = (idx[a], idx[b], idx[h])
             self._design = self._build_design()
+            theta = self._design.extra.thermal_T_scale
+            if not (theta == 0.0 or core.thermal.T_SCALE_MIN <= theta < math.inf):
+                raise core.CycloidInputError("thermal_T_scale", theta, "must be 0 (the linear "
+                                             "law) or at least "
+                                             f"{core.thermal.T_SCALE_MIN:g} K")
             for name in ("map_torque_max", "map_speed_max"):
                 v = getattr(self, name)
                 if not (math.isfinite(v) and v > 0):
