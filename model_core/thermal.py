@@ -251,7 +251,8 @@ def housing_path(t, loss_power, start, ambient, heat_capacity, resistance, per_1
     T_ref : float
         Reference temperature of ``per_10K``, K.
     """
-    from scipy.signal import lfilter
+    from .filters import linear_filter
+    lfilter = linear_filter()
     t = np.asarray(t, float)
     x = np.asarray(loss_power, float)
     if resistance != 1.0:
@@ -267,11 +268,12 @@ def housing_path(t, loss_power, start, ambient, heat_capacity, resistance, per_1
     h = _equal_step(t)
     if h is not None:
         a = math.exp(-h / tau)
-        y[1:] = lfilter([1.0 - a], [1.0, -a], x[:-1], zi=[a * y0])[0]
+        b_, a_ = np.atleast_1d([1.0 - a]), np.atleast_1d([1.0, -a])
+        z_ = np.atleast_1d([a * y0])
+        y[1:] = lfilter(b_, a_, x[:-1], 0, z_)[0]
         for _ in range(_FEEDBACK_PASSES if per_10K else 0):
             prev = y.copy()
-            y[1:] = lfilter([1.0 - a], [1.0, -a], x[:-1] * (1.0 + k * (prev[:-1] + off)),
-                            zi=[a * y0])[0]
+            y[1:] = lfilter(b_, a_, x[:-1] * (1.0 + k * (prev[:-1] + off)), 0, z_)[0]
             if np.max(np.abs(y - prev)) <= 1e-12 * max(float(np.max(np.abs(y))), 1.0):
                 y += ambient
                 return y
