@@ -144,7 +144,7 @@ def run_stepwise(prob, opts, min_expl, forced_terms, folds=None, cv=True, exclud
     rest = {k: v for k, v in opts.items() if k not in skip}
     start = (rest["friction_miscalibrated"][0],) if "friction_miscalibrated" in rest else ()
     return stepwise(prob, rest, min_expl, folds=folds, cv=cv, forced=forced_terms, start=start,
-                    pairs=True)
+                    pairs=False)
 
 
 def best_next_to(prob, terms, bases):
