@@ -206,6 +206,23 @@ def _closure(effect, sets, tmp_path, duration=20.0, plan="full", engine="bench",
     return good, bad, d
 
 
+def _native_closes(r, mode, fixed, sets, folder):
+    """The native reducer FMU built for the updated design ``fixed`` (its start values the
+    bench checks) reproduces recording ``r`` to its noise floor, and its replay is the Python
+    FMU's twin (``TWIN_TOL``)."""
+    from cyclo_fmu.fmu_build import RIG_NATIVE, build_any
+    folder.mkdir()
+    for name in RIG_NATIVE:
+        build_any(name, folder)
+    build_any("CycloidDriveNative", folder, fixed)
+    gn, rpn = verify_recording(r, mode, folder, fixed, "native")
+    gp, rpp = verify_recording(r, mode, sets[0], fixed, "python")
+    assert gn["reproduces_to_noise_floor"]
+    for k in rpp.simulated:
+        scale = np.maximum(1.0, np.abs(rpp.simulated[k]))
+        assert np.max(np.abs(rpn.simulated[k] - rpp.simulated[k]) / scale) <= TWIN_TOL, k
+
+
 def _assert_closes(good, bad, bad_min=2.5):
     # the tolerance VERIFY_TOLERANCE (1.2, bench_replay: what a reproduction to the noise
     # floor may leave); measured ratios 0.88-1.17 on these recordings (Stribeck 1.17, inertia
@@ -283,19 +300,8 @@ def test_closure_shaft_order_ripple(sets, tmp_path, values, field, native):
     assert getattr(fixed.extra, field) == pytest.approx(math.hypot(s_, c_), rel=0.1)
     _assert_closes(good, bad, bad_min=2.0)
     if native:
-        from cyclo_fmu.fmu_build import RIG_NATIVE, build_any
-        nd = tmp_path / "native_updated"
-        nd.mkdir()
-        for name in RIG_NATIVE:
-            build_any(name, nd)
-        build_any("CycloidDriveNative", nd, fixed)
         r, mode, _ = load_recording(tmp_path / "mesh_ripple.csv", "S1")
-        gn, rpn = verify_recording(r, mode, nd, fixed, "native")
-        gp, rpp = verify_recording(r, mode, sets[0], fixed, "python")
-        assert gn["reproduces_to_noise_floor"]
-        for k in rpp.simulated:
-            scale = np.maximum(1.0, np.abs(rpp.simulated[k]))
-            assert np.max(np.abs(rpn.simulated[k] - rpp.simulated[k]) / scale) <= TWIN_TOL, k
+        _native_closes(r, mode, fixed, sets, tmp_path / "native_updated")
 
 
 @pytest.mark.slow
@@ -406,20 +412,8 @@ def test_closure_warm_up_exponential_in_temperature(sets, tmp_path, native):
     assert not linear["reproduces_to_noise_floor"]
     if not native:
         return
-    # the native reducer FMU carries the law (parameter thermal_T_scale; built for the
-    # updated design, whose start values the bench checks)
-    from cyclo_fmu.fmu_build import RIG_NATIVE, build_any
-    nd = tmp_path / "native_updated"
-    nd.mkdir()
-    for name in RIG_NATIVE:
-        build_any(name, nd)
-    build_any("CycloidDriveNative", nd, fixed)
-    gn, rpn = verify_recording(r, mode, nd, fixed, "native")
-    gp, rpp = verify_recording(r, mode, sets[0], fixed, "python")
-    assert gn["reproduces_to_noise_floor"]
-    for k in rpp.simulated:
-        scale = np.maximum(1.0, np.abs(rpp.simulated[k]))
-        assert np.max(np.abs(rpn.simulated[k] - rpp.simulated[k]) / scale) <= TWIN_TOL, k
+    # the native reducer FMU carries the law (parameter thermal_T_scale)
+    _native_closes(r, mode, fixed, sets, tmp_path / "native_updated")
 
 
 @pytest.mark.parametrize("native", [False, pytest.param(True, marks=pytest.mark.slow)])
@@ -453,19 +447,8 @@ def test_closure_warm_up_driven_by_the_loss_power(sets, tmp_path, native):
     _assert_closes(good, bad, bad_min=2.0)
     if not native:
         return
-    from cyclo_fmu.fmu_build import RIG_NATIVE, build_any
-    nd = tmp_path / "native_updated"
-    nd.mkdir()
-    for name in RIG_NATIVE:
-        build_any(name, nd)
-    build_any("CycloidDriveNative", nd, fixed)
     r, mode, _ = load_recording(tmp_path / "thermal_drift.csv", "S1")
-    gn, rpn = verify_recording(r, mode, nd, fixed, "native")
-    gp, rpp = verify_recording(r, mode, sets[0], fixed, "python")
-    assert gn["reproduces_to_noise_floor"]
-    for k in rpp.simulated:
-        scale = np.maximum(1.0, np.abs(rpp.simulated[k]))
-        assert np.max(np.abs(rpn.simulated[k] - rpp.simulated[k]) / scale) <= TWIN_TOL, k
+    _native_closes(r, mode, fixed, sets, tmp_path / "native_updated")
 
 
 @pytest.mark.slow
