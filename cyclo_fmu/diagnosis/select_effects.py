@@ -143,11 +143,7 @@ def run_stepwise(prob, opts, min_expl, forced_terms, folds=None, cv=True, exclud
     skip = {f.effect for f in forced_terms} | set(exclude)
     rest = {k: v for k, v in opts.items() if k not in skip}
     start = (rest["friction_miscalibrated"][0],) if "friction_miscalibrated" in rest else ()
-    # the pair step (``selection._pair_step``) is built but off: over the five independent
-    # batches it found batch 2's m05 and named two loss scales wrongly in two other recordings
-    # (docs, Diagnosis library, the chain); a wrong name costs more than a miss
-    return stepwise(prob, rest, min_expl, folds=folds, cv=cv, forced=forced_terms, start=start,
-                    pairs=False)
+    return stepwise(prob, rest, min_expl, folds=folds, cv=cv, forced=forced_terms, start=start)
 
 
 def best_next_to(prob, terms, bases):

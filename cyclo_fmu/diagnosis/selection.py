@@ -198,15 +198,12 @@ class Selection:
 
 
 def stepwise(problem: GramProblem, options: dict, min_explained: float, folds=None,
-             cv=True, delta_bic=DELTA_BIC, forced=(), start=(), pairs=False) -> Selection:
+             cv=True, delta_bic=DELTA_BIC, forced=(), start=()) -> Selection:
     """Forward selection then backward elimination over the effects in ``options``
     ({effect: [Term, ...] over its shapes}); each effect enters at most once, at its best
     shape. With ``cv=False`` (stability runs) the rule is the BIC alone. ``forced`` terms are
     in from the start and never dropped; ``start`` terms are in from the start and may be
-    dropped by the backward pass. With ``pairs`` (and ``cv``), where no single effect earns its
-    place, two may enter together if each earns its place beside the other (``_pair_step``):
-    the BIC alone (``cv=False``) takes such members one at a time already, it is the held-out
-    test that sees a pair's gain only together."""
+    dropped by the backward pass."""
     def ok(before, after):
         if before.bic - after.bic < delta_bic:
             return False
@@ -217,7 +214,6 @@ def stepwise(problem: GramProblem, options: dict, min_explained: float, folds=No
     path = [("start", "none", None, cur.bic, cur.cv_rmse)]
     while True:
         best = None
-        singles = {}
         for eid, terms in options.items():
             if eid in cur.ids:
                 continue
@@ -233,7 +229,6 @@ def stepwise(problem: GramProblem, options: dict, min_explained: float, folds=No
             # stretched over a zero offset in a forward-only plan), and the comparison is then
             # between the wrong shape with and without the newcomer
             here = _reshape(problem, here, options, folds, cv=False)
-            singles[eid] = here
             if best is None or here.bic < best.bic:
                 best = here
         if best is None:
@@ -241,13 +236,7 @@ def stepwise(problem: GramProblem, options: dict, min_explained: float, folds=No
         if cv:
             best = problem.fit(best.terms, folds, cv=True)
         if not ok(cur, best):
-            pair = _pair_step(problem, cur, singles, options, folds, cv, ok) if (pairs and cv) else None
-            if pair is None:
-                break
-            cur = pair
-            for t in cur.terms[-2:]:
-                path.append(("add pair", t.effect, t.shape, cur.bic, cur.cv_rmse))
-            continue
+            break
         cur = best
         # re-choose the shapes of the terms already in, given the new one
         cur = _reshape(problem, cur, options, folds, cv)
@@ -270,37 +259,6 @@ def stepwise(problem: GramProblem, options: dict, min_explained: float, folds=No
                 changed = True
                 break
     return Selection(cur, path)
-
-
-def _pair_step(problem, cur, singles, options, folds, cv, ok):
-    """Two effects that explain only together: each one's column is cancelled by a term
-    already in (or by the other) when it enters alone, as a warm-up of the losses and a
-    constant transducer offset of the other sign are, next to a friction level that takes the
-    warm-up's mean. Every pair of the effects not yet in, each at the shape it had when judged
-    alone (``singles``: {effect: fit of ``cur`` with it}), is fitted; the pair with the lowest
-    BIC, its shapes and the others' re-chosen, enters where it passes the forward rule ``ok``
-    against ``cur`` *and* each member passes it against the pair without it (what the
-    backward pass asks of every term). Returns the new fit, or None."""
-    ids = list(singles)
-    best = None
-    for i, a in enumerate(ids):
-        ta = singles[a].terms[-1]
-        for b in ids[i + 1:]:
-            tb = singles[b].terms[-1]
-            f = problem.fit(cur.terms + (ta, tb), folds, cv=False)
-            if f.admissible and (best is None or f.bic < best.bic):
-                best = f
-    if best is None:
-        return None
-    best = problem.fit(_reshape(problem, best, options, folds, False).terms, folds, cv)
-    if not (best.admissible and ok(cur, best)):
-        return None
-    for t in best.terms[-2:]:
-        rest = problem.fit(tuple(x for x in best.terms if x != t), folds, cv=False)
-        rest = problem.fit(_reshape(problem, rest, options, folds, False).terms, folds, cv)
-        if not ok(rest, best):
-            return None
-    return best
 
 
 def _reshape(problem, cur, options, folds, cv):
