@@ -64,14 +64,85 @@ def _legendre(x, deg):
     return np.stack([legendre.legval(x, [0] * k + [1]) for k in range(1, deg + 1)], -1)
 
 
+#: [robust standard deviations of the output torque's block means] the half width of the
+#: play (backlash) operator whose state is the direction of the last load change: 5. The
+#: state flips only when the output torque moves 10 standard deviations of its own block-mean
+#: noise against the last change: within a hold of N blocks white noise spans about
+#: 2 sqrt(2 ln N) standard deviations (7.4 at 3000 blocks, a 30 s hold of 10 ms blocks), so a
+#: hold keeps its state, as a hysteresis does, while a load change of a few per cent of the
+#: range already sets it
+PLAY_NOISE_SIGMAS = 5.0
+#: [1] the play's half width is at least this share of the largest block-mean output torque
+#: (a noise-free or quantised torque channel, whose block means may not differ at all in a
+#: hold, would otherwise flip the state on rounding)
+PLAY_MIN_SHARE = 1e-3
+
+#: what each group of the generic basis stands for, as the remainder's statement reads it
+#: (the group's name is the key of ``unexplained.follows``)
+GROUP_READING = {
+    "operating point (losses)": "the operating point (a loss: odd in the direction of motion)",
+    "operating point (reading)": "the operating point (a reading error: even in the direction "
+                                 "of motion)",
+    "time": "time",
+    "acceleration": "the acceleration, growing with speed or load",
+    "temperature": "the temperature",
+    "load-change direction": "the direction of the last load change (a hysteresis of the "
+                             "torque reading, pre-sliding friction or lost motion; not in the "
+                             "library)",
+    "acceleration against the motion": "the speed's changes, against the motion (a loss "
+                                       "while the speed changes, growing with the "
+                                       "acceleration or at a slip level: a dynamic mesh load, "
+                                       "a slipping coupling, a controller's current limit; not "
+                                       "in the library)",
+}
+
+
+def play_state(x, r) -> np.ndarray:
+    """State s in [-1, 1] of a play (backlash) operator of half width ``r`` driven by ``x``:
+    the play's output p follows x only where x leaves [p - r, p + r] (Krasnosel'skii and
+    Pokrovskii 1989; the elementary hysteron of the Prandtl-Ishlinskii model), and
+    s = (x - p) / r: +1 after x rose by 2 r, -1 after it fell by 2 r, and it keeps that value
+    while x is held. Starts at p = x[0] (s = 0: no direction known yet)."""
+    x = np.asarray(x, float)
+    if r <= 0 or not len(x):
+        return np.zeros(len(x))
+    out = np.empty(len(x))
+    p = float(x[0])
+    for i, xi in enumerate(x.tolist()):     # (a recurrence: a loop over the block means)
+        if xi > p + r:
+            p = xi - r
+        elif xi < p - r:
+            p = xi + r
+        out[i] = (xi - p) / r
+    return out
+
+
+def noise_width(x, sigmas=PLAY_NOISE_SIGMAS, min_share=PLAY_MIN_SHARE) -> float:
+    """``sigmas`` robust standard deviations of the noise of the block means ``x``, estimated
+    from their second differences (a ramp has none; white noise of sigma gives sigma
+    sqrt(6)), and at least ``min_share`` of the largest |x|: the change of ``x`` that its
+    noise does not make (the half width of the load-change direction's play, in N*m; the
+    acceleration at which a loss while the speed changes is taken as fully on, in rad/s^2)."""
+    x = np.asarray(x, float)
+    sigma = robust_sigma(np.diff(x, 2)) / math.sqrt(6.0) if len(x) > 2 else 0.0
+    return max(sigmas * sigma, min_share * float(np.max(np.abs(x), initial=0.0)))
+
+
 def generic_basis(blocks: dict) -> tuple:
-    """Columns of the generic structure basis and their group names.
+    """Columns of the generic structure basis and their group names (``GROUP_READING``).
 
     Groups: ``operating point (losses)`` sign(w) P(u, v) with u = |w|/max|w|, v = |T_out|/max,
     total degree <= 3; ``operating point (reading)`` the even terms (u, v, u v, u^2, v^2);
-    ``time`` Legendre P1..P5 of time; ``acceleration`` u dw/dt and v dw/dt; the library's
-    exact signatures (a constant, dw/dt) are left out: the basis holds what the library does not;
-    ``temperature`` (T - T0) and its square, with a temperature column."""
+    ``time`` Legendre P1..P5 of time; ``acceleration`` u dw/dt and v dw/dt; ``temperature``
+    (T - T0) and its square, with a temperature column; ``load-change direction`` s and s v,
+    s the state of a play operator (``play_state``, half width ``noise_width``) on the output
+    torque's block means: a hysteresis of the reading or a loss that remembers whether the
+    load last rose or fell; ``acceleration against the motion`` sign(w) |dw/dt|,
+    sign(w) sat(|dw/dt|) and sat(dw/dt) (sat: clipped to +-1 at ``noise_width`` of the
+    acceleration): a loss while the speed changes, growing with it or at a slip level, and
+    different speeding up and slowing down. The library's
+    exact signatures (a constant, dw/dt) are left out: the basis holds what the library does
+    not."""
     w, T = blocks["w_in"], blocks["T_out"]
     u = np.abs(w) / max(np.max(np.abs(w)), 1e-12)
     v = np.abs(T) / max(np.max(np.abs(T)), 1e-12)
@@ -97,6 +168,20 @@ def generic_basis(blocks: dict) -> tuple:
         dT = blocks["temperature"] - blocks["temperature"][0]
         cols += [dT, dT * dT]
         groups += ["temperature"] * 2
+    # the direction of the last load change: a play on the output torque (its state, and the
+    # state times the load: a hysteresis in per cent of the reading or of the load)
+    h = play_state(T, noise_width(T))
+    cols += [h, h * v]
+    groups += ["load-change direction"] * 2
+    # a loss against the motion while the speed changes (inertia J dw/dt is linear in the
+    # acceleration; these are not): growing with |dw/dt| (even in it, odd in the direction of
+    # motion), at a level once the speed changes beyond its noise (a slip torque, a current
+    # limit: the acceleration saturated at ``noise_width``), and that level's part that
+    # differs between speeding up and slowing down (odd in the acceleration, saturated)
+    a0 = noise_width(a, PLAY_NOISE_SIGMAS, PLAY_MIN_SHARE)
+    sat = np.clip(a / a0, -1.0, 1.0) if a0 > 0 else np.zeros(len(a))
+    cols += [s * np.abs(a), s * np.abs(sat), sat]
+    groups += ["acceleration against the motion"] * 3
     return np.stack(cols, -1), groups
 
 
