@@ -3,8 +3,9 @@
 Claims and their statistics (``twins`` for the false-alarm rate and the fitted tails):
 
 - *smooth structure* (the generic basis, whole or one of its groups, beside the selection):
-  the residual sum of squares the best group removes; twins: the same maximum over the groups
-  on the twins' noise; judged at ``FALSE_ALARM``. Reported when it also explains at least
+  the largest residual sum of squares a group removes, each over the mean its twins remove
+  (``standardised_max``); twins: the same maximum over the groups on the twins' noise;
+  judged at ``FALSE_ALARM``. Reported when it also explains at least
   ``MIN_EXPLAINED_NM`` (a physical limit, not a significance one).
 - *a named effect next to that structure* (does it keep its place, or could the unknown hold
   it?): its drop-one statistic beside the selection and the group of the basis that best
@@ -91,7 +92,8 @@ class Remainder:
 def structure(P, prob, S, tw, mix=None):
     """(present, best fit with a group of the generic basis, Check, RMS in the fit).
 
-    The statistic is the largest RSS drop any group makes beside the selection, each named
+    The statistic is the largest standardised RSS drop any group makes beside the selection
+    (``standardised_max``), each named
     effect at the mix of adjacent shapes it fits best (``twins.mixes``: the effect's own
     form between its grid's shapes is no remainder); the twins take the same maximum. The
     group reported (what the remainder is, its RMS) is the one with the smallest held-out

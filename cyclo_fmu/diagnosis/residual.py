@@ -4,9 +4,11 @@ peaks, and where a mismatch sits on the operating map.
 The structure test fits the residual left by the selected effects with a *generic* basis that
 no library term is: smooth functions of the operating point (odd in the direction of motion,
 as a loss is, and even, as a reading error is), of time, of acceleration and of the
-temperature column. When that basis explains a held-out RMS above the practical threshold
-with very strong evidence, physics is missing that the library does not hold, and the
-diagnosis says where it sits and what it follows instead of naming the nearest library term.
+temperature column, the direction of the last load change (a play operator's state: a
+hysteresis) and the acceleration against the motion (a loss while the speed changes). When
+that basis explains a held-out RMS above the practical threshold with very strong evidence,
+physics is missing that the library does not hold, and the diagnosis says where it sits and
+what it follows instead of naming the nearest library term.
 """
 from __future__ import annotations
 
@@ -71,9 +73,10 @@ def _legendre(x, deg):
 #: part of the span its load sweeps, and the measured torque's own wander must not switch it:
 #: the output torque's noise enters the residual through the model's input torque (errors in
 #: the variable), so a state that follows the noise correlates with the residual on a clean
-#: recording (measured with a play of 5 noise standard deviations on batch 4's clean pink and
-#: AR(1) recordings: 0.5-0.7 mN*m "structure", the state switching on 2000-12000 of 52500
-#: blocks; at this share 4-6 times, the plan's own load reversals)
+#: recording (measured with a play of 5 noise standard deviations, from second differences,
+#: on batch 4's clean pink and AR(1) recordings: 0.5-0.7 mN*m "structure", the state
+#: switching on up to 11 815 of 52 500 blocks; at this share 4-6 times on the same recording,
+#: the plan's own load reversals)
 PLAY_RANGE_SHARE = 0.05
 #: [robust standard deviations of the block means' noise] and at least this many standard
 #: deviations of the output torque's block-mean noise (about its 1 s running median: a
@@ -113,8 +116,9 @@ def play_state(x, r) -> np.ndarray:
     """State s in [-1, 1] of a play (backlash) operator of half width ``r`` driven by ``x``:
     the play's output p follows x only where x leaves [p - r, p + r] (Krasnosel'skii and
     Pokrovskii 1989; the elementary hysteron of the Prandtl-Ishlinskii model), and
-    s = (x - p) / r: +1 after x rose by 2 r, -1 after it fell by 2 r, and it keeps that value
-    while x is held. Starts at p = x[0] (s = 0: no direction known yet)."""
+    s = (x - p) / r: +1 after x rose by 2 r, -1 after it fell by 2 r; while x is held it keeps
+    its branch (a wander within the play moves s linearly, as the hysteron's output does, and
+    switches nothing). Starts at p = x[0] (s = 0: no direction known yet)."""
     x = np.asarray(x, float)
     if r <= 0 or not len(x):
         return np.zeros(len(x))
