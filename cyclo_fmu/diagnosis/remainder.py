@@ -120,12 +120,13 @@ def standardised_max(tw, base, groups, drops) -> tuple:
     (its noise level: a group of k columns takes about k times the noise variance out of
     pure noise). The twins take the same maximum of their own standardised drops.
 
-    Over raw drops the whole basis (26 columns) would decide every claim: its drop on the
-    noise alone is 10-20 times a two-column group's, so a remainder that one small group
-    holds whole (a hysteresis of the reading: 0.72 of a recording's RSS, the whole basis
-    0.72 too) stood within the whole basis's twins (p = 0.08) while 7 times its own group's
-    twins' mean. Standardised, each group is judged by its own evidence and the maximum over
-    the groups keeps the stated rate (the twins maximise alike)."""
+    Over raw drops the whole basis (27 columns) decides every claim: its drop on the noise
+    alone is about 7 times a two-column group's, so a remainder that one small group holds
+    whole stands within the whole basis's twins (batch 5's transducer hysteresis: the
+    load-change direction took 0.69 of the RSS, the whole basis 0.69 too; 15.5 times the
+    group's own twins' mean, 2.4 times the whole basis's; over raw drops p = 0.08).
+    Standardised, each group is judged by its own evidence and the maximum over the groups
+    keeps the stated rate (the twins maximise alike)."""
     r0 = tw.rss(tuple(base))
     D = np.array([r0 - tw.rss(tuple(base) + (b,)) for b in groups])
     scale = np.maximum(D[:, :tw.n].mean(1), 1e-300)
