@@ -4,9 +4,11 @@ peaks, and where a mismatch sits on the operating map.
 The structure test fits the residual left by the selected effects with a *generic* basis that
 no library term is: smooth functions of the operating point (odd in the direction of motion,
 as a loss is, and even, as a reading error is), of time, of acceleration and of the
-temperature column. When that basis explains a held-out RMS above the practical threshold
-with very strong evidence, physics is missing that the library does not hold, and the
-diagnosis says where it sits and what it follows instead of naming the nearest library term.
+temperature column, the direction of the last load change (a play operator's state: a
+hysteresis) and the acceleration against the motion (a loss while the speed changes). When
+that basis explains a held-out RMS above the practical threshold with very strong evidence,
+physics is missing that the library does not hold, and the diagnosis says where it sits and
+what it follows instead of naming the nearest library term.
 """
 from __future__ import annotations
 
@@ -64,14 +66,111 @@ def _legendre(x, deg):
     return np.stack([legendre.legval(x, [0] * k + [1]) for k in range(1, deg + 1)], -1)
 
 
+#: [1] the load-change direction's play has a half width of this share of the range of the
+#: output torque's block means (its 0.5 to 99.5 percentiles): a reversal of the load by a
+#: tenth of the range switches the state, a smaller one does not. An assumption: a hysteresis
+#: loop (a transducer's, a pre-sliding friction's) moves from one branch to the other over a
+#: part of the span its load sweeps, and the measured torque's own wander must not switch it:
+#: the output torque's noise enters the residual through the model's input torque (errors in
+#: the variable), so a state that follows the noise correlates with the residual on a clean
+#: recording (measured with a play of 5 noise standard deviations, from second differences,
+#: on batch 4's clean pink and AR(1) recordings: 0.5-0.7 mN*m "structure", the state
+#: switching on up to 11 815 of 52 500 blocks; at this share 4-6 times on the same recording,
+#: the plan's own load reversals)
+PLAY_RANGE_SHARE = 0.05
+#: [robust standard deviations of the block means' noise] and at least this many standard
+#: deviations of the output torque's block-mean noise (about its 1 s running median: a
+#: recording whose load only wanders, held all along, has no range but noise): within a hold
+#: of N blocks white noise spans about 2 sqrt(2 ln N) standard deviations (7.4 at 3000
+#: blocks, a 30 s hold of 10 ms blocks), so a hold keeps its state, as a hysteresis does. The
+#: same rule sets the acceleration at which a loss while the speed changes is fully on
+PLAY_NOISE_SIGMAS = 5.0
+#: [1] both widths are at least this share of the largest block mean (a noise-free or
+#: quantised channel, whose block means may not differ at all in a hold, would otherwise
+#: switch on rounding)
+PLAY_MIN_SHARE = 1e-3
+#: [s] the running median the noise of the block means is measured about
+NOISE_MEDIAN_S = 1.0
+
+#: what each group of the generic basis stands for, as the remainder's statement reads it
+#: (the group's name is the key of ``unexplained.follows``)
+GROUP_READING = {
+    "operating point (losses)": "the operating point (a loss: odd in the direction of motion)",
+    "operating point (reading)": "the operating point (a reading error: even in the direction "
+                                 "of motion)",
+    "time": "time",
+    "acceleration": "the acceleration, growing with speed or load",
+    "temperature": "the temperature",
+    "load-change direction": "the direction of the last load change (a hysteresis of the "
+                             "torque reading, pre-sliding friction or lost motion; not in the "
+                             "library)",
+    "acceleration against the motion": "the speed's changes, against the motion (a loss "
+                                       "while the speed changes, growing with the "
+                                       "acceleration or at a slip level: a dynamic mesh load, "
+                                       "a slipping coupling, a controller's current limit; not "
+                                       "in the library)",
+}
+
+
+def play_state(x, r) -> np.ndarray:
+    """State s in [-1, 1] of a play (backlash) operator of half width ``r`` driven by ``x``:
+    the play's output p follows x only where x leaves [p - r, p + r] (Krasnosel'skii and
+    Pokrovskii 1989; the elementary hysteron of the Prandtl-Ishlinskii model), and
+    s = (x - p) / r: +1 after x rose by 2 r, -1 after it fell by 2 r; while x is held it keeps
+    its branch (a wander within the play moves s linearly, as the hysteron's output does, and
+    switches nothing). Starts at p = x[0] (s = 0: no direction known yet)."""
+    x = np.asarray(x, float)
+    if r <= 0 or not len(x):
+        return np.zeros(len(x))
+    out = np.empty(len(x))
+    p = float(x[0])
+    for i, xi in enumerate(x.tolist()):     # (a recurrence: a loop over the block means)
+        if xi > p + r:
+            p = xi - r
+        elif xi < p - r:
+            p = xi + r
+        out[i] = (xi - p) / r
+    return out
+
+
+def noise_width(x, dt_block, sigmas=PLAY_NOISE_SIGMAS, min_share=PLAY_MIN_SHARE) -> float:
+    """``sigmas`` robust standard deviations of the noise of the block means ``x`` (every
+    ``dt_block`` s) about their running median over ``NOISE_MEDIAN_S`` (a ramp or a step of
+    the plan stays in the median; a coloured noise's wander faster than a second does not),
+    and at least ``min_share`` of the largest |x|: a change of ``x`` its noise does not make
+    (the acceleration, in rad/s^2, at which a loss while the speed changes is taken as fully
+    on; with ``PLAY_RANGE_SHARE`` the load-change direction's play)."""
+    from scipy.ndimage import median_filter
+    x = np.asarray(x, float)
+    k = max(3, int(round(NOISE_MEDIAN_S / max(dt_block, 1e-12))) | 1)
+    sigma = robust_sigma(x - median_filter(x, k, mode="nearest")) if len(x) > 2 else 0.0
+    return max(sigmas * sigma, min_share * float(np.max(np.abs(x), initial=0.0)))
+
+
+def play_width(T, dt_block) -> float:
+    """[N*m] the half width of the load-change direction's play on the output torque's block
+    means ``T``: ``PLAY_RANGE_SHARE`` of their range (0.5 to 99.5 percentiles), at least
+    ``noise_width``."""
+    T = np.asarray(T, float)
+    span = float(np.subtract(*np.percentile(T, [99.5, 0.5]))) if len(T) else 0.0
+    return max(PLAY_RANGE_SHARE * span, noise_width(T, dt_block))
+
+
 def generic_basis(blocks: dict) -> tuple:
-    """Columns of the generic structure basis and their group names.
+    """Columns of the generic structure basis and their group names (``GROUP_READING``).
 
     Groups: ``operating point (losses)`` sign(w) P(u, v) with u = |w|/max|w|, v = |T_out|/max,
     total degree <= 3; ``operating point (reading)`` the even terms (u, v, u v, u^2, v^2);
-    ``time`` Legendre P1..P5 of time; ``acceleration`` u dw/dt and v dw/dt; the library's
-    exact signatures (a constant, dw/dt) are left out: the basis holds what the library does not;
-    ``temperature`` (T - T0) and its square, with a temperature column."""
+    ``time`` Legendre P1..P5 of time; ``acceleration`` u dw/dt and v dw/dt; ``temperature``
+    (T - T0) and its square, with a temperature column; ``load-change direction`` s and s v,
+    s the state of a play operator (``play_state``, half width ``play_width``) on the output
+    torque's block means: a hysteresis of the reading or a loss that remembers whether the
+    load last rose or fell; ``acceleration against the motion`` sign(w) |dw/dt|,
+    sign(w) sat(|dw/dt|) and sat(dw/dt) (sat: clipped to +-1 at ``noise_width`` of the
+    acceleration): a loss while the speed changes, growing with it or at a slip level, and
+    different speeding up and slowing down. The library's
+    exact signatures (a constant, dw/dt) are left out: the basis holds what the library does
+    not."""
     w, T = blocks["w_in"], blocks["T_out"]
     u = np.abs(w) / max(np.max(np.abs(w)), 1e-12)
     v = np.abs(T) / max(np.max(np.abs(T)), 1e-12)
@@ -97,6 +196,21 @@ def generic_basis(blocks: dict) -> tuple:
         dT = blocks["temperature"] - blocks["temperature"][0]
         cols += [dT, dT * dT]
         groups += ["temperature"] * 2
+    # the direction of the last load change: a play on the output torque (its state, and the
+    # state times the load: a hysteresis in per cent of the reading or of the load)
+    dtb = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    h = play_state(T, play_width(T, dtb))
+    cols += [h, h * v]
+    groups += ["load-change direction"] * 2
+    # a loss against the motion while the speed changes (inertia J dw/dt is linear in the
+    # acceleration; these are not): growing with |dw/dt| (even in it, odd in the direction of
+    # motion), at a level once the speed changes beyond its noise (a slip torque, a current
+    # limit: the acceleration saturated at ``noise_width``), and that level's part that
+    # differs between speeding up and slowing down (odd in the acceleration, saturated)
+    a0 = noise_width(a, dtb)
+    sat = np.clip(a / a0, -1.0, 1.0) if a0 > 0 else np.zeros(len(a))
+    cols += [s * np.abs(a), s * np.abs(sat), sat]
+    groups += ["acceleration against the motion"] * 3
     return np.stack(cols, -1), groups
 
 
