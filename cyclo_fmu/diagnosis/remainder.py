@@ -409,13 +409,58 @@ def orders_part(orders) -> str:
         f"{n} ({1e3 * a:.2f} mN*m)" for n, a in orders.items())
 
 
+def scan_part(lines, k_out, speed_range) -> str:
+    """The statement's part for the orders the order scan found ({name: (order, amplitude
+    [N*m])}); ``k_out`` the output shaft's order of the input; ``speed_range`` the input
+    speed's 5-95 % range over the scan's samples [rad/s]: where an order's frequency stays
+    within the line search's resolution over it (one speed held), a fixed frequency would
+    make the same line, which the recording cannot tell apart."""
+    out = []
+    for k, a in lines.values():
+        txt = (f"an order {k:.4g} of the input shaft ({k / k_out:.3g}x the output shaft), "
+               f"{1e3 * a / math.sqrt(2):.1f} mN*m RMS (amplitude {1e3 * a:.1f} mN*m)")
+        lo, hi = speed_range
+        if k * (hi - lo) / (2 * math.pi) < 2 * R.ORDER_EXCLUSION_HZ:
+            f = k * 0.5 * (lo + hi) / (2 * math.pi)
+            txt += (f" (the recording turns at one speed: a fixed frequency of {f:.2f} Hz "
+                    "would make the same line)")
+        out.append(txt)
+    return ("the residual holds " + ", ".join(out) + ", not in the library: a belt, a "
+            "coupling or a bearing turning with a shaft")
+
+
+def _scan(P, r, orders, k_out):
+    """The order scan (``order_scan.order_scan``) of the sample-level residual ``r``, the
+    listed ``orders`` left to the order analysis: ({name: (order, amplitude)}, {name: Check}
+    with the family's ``search``, the scan or None)."""
+    from .order_scan import order_scan
+    sc = order_scan(r, P.sig["theta_in"], P.sig["w_in"], P.dt, listed=list(orders.values()),
+                    min_amplitude=PEAK_MIN_AMPLITUDE_NM)
+    if sc is None:
+        return {}, {}, None
+    lines = {f"order {x.order:.4g} ({x.order / k_out:.3g}x output)": (x.order, x.amplitude)
+             for x in sc.lines}
+    checks = dict({"search": sc.search.to_json()},
+                  **{n: dict(x.check.to_json(), order=x.order, amplitude_Nm=x.amplitude,
+                             segment_turns=sc.turns, orders_searched=list(sc.order_range))
+                     for n, x in zip(lines, sc.lines)})
+    return lines, checks, sc
+
+
 def _lines(P, S, r, design, mode, rng):
-    """Shaft orders (judged against their off-order twins) and fixed-frequency peaks (against
-    twins of the residual's null spectrum) of the sample-level residual ``r``: (statement
-    parts, library orders left, other orders, peaks, {order: (amplitude, Check)}, the peaks'
-    claims for the JSON)."""
+    """Shaft orders (judged against their off-order twins), the order scan's lines at other
+    orders, and fixed-frequency peaks (against twins of the residual's null spectrum) of the
+    sample-level residual ``r``: (statement parts, library orders left, other orders, peaks,
+    {order: (amplitude, Check)}, the peaks' claims for the JSON, the scan's lines {name:
+    (order, amplitude)} and its claims).
+
+    A line at an order of a speed held throughout is a line at a fixed frequency too: it is
+    reported once, as the scan's order (the scan runs first and its orders are left out of
+    the line search like the listed ones), with the note that the recording cannot tell the
+    two apart."""
     orders = _orders(design, mode, P.sig)
     k = P.sig["order_roller"]
+    k_out = 1.0 / abs(speed_ratio(mode, design.z1))
     # the orders the library's mesh_ripple fits (model_core.effects.RIPPLE_ORDERS): 1x, 2x,
     # the roller pass, 1x and 2x of the driven shaft
     lib = ("1x", "2x", f"order {k:g} (roller pass)") + tuple(
@@ -429,15 +474,19 @@ def _lines(P, S, r, design, mode, rng):
     parts = []
     if outside or inside:
         parts.append(orders_part({**inside, **outside}))
+    scanned, scan_claims, sc = _scan(P, r, orders, k_out)
+    if scanned:
+        parts.append(scan_part(scanned, k_out, sc.speed_range))
     peaks, search, pc = R.peak_claims(r, P.dt, min_amplitude=PEAK_MIN_AMPLITUDE_NM,
-                                      speed=P.sig["w_in"], orders=list(orders.values()))
+                                      speed=P.sig["w_in"], orders=list(orders.values())
+                                      + [x for x, _ in scanned.values()])
     if peaks:
         parts.append("the residual spectrum peaks at " + ", ".join(
             f"{f:.2f} Hz ({1e3 * a:.2f} mN*m)" for f, a in peaks)
             + " (narrow lines at fixed frequencies, beyond its twins)")
     claims = {} if search is None else dict(
         {"search": search.to_json()}, **{f"{f:.2f} Hz": c.to_json() for f, c in pc.items()})
-    return parts, inside, outside, peaks, oc, claims
+    return parts, inside, outside, peaks, oc, claims, scanned, scan_claims, sc
 
 
 def remainder(P, sel, J, rec, design, mode) -> Remainder:
@@ -461,7 +510,8 @@ def remainder(P, sel, J, rec, design, mode) -> Remainder:
     parts, follows = _smooth_part(P, prob, S, with_g, present, rms, dominant, sel.min_expl)
     smooth = present
     r_raw, r, _ = _sample_residual(P, S, with_g, rec)
-    lparts, inside, outside, peaks, oc, claims["peaks"] = _lines(P, S, r, design, mode, rng)
+    lparts, inside, outside, peaks, oc, claims["peaks"], scanned, claims["order_scan"], sc = \
+        _lines(P, S, r, design, mode, rng)
     claims["orders"] = {n: c.to_json() for n, (a, c) in oc.items() if c is not None}
     present = present or bool(lparts)
     parts += lparts
@@ -490,18 +540,22 @@ def remainder(P, sel, J, rec, design, mode) -> Remainder:
                      "but is not named: the unexplained mismatch could hold part of it")
     statement = ("; ".join(parts) + ".") if present else \
         "nothing the model and the selected effects leave is structured beyond the noise."
-    lines = list({**inside, **outside}.values()) + [a for _, a in peaks]
+    lines = list({**inside, **outside}.values()) + [a for _, a in peaks] + [
+        a for _, a in scanned.values()]
     total = math.sqrt((rms if smooth else 0.0) ** 2 + sum(a * a / 2 for a in lines)
                       + burst_rms ** 2)
     unexplained = {
         "present": present, "rms_Nm": total if present else 0.0, "statement": statement,
-        "follows": follows, "orders": outside, "library_orders_left": inside,
+        "follows": follows, "orders": {**outside, **{n: a for n, (_, a) in scanned.items()}},
+        "library_orders_left": inside,
         "peaks_Hz_Nm": peaks,
         "could_include": list(withdrawn) + set_aside + (
             ["friction_miscalibrated"] if doubted else []),
         "bursts": b, "false_alarm_rate": FALSE_ALARM, "n_twins": tw.n, "claims": claims,
         "proposed": None}
     amps = {n: (a, c) for n, (a, c) in oc.items()}
+    for x, n in zip(sc.lines if sc else [], scanned):
+        amps[n] = (x.amplitude, x.check)
     return Remainder(S=S, with_g=with_g, unexplained=unexplained, withdrawn=withdrawn,
                      dominant=[(e, fit_rms(prob, prob.fit(tuple(x for x in S.terms
                                                                    if x.effect != e)), S),

@@ -1,0 +1,207 @@
+"""The order scan: lines of the residual at any order of the input shaft, in the angle domain.
+
+The remainder's order analysis (``remainder.order_claims``) judges a fixed list of orders (1x,
+2x, 3x of the input, the roller pass and its 2x, 1x and 2x of the output shaft), and the
+line search (``residual.peak_claims``) finds lines at fixed frequencies. A part turning with
+a shaft at any other ratio (a belt, a coupling, a bearing's cage or rolling elements, a
+motor-side gear stage, a pump) puts a line at its own order, and wherever the speed varies
+its frequency smears over the time spectrum: neither finds it.
+
+Here the sample-level residual is resampled at uniform steps of the angle the input shaft
+has travelled (|angle|: a reversal keeps an order an order) over the moving stretches,
+cut into segments of ``SCAN_TURNS`` turns and judged exactly as the fixed-frequency lines are
+(``residual.judged_spectrum``, ``residual.judge_lines``: Welch in angle, each segment at its
+own level, the null spectrum from a running median and flanks, Gaussian twins of it, a
+Gumbel tail, the family-wise rate ``twins.FALSE_ALARM`` over every order searched). The
+abscissa is the order: cycles per turn of the input shaft.
+
+Resampling: each angle sample is the mean of the residual over its step of angle (the
+difference of the residual's cumulative integral at the step's two ends, over the time
+between them). Where a step spans several time samples (below the top speed) this box mean is
+the anti-aliasing filter of the decimation; an order k is attenuated by the box by
+sinc(k dphi / 2) (dphi the step), which the amplitude is divided by.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import residual as R
+from .twins import FALSE_ALARM, N_TWINS, Check, gumbel_tail
+
+#: [turns] length of a scan segment: an order resolution of 1/128 (the Hann main lobe +-2/128),
+#: fine enough to keep an order of the output shaft apart from its neighbours (1/ratio apart,
+#: 0.07 at a ratio of 14: 9 bins); a stretch of motion shorter than a segment is not used
+SCAN_TURNS = 128
+#: [turns] shortest segment where the recording holds fewer turns than ``SCAN_MIN_SEGMENTS``
+#: segments of ``SCAN_TURNS`` (the length halved down to this): a coarser resolution rather
+#: than no scan
+SCAN_MIN_TURNS = 32
+#: [1] Welch needs this many segments for a mean spectrum whose null level is estimated from
+#: the recording itself (as the line search requires eight segments)
+SCAN_MIN_SEGMENTS = 8
+#: [cycles per segment] the lowest order searched repeats this many times within a segment
+#: (1/16 of an input turn's order at 128 turns): below it a line is hardly narrower than the
+#: slow changes of the residual with the operating point, which the generic basis fits on
+#: block means (the line search's lower bound, 2.5 Hz in 2 s segments, is 5 cycles)
+SCAN_MIN_CYCLES = 8
+#: [samples per turn] the most angle samples per input turn: orders up to
+#: ``ORDER_NYQUIST_SHARE`` of it (51 at 128) are searched; a bearing's or a belt's orders
+#: are below it, a gear mesh of a motor-side stage usually too. Bounds the scan's cost on a
+#: slow shaft sampled fast
+SCAN_MAX_PER_TURN = 128
+#: [bins] the null level's running median (five main lobes) and each segment's level band:
+#: the bin counts of the line search (10 Hz and 64 Hz over its 0.5 Hz bins)
+SCAN_LEVEL_BINS = 21
+SCAN_BAND_BINS = 128
+#: [bins] a scan bin this close to a listed order (``remainder._orders``) is left to the
+#: order analysis: the Hann main lobe (+-2 bins) and one bin beside it
+SCAN_EXCLUSION_BINS = 3
+
+
+@dataclass
+class ScanLine:
+    """A line of the scan: its order of the input shaft, amplitude [N*m] and ``Check``."""
+    order: float
+    amplitude: float
+    check: Check
+
+
+@dataclass
+class Scan:
+    """What the scan did: the lines that stand (largest first), the family's ``search`` Check,
+    the segment length [turns], the orders searched, and the input speed's 5-95 % range
+    [rad/s] over the samples used (one held speed: an order and a fixed frequency make the
+    same line)."""
+    lines: list
+    search: Check
+    turns: int
+    order_range: tuple
+    speed_range: tuple
+    n_segments: int
+    extra: dict = field(default_factory=dict)
+
+
+def _runs(moving):
+    """[(start, stop)] of the runs of True in ``moving``."""
+    d = np.diff(np.concatenate([[0], moving.view(np.int8), [0]]))
+    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
+
+
+def _plan(s, runs, per_turn):
+    """(turns per segment, the runs long enough for one) with at least ``SCAN_MIN_SEGMENTS``
+    half-overlapping segments, the longest from ``SCAN_TURNS`` halving down to
+    ``SCAN_MIN_TURNS``; (0, []) where none."""
+    turns = SCAN_TURNS
+    lengths = [(a, b, (s[b - 1] - s[a]) / (2 * math.pi)) for a, b in runs]
+    while turns >= SCAN_MIN_TURNS:
+        used = [(a, b) for a, b, L in lengths if L >= turns]
+        nper = turns * per_turn
+        n_seg = sum((int(L * per_turn) - nper) // (nper // 2) + 1
+                    for a, b, L in lengths if L >= turns)
+        if n_seg >= SCAN_MIN_SEGMENTS:
+            return turns, used
+        turns //= 2
+    return 0, []
+
+
+def angle_resample(r, s, a, b, step):
+    """The mean of ``r`` over uniform steps ``step`` [rad] of the travelled angle ``s`` (rad,
+    increasing) within the samples a..b-1: the difference of the residual's cumulative
+    (trapezoidal) integral over sample index, interpolated at the steps' ends, over the
+    samples between them."""
+    ss = s[a:b]
+    g = ss[0] + step * np.arange(int((ss[-1] - ss[0]) / step) + 1)
+    x = np.interp(g, ss, np.arange(b - a, dtype=float))      # fractional sample index
+    del g
+    rr = r[a:b]
+    C = np.empty(b - a)
+    C[0] = 0.0
+    np.cumsum(0.5 * (rr[1:] + rr[:-1]), out=C[1:])
+    i = np.minimum(x.astype(np.int64), b - a - 2)
+    fr = x - i
+    Cx = C[i] * (1 - fr) + C[i + 1] * fr
+    # (the residual's own slope within a sample: the trapezoid of a linear interpolation;
+    # the quadratic term of its integral is below the interpolation's own error)
+    return np.diff(Cx) / np.maximum(np.diff(x), 1e-12)
+
+
+def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, rng=None,
+               min_amplitude=1e-3):
+    """Lines of the residual ``r`` (sample level, N*m) at orders of the input shaft (angle
+    ``theta`` [rad], speed ``w`` [rad/s], sampling step ``dt`` [s]) that stand against twins
+    of its angle spectrum at ``alpha`` (family-wise over the orders searched), the orders
+    within ``SCAN_EXCLUSION_BINS`` of ``listed`` left out. Returns a ``Scan`` or None where
+    the recording holds too few turns in motion.
+
+    Samples used: moving (|w| above ``residual.MOVING_SHARE`` of its top), in runs of at least
+    one segment's turns. Orders searched: from ``SCAN_MIN_CYCLES`` per segment up to
+    ``residual.ORDER_NYQUIST_SHARE`` of the sampling rate at the top speed of the samples used
+    (capped at the band at the top speed: at any lower speed the same order is further below
+    the Nyquist frequency, so no order searched aliases anywhere) and of the angle sampling
+    (``SCAN_MAX_PER_TURN``)."""
+    r = np.asarray(r, float)
+    n = min(len(r), len(theta), len(w))
+    aw = np.abs(np.asarray(w[:n], float))
+    top = float(np.max(aw, initial=0.0))
+    if n < 16 or not np.isfinite(top) or top <= 0:
+        return None
+    moving = aw > R.MOVING_SHARE * top
+    runs = [(a, b) for a, b in _runs(moving) if b - a >= 16]
+    if not runs:
+        return None
+    top = max(float(np.max(aw[a:b])) for a, b in runs)
+    fs = 1.0 / dt
+    # angle samples per turn: one per time sample at the top speed (no finer: the box mean
+    # would only interpolate), even, capped
+    per_turn = int(min(SCAN_MAX_PER_TURN, 2 * math.ceil(math.pi * fs / top)))
+    k_max = R.ORDER_NYQUIST_SHARE * min(2 * math.pi * fs / top, per_turn)
+    th = np.asarray(theta[:n], float)
+    s = np.empty(n)
+    s[0] = 0.0
+    np.cumsum(np.abs(np.diff(th)), out=s[1:])
+    turns, used = _plan(s, runs, per_turn)
+    if not turns:
+        return None
+    nper = turns * per_turn
+    step = 2 * math.pi / per_turn
+    spectra, pairs, speeds = [], 0, []
+    for a, b in used:
+        y = angle_resample(r, s, a, b, step)
+        if y.size < nper:
+            continue
+        f, S = R.hann_spectrogram(y, per_turn, nper)
+        spectra.append(S)
+        pairs += S.shape[1] - 1
+        speeds.append(aw[a:b])
+    S = np.concatenate(spectra, 1) if len(spectra) > 1 else spectra[0]
+    del spectra
+    sp = R.judged_spectrum(f, S, None, SCAN_LEVEL_BINS, SCAN_BAND_BINS, pairs)
+    del S
+    df = f[1] - f[0]
+    search = (f >= SCAN_MIN_CYCLES / turns) & (f <= k_max)
+    for k in listed:
+        search &= np.abs(f - abs(k)) > SCAN_EXCLUSION_BINS * df
+    rng = rng or np.random.default_rng(20261129)
+    judged = R.judge_lines(sp, search, alpha, n_twins, rng)
+    if judged is None:
+        return None
+    lines, stat, thr, twins, Lp = judged
+    out = []
+    for i, zi in lines.items():
+        e = np.maximum(sp.P[i - 1:i + 2] - Lp[i], 0.0)
+        k = float(np.dot(e, f[i - 1:i + 2]) / e.sum()) if e.sum() > 0 else float(f[i])
+        x = k * step / 2
+        amp = R.line_amplitude(sp, Lp, i) / (math.sin(x) / x)
+        if amp >= min_amplitude:
+            out.append(ScanLine(k, amp, Check(zi, thr, gumbel_tail(twins, zi, alpha)[1],
+                                              float(alpha), int(n_twins), True)))
+    sw = np.concatenate(speeds)
+    lo, hi = np.quantile(sw, [0.05, 0.95])
+    return Scan(sorted(out, key=lambda x: -x.amplitude),
+                Check(stat, thr, gumbel_tail(twins, stat, alpha)[1], float(alpha),
+                      int(n_twins), bool(stat > thr)),
+                turns, (float(SCAN_MIN_CYCLES / turns), float(k_max)), (float(lo), float(hi)),
+                int(sp.S.shape[1]), {"per_turn": per_turn})
