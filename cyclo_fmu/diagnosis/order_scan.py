@@ -16,10 +16,13 @@ Gumbel tail, the family-wise rate ``twins.FALSE_ALARM`` over every order searche
 abscissa is the order: cycles per turn of the input shaft.
 
 Resampling: each angle sample is the mean of the residual over its step of angle (the
-difference of the residual's cumulative integral at the step's two ends, over the time
-between them). Where a step spans several time samples (below the top speed) this box mean is
-the anti-aliasing filter of the decimation; an order k is attenuated by the box by
-sinc(k dphi / 2) (dphi the step), which the amplitude is divided by.
+difference of the residual's cumulative trapezoidal integral, interpolated linearly between
+samples, at the step's two ends, over the time between them). Where a step spans several time
+samples (below the top speed) this box mean is the anti-aliasing filter of the decimation. It
+attenuates an order (the box in angle, and the interpolation between time samples where the
+order's frequency approaches the Nyquist frequency): a line's amplitude is divided by the
+resampling's own gain at its order, measured by passing sin and cos of that order of the
+shaft angle through the same resampling (``_gain``).
 """
 from __future__ import annotations
 
@@ -128,6 +131,23 @@ def angle_resample(r, s, a, b, step):
     return np.diff(Cx) / np.maximum(np.diff(x), 1e-12)
 
 
+def _gain(k, th, s, used, step):
+    """The resampling's gain at order ``k``: the complex amplitude of sin + i cos of k times
+    the shaft angle ``th`` after ``angle_resample`` over the runs ``used``, against the same
+    at the angle samples' centres (the angle there interpolated from the travelled angle
+    ``s``), as a share."""
+    num, den = 0.0, 0.0
+    for a, b in used:
+        y = angle_resample(np.sin(k * th[a:b]), s[a:b] - s[a], 0, b - a, step) + 1j * \
+            angle_resample(np.cos(k * th[a:b]), s[a:b] - s[a], 0, b - a, step)
+        mid = step * (np.arange(y.size) + 0.5)
+        ang = k * np.interp(mid, s[a:b] - s[a], th[a:b])
+        z = np.sin(ang) + 1j * np.cos(ang)
+        num += np.vdot(z, y)
+        den += float(np.vdot(z, z).real)
+    return max(abs(num) / max(den, 1e-300), 1e-3)
+
+
 def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, rng=None,
                min_amplitude=1e-3):
     """Lines of the residual ``r`` (sample level, N*m) at orders of the input shaft (angle
@@ -193,8 +213,7 @@ def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, r
     for i, zi in lines.items():
         e = np.maximum(sp.P[i - 1:i + 2] - Lp[i], 0.0)
         k = float(np.dot(e, f[i - 1:i + 2]) / e.sum()) if e.sum() > 0 else float(f[i])
-        x = k * step / 2
-        amp = R.line_amplitude(sp, Lp, i) / (math.sin(x) / x)
+        amp = R.line_amplitude(sp, Lp, i) / _gain(k, th, s, used, step)
         if amp >= min_amplitude:
             out.append(ScanLine(k, amp, Check(zi, thr, gumbel_tail(twins, zi, alpha)[1],
                                               float(alpha), int(n_twins), True)))
