@@ -89,6 +89,39 @@ def test_a_fixed_frequency_is_no_order_where_the_speed_varies():
     assert order_scan(r, th, w, 1 / FS, listed=LISTED).lines == []
 
 
+def _stairs():
+    """Five held speeds, 20 s each (60-300 rad/s), two minutes at 1 kHz (the first held again)."""
+    t = np.arange(120000) / FS
+    w = np.array([60.0, 120, 180, 240, 300])[(t // 20).astype(int) % 5]
+    return t, w, np.cumsum(w) / FS
+
+
+@pytest.mark.parametrize("kind", ["fixed 50 Hz", "order 0.37"])
+def test_a_line_in_both_domains_is_reported_once_in_its_own(kind):
+    """Over held speeds a fixed frequency is an order at each hold, and an order a fixed
+    frequency at each hold: 50 Hz pick-up makes lines at orders 5.2, 2.6, 1.7, 1.3 and 1.05
+    of the scan (one per hold), an order 0.37 lines at 3.5-17.7 Hz in the time spectrum.
+    Judged without the other's segments, only the line's own domain stands: 50 Hz once, as
+    a fixed frequency (no order), and the order once, as an order (no fixed line)."""
+    from types import SimpleNamespace
+    from cyclo_fmu.diagnosis import remainder as RM
+    from cyclo_fmu.diagnosis.residual import peak_claims
+    t, w, th = _stairs()
+    r = _noise("white", t.size, np.random.default_rng(3))
+    r += 0.006 * (np.sin(2 * np.pi * 50 * t) if kind == "fixed 50 Hz" else np.sin(0.37 * th))
+    P = SimpleNamespace(dt=1 / FS, sig={"w_in": w, "theta_in": th})
+    peaks, _, pc = peak_claims(r, 1 / FS, speed=w, orders=list(LISTED))
+    scanned, claims, sc = RM._scan(P, r, dict(zip("abcde", LISTED)), 1 / 14)
+    assert scanned and peaks            # each domain alone sees a line
+    scanned, peaks, pc, amb = RM.one_domain(P, r, sc, scanned, claims, peaks, pc,
+                                            list(LISTED))
+    if kind == "fixed 50 Hz":
+        assert scanned == {} and [f for f, _ in peaks] == [50.0]
+    else:
+        assert peaks == [] and [round(k, 2) for k, _ in scanned.values()] == [0.37]
+    assert amb == {}
+
+
 def test_noise_alone_keeps_the_stated_family_wise_rate():
     """60 residuals of noise alone (white, AR(1) with a = 0.95, flicker 1/f; 20 of each) over
     the drive cycle: a line is claimed in a share compatible with the stated 1 % (three or

@@ -85,6 +85,39 @@ class Scan:
     speed_range: tuple
     n_segments: int
     extra: dict = field(default_factory=dict)
+    #: per segment the lowest and highest input speed [rad/s] (n_segments x 2)
+    seg_speed: np.ndarray = field(default=None, repr=False)
+    #: what a line is judged again with (``stands_without``): the spectrum, the bins searched
+    state: dict = field(default_factory=dict, repr=False)
+
+    def reaches(self, k, f_hz):
+        """Segments in which order ``k`` comes within ``residual.ORDER_EXCLUSION_HZ`` of the
+        frequency ``f_hz`` (bool per segment)."""
+        lo, hi = k * self.seg_speed.T / (2 * math.pi)
+        return (lo - R.ORDER_EXCLUSION_HZ <= f_hz) & (f_hz <= hi + R.ORDER_EXCLUSION_HZ)
+
+    def stands_without(self, k, freqs):
+        """Does the line at order ``k`` stand on the segments in which it comes near none of
+        the fixed frequencies ``freqs`` [Hz] (judged as the scan judged it, the same family
+        of orders and rate)? False where no segment is left."""
+        st = self.state
+        f = st["sp"].f
+        near = np.zeros(self.seg_speed.shape[0], bool)
+        for fz in freqs:
+            near |= self.reaches(k, fz)
+        if near.all():
+            return False
+        M = np.ones(st["sp"].S.shape)
+        band = np.abs(f - k) <= (SCAN_EXCLUSION_BINS + R.PEAK_FLANK_BINS + 3) * (f[1] - f[0])
+        M[np.ix_(band, near)] = 0.0
+        sp = R.judged_spectrum(f, st["sp"].S, M, SCAN_LEVEL_BINS, SCAN_BAND_BINS,
+                               st["pairs"])
+        judged = R.judge_lines(sp, st["search"], st["alpha"], st["n_twins"],
+                               np.random.default_rng(20261130))
+        if judged is None:
+            return False
+        df = f[1] - f[0]
+        return any(abs(f[i] - k) <= 2 * df for i in judged[0])
 
 
 def _runs(moving):
@@ -110,11 +143,12 @@ def _plan(s, runs, per_turn):
     return 0, []
 
 
-def angle_resample(r, s, a, b, step):
+def angle_resample(r, s, a, b, step, index=False):
     """The mean of ``r`` over uniform steps ``step`` [rad] of the travelled angle ``s`` (rad,
     increasing) within the samples a..b-1: the difference of the residual's cumulative
     (trapezoidal) integral over sample index, interpolated at the steps' ends, over the
-    samples between them."""
+    samples between them. With ``index``, also the steps' ends as fractional sample indices
+    (from a)."""
     ss = s[a:b]
     g = ss[0] + step * np.arange(int((ss[-1] - ss[0]) / step) + 1)
     x = np.interp(g, ss, np.arange(b - a, dtype=float))      # fractional sample index
@@ -126,9 +160,8 @@ def angle_resample(r, s, a, b, step):
     i = np.minimum(x.astype(np.int64), b - a - 2)
     fr = x - i
     Cx = C[i] * (1 - fr) + C[i + 1] * fr
-    # (the residual's own slope within a sample: the trapezoid of a linear interpolation;
-    # the quadratic term of its integral is below the interpolation's own error)
-    return np.diff(Cx) / np.maximum(np.diff(x), 1e-12)
+    y = np.diff(Cx) / np.maximum(np.diff(x), 1e-12)
+    return (y, x) if index else y
 
 
 def _gain(k, th, s, used, step):
@@ -187,15 +220,19 @@ def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, r
         return None
     nper = turns * per_turn
     step = 2 * math.pi / per_turn
-    spectra, pairs, speeds = [], 0, []
+    spectra, pairs, speeds, seg_speed = [], 0, [], []
     for a, b in used:
-        y = angle_resample(r, s, a, b, step)
+        y, x = angle_resample(r, s, a, b, step, index=True)
         if y.size < nper:
             continue
         f, S = R.hann_spectrogram(y, per_turn, nper)
         spectra.append(S)
         pairs += S.shape[1] - 1
         speeds.append(aw[a:b])
+        hop = nper - nper // 2
+        for j in range(S.shape[1]):      # each segment's speed range
+            i0, i1 = int(x[j * hop]), int(math.ceil(x[j * hop + nper])) + 1
+            seg_speed.append((aw[a + i0:a + i1].min(), aw[a + i0:a + i1].max()))
     S = np.concatenate(spectra, 1) if len(spectra) > 1 else spectra[0]
     del spectra
     sp = R.judged_spectrum(f, S, None, SCAN_LEVEL_BINS, SCAN_BAND_BINS, pairs)
@@ -223,4 +260,6 @@ def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, r
                 Check(stat, thr, gumbel_tail(twins, stat, alpha)[1], float(alpha),
                       int(n_twins), bool(stat > thr)),
                 turns, (float(SCAN_MIN_CYCLES / turns), float(k_max)), (float(lo), float(hi)),
-                int(sp.S.shape[1]), {"per_turn": per_turn})
+                int(sp.S.shape[1]), {"per_turn": per_turn}, np.array(seg_speed),
+                {"sp": sp, "search": search, "alpha": alpha, "n_twins": n_twins,
+                 "pairs": pairs})
