@@ -44,8 +44,8 @@ def test_a_line_at_an_unlisted_order_is_found_at_its_order_and_amplitude(plan, k
     varying 10-290 rad/s (drive cycle) or through zero (four quadrants: the order's phase runs
     back with the angle, an order of |angle| still). One line, at k within half a bin
     (1/256 of an order), its amplitude within 15 %. Order 7.7 is near the top searched at
-    the top speed (8.7), where the box mean of each angle step attenuates it to
-    sinc(7.7 pi / 22) = 0.81: the amplitude is corrected for it."""
+    the top speed (8.7), where the resampling's box mean and interpolation keep about half
+    of it: the amplitude is measured at sample level."""
     w, th = _plan(plan)
     rng = np.random.default_rng(7)
     r = _noise("white", w.size, rng) + 0.006 * np.sin(k * th + 0.3)
@@ -135,6 +135,30 @@ def test_noise_alone_keeps_the_stated_family_wise_rate():
         sc = order_scan(r, th, w, 1 / FS, listed=LISTED, min_amplitude=0.0, rng=rng)
         hits += bool(sc.lines)
     assert hits <= 2, hits
+
+
+@pytest.mark.parametrize("plan", ["drive cycle", "one speed"])
+def test_an_order_above_the_angle_sampling_is_found_at_its_own_order(plan):
+    """22 angle samples per turn (one per time sample at the top speed, 290-300 rad/s, at
+    1 kHz): an order 14.37 folds in the angle domain to 22 - 14.37 = 7.63 where the speed is
+    low enough for the time samples to hold it, and the box mean keeps a share of it there.
+    It is reported at 14.37, its amplitude (20 mN*m) measured at sample level. A listed order
+    14 at one held speed (668 Hz folded to 332 Hz by the sampling, and its image at order 8
+    of the interpolation) gives no line."""
+    if plan == "one speed":
+        t = np.arange(120000) / FS
+        w = np.full(t.size, 300.0)
+        th = np.cumsum(w) / FS
+    else:
+        w, th = _plan(plan)
+    noise = _noise("white", w.size, np.random.default_rng(3))
+    sc = order_scan(noise + 0.02 * np.sin(14.0 * th), th, w, 1 / FS, listed=LISTED + (14.0,))
+    assert sc.lines == []
+    if plan == "one speed":
+        return          # (at 300 rad/s 14.37 is above the Nyquist frequency: not resolvable)
+    sc = order_scan(noise + 0.02 * np.sin(14.37 * th), th, w, 1 / FS, listed=LISTED + (14.0,))
+    assert [round(x.order, 2) for x in sc.lines] == [14.37]
+    assert sc.lines[0].amplitude == pytest.approx(0.02, rel=0.05)
 
 
 def test_too_few_turns_give_no_scan():

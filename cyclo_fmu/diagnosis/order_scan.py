@@ -18,11 +18,13 @@ abscissa is the order: cycles per turn of the input shaft.
 Resampling: each angle sample is the mean of the residual over its step of angle (the
 difference of the residual's cumulative trapezoidal integral, interpolated linearly between
 samples, at the step's two ends, over the time between them). Where a step spans several time
-samples (below the top speed) this box mean is the anti-aliasing filter of the decimation. It
-attenuates an order (the box in angle, and the interpolation between time samples where the
-order's frequency approaches the Nyquist frequency): a line's amplitude is divided by the
-resampling's own gain at its order, measured by passing sin and cos of that order of the
-shaft angle through the same resampling (``_gain``).
+samples (below the top speed) this box mean is the decimation's anti-aliasing filter; it
+attenuates but does not remove what lies above the angle sampling's Nyquist order, and the
+interpolation between time samples makes an image of a line near the Nyquist frequency. So
+the scan only detects: a line's order and amplitude are measured at sample level, where
+nothing folds (``_unfold``, ``chunk_amplitude``: least squares on sin/cos of the shaft angle
+in chunks of a segment's turns, at the order seen and at its images), and an image, which has
+no amplitude at its own order there, is not reported.
 """
 from __future__ import annotations
 
@@ -66,10 +68,13 @@ SCAN_EXCLUSION_BINS = 3
 
 @dataclass
 class ScanLine:
-    """A line of the scan: its order of the input shaft, amplitude [N*m] and ``Check``."""
+    """A line of the scan: its order of the input shaft, amplitude [N*m] and ``Check``;
+    ``seen_at`` the order of the scan's bin (the order itself, or its image where an order
+    above the angle sampling's Nyquist order folded into the band, ``_unfold``)."""
     order: float
     amplitude: float
     check: Check
+    seen_at: float = None
 
 
 @dataclass
@@ -96,10 +101,11 @@ class Scan:
         lo, hi = k * self.seg_speed.T / (2 * math.pi)
         return (lo - R.ORDER_EXCLUSION_HZ <= f_hz) & (f_hz <= hi + R.ORDER_EXCLUSION_HZ)
 
-    def stands_without(self, k, freqs):
-        """Does the line at order ``k`` stand on the segments in which it comes near none of
-        the fixed frequencies ``freqs`` [Hz] (judged as the scan judged it, the same family
-        of orders and rate)? False where no segment is left."""
+    def stands_without(self, k, freqs, seen_at=None):
+        """Does the line at order ``k`` (seen in the scan at ``seen_at``, default k) stand on
+        the segments in which it comes near none of the fixed frequencies ``freqs`` [Hz]
+        (judged as the scan judged it, the same family of orders and rate)? False where no
+        segment is left."""
         st = self.state
         f = st["sp"].f
         near = np.zeros(self.seg_speed.shape[0], bool)
@@ -107,8 +113,9 @@ class Scan:
             near |= self.reaches(k, fz)
         if near.all():
             return False
-        M = np.ones(st["sp"].S.shape)
-        band = np.abs(f - k) <= (SCAN_EXCLUSION_BINS + R.PEAK_FLANK_BINS + 3) * (f[1] - f[0])
+        M = np.ones(st["sp"].S.shape) if st["M"] is None else st["M"].copy()
+        seen = k if seen_at is None else seen_at
+        band = np.abs(f - seen) <= (SCAN_EXCLUSION_BINS + R.PEAK_FLANK_BINS + 3) * (f[1] - f[0])
         M[np.ix_(band, near)] = 0.0
         sp = R.judged_spectrum(f, st["sp"].S, M, SCAN_LEVEL_BINS, SCAN_BAND_BINS,
                                st["pairs"])
@@ -117,7 +124,7 @@ class Scan:
         if judged is None:
             return False
         df = f[1] - f[0]
-        return any(abs(f[i] - k) <= 2 * df for i in judged[0])
+        return any(abs(f[i] - seen) <= 2 * df for i in judged[0])
 
 
 def _runs(moving):
@@ -164,21 +171,99 @@ def angle_resample(r, s, a, b, step, index=False):
     return (y, x) if index else y
 
 
-def _gain(k, th, s, used, step):
-    """The resampling's gain at order ``k``: the complex amplitude of sin + i cos of k times
-    the shaft angle ``th`` after ``angle_resample`` over the runs ``used``, against the same
-    at the angle samples' centres (the angle there interpolated from the travelled angle
-    ``s``), as a share."""
-    num, den = 0.0, 0.0
-    for a, b in used:
-        y = angle_resample(np.sin(k * th[a:b]), s[a:b] - s[a], 0, b - a, step) + 1j * \
-            angle_resample(np.cos(k * th[a:b]), s[a:b] - s[a], 0, b - a, step)
-        mid = step * (np.arange(y.size) + 0.5)
-        ang = k * np.interp(mid, s[a:b] - s[a], th[a:b])
-        z = np.sin(ang) + 1j * np.cos(ang)
-        num += np.vdot(z, y)
-        den += float(np.vdot(z, z).real)
-    return max(abs(num) / max(den, 1e-300), 1e-3)
+def _folded_listed(f, seg_speed, listed, fs):
+    """Which scan bins (orders ``f``) each segment may use (bins x segments, 1 or 0; None
+    where all): a listed order above the Nyquist frequency in a segment appears there folded
+    about it, at an order that moves with the speed (``residual.folded``), and the bins it
+    reaches at the segment's speeds (+-``residual.ORDER_EXCLUSION_HZ`` and
+    ``SCAN_EXCLUSION_BINS``) are not averaged over that segment, as the line search leaves
+    the folded orders out of its segments."""
+    fn = fs / 2
+    pad = R.ORDER_EXCLUSION_HZ
+    df = f[1] - f[0]
+    M = None
+    for j, (wl, wh) in enumerate(seg_speed):
+        for kl in np.abs(np.asarray(listed, float)):
+            a, b = kl * wl / (2 * math.pi), kl * wh / (2 * math.pi)
+            if b < fn:
+                continue
+            # its Nyquist zones above the first (there it is itself, excluded as listed)
+            for z in range(max(int(a // fn), 1), int(b // fn) + 1):
+                lo, hi = max(a, z * fn) - z * fn, min(b, (z + 1) * fn) - z * fn
+                if z % 2:
+                    lo, hi = fn - hi, fn - lo
+                o_lo = max(lo - pad, 0.0) * 2 * math.pi / max(wh, 1e-12)
+                o_hi = (hi + pad) * 2 * math.pi / max(wl, 1e-12)
+                cut = (f >= o_lo - SCAN_EXCLUSION_BINS * df) & \
+                    (f <= o_hi + SCAN_EXCLUSION_BINS * df)
+                if cut.any():
+                    if M is None:
+                        M = np.ones((f.size, seg_speed.shape[0]))
+                    M[cut, j] = 0.0
+    return M
+
+
+#: the images of an order searched: orders m * per_turn +- k for m up to this many
+UNFOLD_IMAGES = 2
+
+
+def chunk_amplitude(r, th, s, moving, dt, k, turns):
+    """Amplitude [N*m] of order ``k`` in the residual ``r`` at sample level: least squares on
+    (1, sin k th, cos k th) in chunks of ``turns`` turns of the travelled angle ``s`` (each
+    chunk its own phase and mean, as each scan segment has them), over the samples
+    ``moving[0]`` whose speed ``moving[1]`` keeps the order below
+    ``residual.ORDER_NYQUIST_SHARE`` of the sampling rate; the chunks' squared amplitudes
+    less their noise bias (2 sigma^2 / n), weighted by their samples. No angle resampling, so
+    nothing folds. None where fewer than 100 samples."""
+    w_ok = R.ORDER_NYQUIST_SHARE * 2 * math.pi / (dt * k)      # the highest speed [rad/s]
+    idx = np.flatnonzero(moving[0] & (moving[1] < w_ok))
+    if idx.size < 100:
+        return None
+    _, c = np.unique((s[idx] // (2 * math.pi * turns)).astype(np.int64), return_inverse=True)
+    ang = k * th[idx]
+    sn, cs, rr = np.sin(ang), np.cos(ang), r[idx]
+    del ang
+
+    def tot(x):
+        return np.bincount(c, x)
+    n = np.bincount(c).astype(float)
+    G = np.empty((n.size, 3, 3))
+    G[:, 0, 0] = n
+    G[:, 0, 1] = G[:, 1, 0] = tot(sn)
+    G[:, 0, 2] = G[:, 2, 0] = tot(cs)
+    G[:, 1, 1] = tot(sn * sn)
+    G[:, 2, 2] = tot(cs * cs)
+    G[:, 1, 2] = G[:, 2, 1] = tot(sn * cs)
+    b = np.stack([tot(rr), tot(rr * sn), tot(rr * cs)], -1)
+    ok = n >= 16
+    if not ok.any():
+        return None
+    G, b, n = G[ok], b[ok], n[ok]
+    coef = np.linalg.solve(G + 1e-12 * np.eye(3), b[..., None])[..., 0]
+    rss = np.maximum(tot(rr * rr)[ok] - np.einsum("ij,ij->i", coef, b), 0.0)
+    sigma2 = rss / np.maximum(n - 3, 1)
+    a2 = coef[:, 1] ** 2 + coef[:, 2] ** 2 - 2 * sigma2 / n
+    return math.sqrt(max(float(np.dot(n, a2) / n.sum()), 0.0))
+
+
+def _unfold(k, r, th, s, moving, dt, per_turn, turns):
+    """The true order of a scan line seen at order ``k``, with its amplitude at sample level
+    (``chunk_amplitude``): (order, amplitude [N*m]) of the candidate of the largest amplitude,
+    or None where none can be fitted. The candidates are k and its images m ``per_turn`` +-
+    k (``UNFOLD_IMAGES``): an order above the angle sampling's Nyquist order (``per_turn`` /
+    2, reached at speeds below the top, where the time samples still resolve it) folds to
+    such an image, which the box mean attenuates but does not remove; so does the image the
+    interpolation between time samples makes of a line near the Nyquist frequency. At
+    sample level nothing folds: an image has no amplitude at its own order there."""
+    cands = [k]
+    for m in range(1, UNFOLD_IMAGES + 1):
+        cands += [c for c in (m * per_turn - k, m * per_turn + k) if c > k + 1.0 / turns]
+    best = None
+    for c in cands:
+        a = chunk_amplitude(r, th, s, moving, dt, c, turns)
+        if a is not None and (best is None or a > best[1]):
+            best = (c, a)
+    return best
 
 
 def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, rng=None,
@@ -235,7 +320,9 @@ def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, r
             seg_speed.append((aw[a + i0:a + i1].min(), aw[a + i0:a + i1].max()))
     S = np.concatenate(spectra, 1) if len(spectra) > 1 else spectra[0]
     del spectra
-    sp = R.judged_spectrum(f, S, None, SCAN_LEVEL_BINS, SCAN_BAND_BINS, pairs)
+    seg_speed = np.array(seg_speed)
+    M = _folded_listed(f, seg_speed, listed, fs)
+    sp = R.judged_spectrum(f, S, M, SCAN_LEVEL_BINS, SCAN_BAND_BINS, pairs)
     del S
     df = f[1] - f[0]
     search = (f >= SCAN_MIN_CYCLES / turns) & (f <= k_max)
@@ -250,16 +337,21 @@ def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, r
     for i, zi in lines.items():
         e = np.maximum(sp.P[i - 1:i + 2] - Lp[i], 0.0)
         k = float(np.dot(e, f[i - 1:i + 2]) / e.sum()) if e.sum() > 0 else float(f[i])
-        amp = R.line_amplitude(sp, Lp, i) / _gain(k, th, s, used, step)
+        true = _unfold(k, r, th, s, (moving, aw), dt, per_turn, turns)
+        if true is None:
+            continue
+        k_true, amp = true
+        if any(abs(k_true - abs(kl)) <= 1.0 / turns for kl in listed):
+            continue             # the image of a listed order: left to the order analysis
         if amp >= min_amplitude:
-            out.append(ScanLine(k, amp, Check(zi, thr, gumbel_tail(twins, zi, alpha)[1],
-                                              float(alpha), int(n_twins), True)))
+            out.append(ScanLine(k_true, amp, Check(zi, thr, gumbel_tail(twins, zi, alpha)[1],
+                                                   float(alpha), int(n_twins), True), k))
     sw = np.concatenate(speeds)
     lo, hi = np.quantile(sw, [0.05, 0.95])
     return Scan(sorted(out, key=lambda x: -x.amplitude),
                 Check(stat, thr, gumbel_tail(twins, stat, alpha)[1], float(alpha),
                       int(n_twins), bool(stat > thr)),
                 turns, (float(SCAN_MIN_CYCLES / turns), float(k_max)), (float(lo), float(hi)),
-                int(sp.S.shape[1]), {"per_turn": per_turn}, np.array(seg_speed),
+                int(sp.S.shape[1]), {"per_turn": per_turn}, seg_speed,
                 {"sp": sp, "search": search, "alpha": alpha, "n_twins": n_twins,
-                 "pairs": pairs})
+                 "pairs": pairs, "M": M})

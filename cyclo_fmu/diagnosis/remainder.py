@@ -486,7 +486,7 @@ def one_domain(P, r, sc, scanned, scan_claims, peaks, pc, listed):
             orders=listed + [ks[n]])[0]]
     drop, tied = {}, []
     for n, f in touch:
-        k_alone = sc.stands_without(ks[n], [f])
+        k_alone = sc.stands_without(ks[n], [f], sc.extra["by_name"][n].seen_at)
         f_alone = any(abs(g - f) <= R.ORDER_EXCLUSION_HZ for g in f_without[n])
         if f_alone and not k_alone:
             drop[n] = f
