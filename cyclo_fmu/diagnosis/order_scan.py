@@ -346,6 +346,12 @@ def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, r
         if amp >= min_amplitude:
             out.append(ScanLine(k_true, amp, Check(zi, thr, gumbel_tail(twins, zi, alpha)[1],
                                                    float(alpha), int(n_twins), True), k))
+    # one line per order (a line and its image both measured at the same order)
+    kept = []
+    for x in sorted(out, key=lambda x: -x.amplitude):
+        if all(abs(x.order - y.order) > 1.0 / turns for y in kept):
+            kept.append(x)
+    out = kept
     sw = np.concatenate(speeds)
     lo, hi = np.quantile(sw, [0.05, 0.95])
     return Scan(sorted(out, key=lambda x: -x.amplitude),

@@ -453,8 +453,9 @@ def _scan(P, r, orders, k_out):
     lines = {n: (x.order, x.amplitude) for n, x in sc.extra["by_name"].items()}
     checks = dict({"search": sc.search.to_json()},
                   **{n: dict(x.check.to_json(), order=x.order, amplitude_Nm=float(x.amplitude),
+                             seen_at_order=x.seen_at,
                              segment_turns=sc.turns, orders_searched=list(sc.order_range))
-                     for n, x in zip(lines, sc.lines)})
+                     for n, x in sc.extra["by_name"].items()})
     return lines, checks, sc
 
 
