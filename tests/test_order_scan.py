@@ -122,6 +122,31 @@ def test_a_line_in_both_domains_is_reported_once_in_its_own(kind):
     assert amb == {}
 
 
+def test_at_one_held_speed_an_order_and_a_frequency_are_said_to_be_one_line():
+    """At one speed (160 rad/s) an order 0.37 is a line at 9.42 Hz too: neither stands without
+    the other's segments (every segment holds both). It is reported once, and the statement
+    says that the recording cannot tell an order from a fixed frequency."""
+    from types import SimpleNamespace
+    from cyclo_fmu.diagnosis import remainder as RM
+    from cyclo_fmu.diagnosis.residual import peak_claims
+    t = np.arange(120000) / FS
+    w = np.full(t.size, 160.0)
+    th = np.cumsum(w) / FS
+    r = _noise("white", t.size, np.random.default_rng(3)) + 0.006 * np.sin(0.37 * th)
+    P = SimpleNamespace(dt=1 / FS, sig={"w_in": w, "theta_in": th})
+    peaks, _, pc = peak_claims(r, 1 / FS, speed=w, orders=list(LISTED))
+    scanned, claims, sc = RM._scan(P, r, dict(zip("abcde", LISTED)), 1 / 14)
+    assert scanned and peaks
+    scanned, peaks, pc, amb = RM.one_domain(P, r, sc, scanned, claims, peaks, pc,
+                                            list(LISTED))
+    assert len(scanned) + len(peaks) == 1
+    if peaks:
+        assert [round(k, 2) for k in amb[peaks[0][0]]] == [0.37]
+    else:
+        text = RM.scan_part(scanned, 1 / 14, sc.speed_range, claims)
+        assert "cannot tell them apart" in text or "would make the same line" in text
+
+
 def test_noise_alone_keeps_the_stated_family_wise_rate():
     """60 residuals of noise alone (white, AR(1) with a = 0.95, flicker 1/f; 20 of each) over
     the drive cycle: a line is claimed in a share compatible with the stated 1 % (three or
