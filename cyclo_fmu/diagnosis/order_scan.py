@@ -267,12 +267,14 @@ def _unfold(k, r, th, s, moving, dt, per_turn, turns):
 
 
 def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, rng=None,
-               min_amplitude=1e-3):
+               min_amplitude=1e-3, folded=None):
     """Lines of the residual ``r`` (sample level, N*m) at orders of the input shaft (angle
     ``theta`` [rad], speed ``w`` [rad/s], sampling step ``dt`` [s]) that stand against twins
     of its angle spectrum at ``alpha`` (family-wise over the orders searched), the orders
-    within ``SCAN_EXCLUSION_BINS`` of ``listed`` left out. Returns a ``Scan`` or None where
-    the recording holds too few turns in motion.
+    within ``SCAN_EXCLUSION_BINS`` of ``listed`` left out, and the orders of ``folded``
+    (default: ``listed``) left out of the segments in which they are folded about the Nyquist
+    frequency (``_folded_listed``). Returns a ``Scan`` or None where the recording holds too
+    few turns in motion.
 
     Samples used: moving (|w| above ``residual.MOVING_SHARE`` of its top), in runs of at least
     one segment's turns. Orders searched: from ``SCAN_MIN_CYCLES`` per segment up to
@@ -321,7 +323,7 @@ def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, r
     S = np.concatenate(spectra, 1) if len(spectra) > 1 else spectra[0]
     del spectra
     seg_speed = np.array(seg_speed)
-    M = _folded_listed(f, seg_speed, listed, fs)
+    M = _folded_listed(f, seg_speed, listed if folded is None else folded, fs)
     sp = R.judged_spectrum(f, S, M, SCAN_LEVEL_BINS, SCAN_BAND_BINS, pairs)
     del S
     df = f[1] - f[0]

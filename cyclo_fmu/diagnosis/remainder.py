@@ -439,13 +439,27 @@ def scan_part(lines, k_out, speed_range, claims=None) -> str:
             "coupling or a bearing turning with a shaft")
 
 
-def _scan(P, r, orders, k_out):
+#: [1] a listed order folded about the Nyquist frequency is left out of the scan's segments
+#: where it could make a line of the reported size: where its amplitude, measured where it
+#: is resolved (``order_claims``), is at least this share of ``PEAK_MIN_AMPLITUDE_NM`` (an
+#: amplitude that changes with the operating point, e.g. with the load, by up to a factor
+#: of two), or where it is resolved nowhere. A roller pass swept through several Nyquist
+#: zones by a plan through zero folds onto every order; left out everywhere it would leave
+#: nothing to scan for a ripple the order analysis measured at 0.1 mN*m
+FOLDED_SHARE = 0.5
+
+
+def _scan(P, r, orders, k_out, oc=None):
     """The order scan (``order_scan.order_scan``) of the sample-level residual ``r``, the
-    listed ``orders`` left to the order analysis: ({name: (order, amplitude)}, {name: Check}
-    with the family's ``search``, the scan or None)."""
+    listed ``orders`` left to the order analysis (``oc``: its {name: (amplitude, Check)}):
+    ({name: (order, amplitude)}, {name: Check} with the family's ``search``, the scan or
+    None)."""
     from .order_scan import order_scan
+    oc = oc or {}
+    folded = [k for n, k in orders.items()
+              if n not in oc or oc[n][0] >= FOLDED_SHARE * PEAK_MIN_AMPLITUDE_NM]
     sc = order_scan(r, P.sig["theta_in"], P.sig["w_in"], P.dt, listed=list(orders.values()),
-                    min_amplitude=PEAK_MIN_AMPLITUDE_NM)
+                    min_amplitude=PEAK_MIN_AMPLITUDE_NM, folded=folded)
     if sc is None:
         return {}, {}, None
     sc.extra["by_name"] = {f"order {x.order:.4g} ({x.order / k_out:.3g}x output)": x
@@ -545,7 +559,7 @@ def _lines(P, S, r, design, mode, rng):
         parts.append(orders_part({**inside, **outside}))
     peaks, search, pc = R.peak_claims(r, P.dt, min_amplitude=PEAK_MIN_AMPLITUDE_NM,
                                       speed=P.sig["w_in"], orders=list(orders.values()))
-    scanned, scan_claims, sc = _scan(P, r, orders, k_out)
+    scanned, scan_claims, sc = _scan(P, r, orders, k_out, oc)
     scanned, peaks, pc, amb = one_domain(P, r, sc, scanned, scan_claims, peaks, pc,
                                          list(orders.values()))
     if scanned:
