@@ -186,6 +186,25 @@ def test_an_order_above_the_angle_sampling_is_found_at_its_own_order(plan):
     assert sc.lines[0].amplitude == pytest.approx(0.02, rel=0.05)
 
 
+def test_a_folded_listed_order_is_left_out_only_where_the_residual_holds_it():
+    """At 333 Hz on a plan through zero (a sine of 250 rad/s peak) the roller pass (order 15)
+    sweeps through five Nyquist zones, folded onto orders that move with the speed. Where
+    the residual holds it (20 mN*m), it is left out of the segments where it is folded, and
+    nothing is claimed (not left out, it made a line at order 1.75 of 2.3 mN*m). Where it
+    does not (``folded`` empty: the order analysis measured it below the reportable size),
+    the scan keeps those bins and finds an order 0.43."""
+    fs = 333.0
+    t = np.arange(int(240 * fs)) / fs
+    w = 250 * np.sin(2 * np.pi * t / 60)
+    th = np.cumsum(w) / fs
+    noise = _noise("white", t.size, np.random.default_rng(5))
+    listed = LISTED + (15.0, 30.0)
+    sc = order_scan(noise + 0.02 * np.sin(15 * th), th, w, 1 / fs, listed=listed)
+    assert sc is None or sc.lines == []
+    sc = order_scan(noise + 0.006 * np.sin(0.43 * th), th, w, 1 / fs, listed=listed, folded=[])
+    assert [round(x.order, 2) for x in sc.lines] == [0.43]
+
+
 def test_too_few_turns_give_no_scan():
     """Ten seconds at 30 rad/s hold 48 turns, fewer than eight segments of the shortest
     length (32 turns): no scan rather than one on a spectrum it cannot estimate."""
