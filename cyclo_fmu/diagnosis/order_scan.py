@@ -266,6 +266,46 @@ def _unfold(k, r, th, s, moving, dt, per_turn, turns):
     return best
 
 
+def _angle_spectrogram(r, s, aw, used, per_turn, nper):
+    """The Welch spectrogram in angle of the runs ``used``: (orders, spectra (bins x
+    segments), the half-overlapping neighbour pairs, each segment's lowest and highest speed
+    (segments x 2, rad/s), the 5-95 % range of the speed over the runs), or None where no run
+    holds a segment."""
+    spectra, pairs, seg_speed, speeds = [], 0, [], []
+    f = None
+    for a, b in used:
+        y, x = angle_resample(r, s, a, b, 2 * math.pi / per_turn, index=True)
+        if y.size < nper:
+            continue
+        f, S = R.hann_spectrogram(y, per_turn, nper)
+        spectra.append(S)
+        pairs += S.shape[1] - 1
+        speeds.append(aw[a:b])
+        hop = nper - nper // 2
+        for j in range(S.shape[1]):      # each segment's speed range
+            i0, i1 = int(x[j * hop]), int(math.ceil(x[j * hop + nper])) + 1
+            seg_speed.append((aw[a + i0:a + i1].min(), aw[a + i0:a + i1].max()))
+    if not spectra:
+        return None
+    S = np.concatenate(spectra, 1) if len(spectra) > 1 else spectra[0]
+    lo, hi = np.quantile(np.concatenate(speeds), [0.05, 0.95])
+    return f, S, pairs, np.array(seg_speed), (float(lo), float(hi))
+
+
+def _measured(sp, Lp, i, r, th, s, moving, dt, per_turn, turns, listed):
+    """(order, amplitude [N*m], order seen) of the scan's line at bin ``i``: seen at the
+    power-weighted centre of its three bins over the null level ``Lp``, measured at sample
+    level (``_unfold``); None where it cannot be measured or is the image of a listed
+    order (left to the order analysis)."""
+    f = sp.f
+    e = np.maximum(sp.P[i - 1:i + 2] - Lp[i], 0.0)
+    k = float(np.dot(e, f[i - 1:i + 2]) / e.sum()) if e.sum() > 0 else float(f[i])
+    true = _unfold(k, r, th, s, moving, dt, per_turn, turns)
+    if true is None or any(abs(true[0] - abs(kl)) <= 1.0 / turns for kl in listed):
+        return None
+    return true[0], true[1], k
+
+
 def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, rng=None,
                min_amplitude=1e-3, folded=None):
     """Lines of the residual ``r`` (sample level, N*m) at orders of the input shaft (angle
@@ -306,23 +346,10 @@ def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, r
     if not turns:
         return None
     nper = turns * per_turn
-    step = 2 * math.pi / per_turn
-    spectra, pairs, speeds, seg_speed = [], 0, [], []
-    for a, b in used:
-        y, x = angle_resample(r, s, a, b, step, index=True)
-        if y.size < nper:
-            continue
-        f, S = R.hann_spectrogram(y, per_turn, nper)
-        spectra.append(S)
-        pairs += S.shape[1] - 1
-        speeds.append(aw[a:b])
-        hop = nper - nper // 2
-        for j in range(S.shape[1]):      # each segment's speed range
-            i0, i1 = int(x[j * hop]), int(math.ceil(x[j * hop + nper])) + 1
-            seg_speed.append((aw[a + i0:a + i1].min(), aw[a + i0:a + i1].max()))
-    S = np.concatenate(spectra, 1) if len(spectra) > 1 else spectra[0]
-    del spectra
-    seg_speed = np.array(seg_speed)
+    spec = _angle_spectrogram(r, s, aw, used, per_turn, nper)
+    if spec is None:
+        return None
+    f, S, pairs, seg_speed, (lo, hi) = spec
     M = _folded_listed(f, seg_speed, listed if folded is None else folded, fs)
     sp = R.judged_spectrum(f, S, M, SCAN_LEVEL_BINS, SCAN_BAND_BINS, pairs)
     del S
@@ -337,29 +364,20 @@ def order_scan(r, theta, w, dt, listed=(), alpha=FALSE_ALARM, n_twins=N_TWINS, r
     lines, stat, thr, twins, Lp = judged
     out = []
     for i, zi in lines.items():
-        e = np.maximum(sp.P[i - 1:i + 2] - Lp[i], 0.0)
-        k = float(np.dot(e, f[i - 1:i + 2]) / e.sum()) if e.sum() > 0 else float(f[i])
-        true = _unfold(k, r, th, s, (moving, aw), dt, per_turn, turns)
-        if true is None:
-            continue
-        k_true, amp = true
-        if any(abs(k_true - abs(kl)) <= 1.0 / turns for kl in listed):
-            continue             # the image of a listed order: left to the order analysis
-        if amp >= min_amplitude:
-            out.append(ScanLine(k_true, amp, Check(zi, thr, gumbel_tail(twins, zi, alpha)[1],
-                                                   float(alpha), int(n_twins), True), k))
+        x = _measured(sp, Lp, i, r, th, s, (moving, aw), dt, per_turn, turns, listed)
+        if x is not None and x[1] >= min_amplitude:
+            out.append(ScanLine(x[0], x[1], Check(zi, thr, gumbel_tail(twins, zi, alpha)[1],
+                                                  float(alpha), int(n_twins), True), x[2]))
     # one line per order (a line and its image both measured at the same order)
     kept = []
     for x in sorted(out, key=lambda x: -x.amplitude):
         if all(abs(x.order - y.order) > 1.0 / turns for y in kept):
             kept.append(x)
     out = kept
-    sw = np.concatenate(speeds)
-    lo, hi = np.quantile(sw, [0.05, 0.95])
     return Scan(sorted(out, key=lambda x: -x.amplitude),
                 Check(stat, thr, gumbel_tail(twins, stat, alpha)[1], float(alpha),
                       int(n_twins), bool(stat > thr)),
-                turns, (float(SCAN_MIN_CYCLES / turns), float(k_max)), (float(lo), float(hi)),
+                turns, (float(SCAN_MIN_CYCLES / turns), float(k_max)), (lo, hi),
                 int(sp.S.shape[1]), {"per_turn": per_turn}, seg_speed,
                 {"sp": sp, "search": search, "alpha": alpha, "n_twins": n_twins,
                  "pairs": pairs, "M": M})
