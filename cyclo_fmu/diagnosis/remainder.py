@@ -32,6 +32,11 @@ Claims and their statistics (``twins`` for the false-alarm rate and the fitted t
   noise with that null spectrum, the same largest height over the frequencies searched, a
   Gumbel tail; judged at FALSE_ALARM for "a line somewhere" (family-wise). Shaft orders are
   excluded from the segments they reach; a line is reported from ``PEAK_MIN_AMPLITUDE_NM``.
+- *lines at any other order* (``order_scan``): the same judgement on the residual resampled
+  at uniform steps of the input shaft's travelled angle (Welch in angle, the abscissa the
+  order), the listed orders left out; family-wise at FALSE_ALARM over the orders searched. A
+  line that is both an order and a fixed frequency (held speeds) is reported once
+  (``one_domain``).
 """
 from __future__ import annotations
 
@@ -458,13 +463,136 @@ def orders_part(orders) -> str:
         f"{n} ({1e3 * a:.2f} mN*m)" for n, a in orders.items())
 
 
+def scan_part(lines, k_out, speed_range, claims=None) -> str:
+    """The statement's part for the orders the order scan found ({name: (order, amplitude
+    [N*m])}); ``k_out`` the output shaft's order of the input; ``speed_range`` the input
+    speed's 5-95 % range over the scan's samples [rad/s]: where an order's frequency stays
+    within the line search's resolution over it (one speed held), a fixed frequency would
+    make the same line, which the recording cannot tell apart; so where ``claims`` (the
+    scan's) name fixed-frequency lines the order was kept over (``one_domain``)."""
+    out = []
+    for n, (k, a) in lines.items():
+        txt = (f"an order {k:.4g} of the input shaft ({k / k_out:.3g}x the output shaft), "
+               f"{1e3 * a / math.sqrt(2):.1f} mN*m RMS (amplitude {1e3 * a:.1f} mN*m)")
+        lo, hi = speed_range
+        fixed = (claims or {}).get(n, {}).get("could_be_fixed_Hz")
+        if fixed:
+            txt += (" (or a fixed frequency of " + ", ".join(f"{f:.2f} Hz" for f in fixed)
+                    + ": at the speeds held the recording cannot tell them apart)")
+        elif k * (hi - lo) / (2 * math.pi) < 2 * R.ORDER_EXCLUSION_HZ:
+            f = k * 0.5 * (lo + hi) / (2 * math.pi)
+            txt += (f" (the recording turns at one speed: a fixed frequency of {f:.2f} Hz "
+                    "would make the same line)")
+        out.append(txt)
+    return ("the residual holds " + ", ".join(out) + ", not in the library: a belt, a "
+            "coupling or a bearing turning with a shaft")
+
+
+#: [1] a listed order folded about the Nyquist frequency is left out of the scan's segments
+#: where it could make a line of the reported size: where its amplitude, measured where it
+#: is resolved (``order_claims``), is at least this share of ``PEAK_MIN_AMPLITUDE_NM`` (an
+#: amplitude that changes with the operating point, e.g. with the load, by up to a factor
+#: of two), or where it is resolved nowhere. A roller pass swept through several Nyquist
+#: zones by a plan through zero folds onto every order; left out everywhere it would leave
+#: nothing to scan for a ripple the order analysis measured at 0.1 mN*m
+FOLDED_SHARE = 0.5
+
+
+def _scan(P, r, orders, k_out, oc=None):
+    """The order scan (``order_scan.order_scan``) of the sample-level residual ``r``, the
+    listed ``orders`` left to the order analysis (``oc``: its {name: (amplitude, Check)}):
+    ({name: (order, amplitude)}, {name: Check} with the family's ``search``, the scan or
+    None)."""
+    from .order_scan import order_scan
+    oc = oc or {}
+    folded = [k for n, k in orders.items()
+              if n not in oc or oc[n][0] >= FOLDED_SHARE * PEAK_MIN_AMPLITUDE_NM]
+    sc = order_scan(r, P.sig["theta_in"], P.sig["w_in"], P.dt, listed=list(orders.values()),
+                    min_amplitude=PEAK_MIN_AMPLITUDE_NM, folded=folded)
+    if sc is None:
+        return {}, {}, None
+    sc.extra["by_name"] = {f"order {x.order:.4g} ({x.order / k_out:.3g}x output)": x
+                           for x in sc.lines}
+    lines = {n: (x.order, x.amplitude) for n, x in sc.extra["by_name"].items()}
+    checks = dict({"search": sc.search.to_json()},
+                  **{n: dict(x.check.to_json(), order=x.order, amplitude_Nm=float(x.amplitude),
+                             seen_at_order=x.seen_at,
+                             segment_turns=sc.turns, orders_searched=list(sc.order_range))
+                     for n, x in sc.extra["by_name"].items()})
+    return lines, checks, sc
+
+
+def one_domain(P, r, sc, scanned, scan_claims, peaks, pc, listed):
+    """Each line once: an order of the scan and a fixed-frequency line touch where the
+    order's frequency comes within ``residual.ORDER_EXCLUSION_HZ`` of the line in some
+    segment (at one held speed everywhere; over a plan of holds at one of the holds' speeds).
+    Each pair that touches is judged again each without the other's segments: the order on
+    the scan's segments where it stays away from the frequency (``order_scan.Scan.
+    stands_without``), the frequency with the order left out of the line search as the listed
+    orders are. Where one stands without the other and the other does not, the other is made
+    by it and is dropped (a fixed frequency seen at one of several held speeds is no order;
+    an order lingering where the speed turns, or seen at one hold, is no fixed frequency).
+    Where neither stands without the other (one speed held throughout), the one higher over
+    its twins is kept and the statement says that the recording cannot tell them apart.
+    Returns the scan's lines, the peaks and their checks kept, and {frequency: [orders]} of
+    the fixed-frequency lines kept over orders that could make them; the scan's claims
+    record the decision."""
+    if not scanned or not peaks:
+        return scanned, peaks, pc, {}
+    ks = {n: k for n, (k, _) in scanned.items()}
+    touch = [(n, f) for n in ks for f, _ in peaks if sc.reaches(ks[n], f).any()]
+    if not touch:
+        return scanned, peaks, pc, {}
+    f_without = {}            # per order: the fixed lines that stand with it left out
+    for n in dict.fromkeys(m for m, _ in touch):
+        f_without[n] = [g for g, _ in R.peak_claims(
+            r, P.dt, min_amplitude=PEAK_MIN_AMPLITUDE_NM, speed=P.sig["w_in"],
+            orders=listed + [ks[n]])[0]]
+    drop, tied = {}, []
+    for n, f in touch:
+        k_alone = sc.stands_without(ks[n], [f], sc.extra["by_name"][n].seen_at)
+        f_alone = any(abs(g - f) <= R.ORDER_EXCLUSION_HZ for g in f_without[n])
+        if f_alone and not k_alone:
+            drop[n] = f
+        elif k_alone and not f_alone:
+            drop[f] = n
+        elif not (k_alone or f_alone):
+            tied.append((n, f))
+
+    def margin(x):
+        c = scan_claims[x] if x in scan_claims else pc[x].to_json()
+        return c["statistic"] - c["twin_threshold"]
+    amb = {}
+    for n, f in tied:
+        if n in drop or f in drop:
+            continue
+        if margin(n) >= margin(f):
+            drop[f] = n
+            scan_claims[n].setdefault("could_be_fixed_Hz", []).append(f)
+        else:
+            drop[n] = f
+            amb.setdefault(f, []).append(ks[n])
+    for n in ks:
+        if n in drop:
+            scan_claims[n]["dropped"] = f"the fixed-frequency line at {drop[n]:.2f} Hz makes it"
+    scanned = {n: v for n, v in scanned.items() if n not in drop}
+    peaks = [(f, a) for f, a in peaks if f not in drop]
+    pc = {f: c for f, c in pc.items() if f not in drop}
+    return scanned, peaks, pc, amb
+
+
 def _lines(P, S, r, design, mode, rng):
-    """Shaft orders (judged against their off-order twins) and fixed-frequency peaks (against
-    twins of the residual's null spectrum) of the sample-level residual ``r``: (statement
-    parts, library orders left, other orders, peaks, {order: (amplitude, Check)}, the peaks'
-    claims for the JSON)."""
+    """Shaft orders (judged against their off-order twins), the order scan's lines at other
+    orders, and fixed-frequency peaks (against twins of the residual's null spectrum) of the
+    sample-level residual ``r``: (statement parts, library orders left, other orders, peaks,
+    {order: (amplitude, Check)}, the peaks' claims for the JSON, the scan's lines {name:
+    (order, amplitude)} and its claims).
+
+    A line at an order of a held speed is a line at a fixed frequency too: it is reported
+    once; ``one_domain`` decides where a line is both."""
     orders = _orders(design, mode, P.sig)
     k = P.sig["order_roller"]
+    k_out = 1.0 / abs(speed_ratio(mode, design.z1))
     # the orders the library's mesh_ripple fits (model_core.effects.RIPPLE_ORDERS): 1x, 2x,
     # the roller pass, 1x and 2x of the driven shaft
     lib = ("1x", "2x", f"order {k:g} (roller pass)") + tuple(
@@ -480,13 +608,21 @@ def _lines(P, S, r, design, mode, rng):
         parts.append(orders_part({**inside, **outside}))
     peaks, search, pc = R.peak_claims(r, P.dt, min_amplitude=PEAK_MIN_AMPLITUDE_NM,
                                       speed=P.sig["w_in"], orders=list(orders.values()))
+    scanned, scan_claims, sc = _scan(P, r, orders, k_out, oc)
+    scanned, peaks, pc, amb = one_domain(P, r, sc, scanned, scan_claims, peaks, pc,
+                                         list(orders.values()))
+    if scanned:
+        parts.append(scan_part(scanned, k_out, sc.speed_range, scan_claims))
     if peaks:
         parts.append("the residual spectrum peaks at " + ", ".join(
-            f"{f:.2f} Hz ({1e3 * a:.2f} mN*m)" for f, a in peaks)
+            f"{f:.2f} Hz ({1e3 * a:.2f} mN*m)" + (
+                f" (or an order {', '.join(f'{k:.4g}' for k in amb[f])} of the input shaft: "
+                "at the speeds held the recording cannot tell them apart)" if f in amb else "")
+            for f, a in peaks)
             + " (narrow lines at fixed frequencies, beyond its twins)")
     claims = {} if search is None else dict(
         {"search": search.to_json()}, **{f"{f:.2f} Hz": c.to_json() for f, c in pc.items()})
-    return parts, inside, outside, peaks, oc, claims
+    return parts, inside, outside, peaks, oc, claims, scanned, scan_claims, sc
 
 
 def remainder(P, sel, J, rec, design, mode) -> Remainder:
@@ -510,7 +646,8 @@ def remainder(P, sel, J, rec, design, mode) -> Remainder:
     parts, follows = _smooth_part(P, prob, S, with_g, present, rms, dominant, sel.min_expl)
     smooth = present
     r_raw, r, _ = _sample_residual(P, S, with_g, rec)
-    lparts, inside, outside, peaks, oc, claims["peaks"] = _lines(P, S, r, design, mode, rng)
+    lparts, inside, outside, peaks, oc, claims["peaks"], scanned, claims["order_scan"], sc = \
+        _lines(P, S, r, design, mode, rng)
     claims["orders"] = {n: c.to_json() for n, (a, c) in oc.items() if c is not None}
     present = present or bool(lparts)
     parts += lparts
@@ -539,18 +676,23 @@ def remainder(P, sel, J, rec, design, mode) -> Remainder:
                      "but is not named: the unexplained mismatch could hold part of it")
     statement = ("; ".join(parts) + ".") if present else \
         "nothing the model and the selected effects leave is structured beyond the noise."
-    lines = list({**inside, **outside}.values()) + [a for _, a in peaks]
+    lines = list({**inside, **outside}.values()) + [a for _, a in peaks] + [
+        a for _, a in scanned.values()]
     total = math.sqrt((rms if smooth else 0.0) ** 2 + sum(a * a / 2 for a in lines)
                       + burst_rms ** 2)
     unexplained = {
         "present": present, "rms_Nm": total if present else 0.0, "statement": statement,
-        "follows": follows, "orders": outside, "library_orders_left": inside,
+        "follows": follows, "orders": {**outside, **{n: a for n, (_, a) in scanned.items()}},
+        "library_orders_left": inside,
         "peaks_Hz_Nm": peaks,
         "could_include": list(withdrawn) + set_aside + (
             ["friction_miscalibrated"] if doubted else []),
         "bursts": b, "false_alarm_rate": FALSE_ALARM, "n_twins": tw.n, "claims": claims,
         "proposed": None}
     amps = {n: (a, c) for n, (a, c) in oc.items()}
+    for n in scanned:
+        x = sc.extra["by_name"][n]
+        amps[n] = (x.amplitude, x.check)
     return Remainder(S=S, with_g=with_g, unexplained=unexplained, withdrawn=withdrawn,
                      dominant=[(e, fit_rms(prob, prob.fit(tuple(x for x in S.terms
                                                                    if x.effect != e)), S),

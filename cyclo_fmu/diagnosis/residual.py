@@ -508,20 +508,31 @@ def _line_spectrum(r, fs, nper, speed, orders) -> _LineSpectrum:
     """The spectra ``peak_claims`` judges (``_LineSpectrum``)."""
     f, S = hann_spectrogram(r - np.mean(r), fs, nper)
     df = f[1] - f[0]
-    nf, n_seg = S.shape
-    width = max(3, int(round(PEAK_LEVEL_HZ / df)) | 1)
+    M = None
     if speed is not None and orders:
-        cov = _order_coverage(speed, orders, fs, f, n_seg, nper)
+        cov = _order_coverage(speed, orders, fs, f, S.shape[1], nper)
         near = cov.copy()
         near[1:] |= cov[:-1]
         near[:-1] |= cov[1:]
         M = (~near).astype(float)
+    return judged_spectrum(f, S, M, max(3, int(round(PEAK_LEVEL_HZ / df)) | 1),
+                           max(1, int(round(PEAK_BAND_HZ / df))))
+
+
+def judged_spectrum(f, S, M, width, band, pairs=None) -> _LineSpectrum:
+    """``_LineSpectrum`` of the spectrogram ``S`` (bins x segments, at the abscissa ``f``:
+    frequencies or orders) with ``M`` (bins x segments, 1 where a bin may use a segment; None:
+    all): the null level's running median over ``width`` (odd) bins, each segment's own level
+    in bands of ``band`` bins; ``pairs`` the number of half-overlapping neighbour segments
+    (default: every consecutive pair, as one Welch run makes them)."""
+    nf, n_seg = S.shape
+    pairs = n_seg - 1.0 if pairs is None else float(pairs)
+    if M is not None:
         K = M.sum(1)
         adj = np.einsum("ij,ij->i", M[:, 1:], M[:, :-1])
     else:
-        M = None
         K = np.full(nf, float(n_seg))
-        adj = np.full(nf, n_seg - 1.0)
+        adj = np.full(nf, pairs)
 
     def mean_over(A):       # over the segments each bin may use (all where none may)
         if M is None:
@@ -529,11 +540,11 @@ def _line_spectrum(r, fs, nper, speed, orders) -> _LineSpectrum:
         return np.where(K > 0, np.einsum("ij,ij->i", A, M) / np.maximum(K, 1), A.mean(1))
     P = mean_over(S)
     base = np.maximum(_running_median(P, width), 1e-300)
-    N = S / np.maximum(_segment_levels(S, base, max(1, int(round(PEAK_BAND_HZ / df)))), 1e-12)
+    N = S / np.maximum(_segment_levels(S, base, band), 1e-12)
     # the Gamma shape of a bin's mean over its K segments (Welch's equivalent degrees of
     # freedom / 2: half-overlapping neighbours share HANN_OVERLAP_RHO2 of their variance)
     Ka = np.where(K > 0, K, n_seg)
-    h = Ka * Ka / (Ka + 2 * HANN_OVERLAP_RHO2 * np.where(K > 0, adj, n_seg - 1.0))
+    h = Ka * Ka / (Ka + 2 * HANN_OVERLAP_RHO2 * np.where(K > 0, adj, pairs))
     return _LineSpectrum(f, S, N, M, K, P, mean_over(N), h, width)
 
 
@@ -574,6 +585,43 @@ def _lines(sp, z, ratio, ok, thr, h3):
     return out, (stat if np.isfinite(stat) else float(np.min(z[ok])))
 
 
+def judge_lines(sp, search, alpha=FALSE_ALARM, n_twins=N_TWINS, rng=None):
+    """The narrow lines of the spectrum ``sp`` (``_LineSpectrum``) among the bins ``search``
+    (bool), judged family-wise against twins: None where no bin can be judged, else ({bin of a
+    line's centre: its score}, the family's statistic, the twins' threshold at ``alpha``, the
+    twins' statistics, the plain spectrum's null level ``Lp``). The one implementation of the
+    null spectrum, its twins and their Gumbel tail, for lines in frequency
+    (``peak_claims``) and in order (``order_scan``)."""
+    f, K = sp.f, sp.K
+    Lq, Lp = _line_free_level(sp.Q, sp.width), _line_free_level(sp.P, sp.width)
+    h3 = 9.0 * sp.h / (3.0 + 4.0 * HANN_ADJACENT_RHO2)    # of the mean of three adjacent bins
+    ok = np.asarray(search, bool) & np.isfinite(Lq) & np.isfinite(Lp)
+    ok[[0, -1]] = False
+    ok[1:-1] &= (K[:-2] > 0) & (K[1:-1] > 0) & (K[2:] > 0)
+    if not ok.any():
+        return None
+    ratio = np.full(f.size, -np.inf)
+    ratio[1:-1] = np.where(ok[1:-1], _ratios(sp.Q, np.where(ok, Lq, 1.0)), -np.inf)
+    z = np.full(f.size, -np.inf)
+    z[1:-1] = np.where(ok[1:-1], _normal_score(ratio[1:-1], h3[1:-1]), -np.inf)
+    # the twins' spectrum: the running median of the recording's, narrow lines removed (a
+    # line fills 3 of its 21 bins); not the flank level, which stands high beside a line
+    twins = _twin_heights(_running_median(sp.Q, sp.width), sp.h, h3, ok, sp.width, n_twins,
+                          rng or np.random.default_rng(20261128))
+    thr = gumbel_tail(twins, 0.0, alpha)[0]
+    lines, stat = _lines(sp, z, ratio, ok, thr, h3)
+    return lines, stat, thr, twins, Lp
+
+
+def line_amplitude(sp, Lp, i) -> float:
+    """Amplitude of a sinusoid at bin ``i`` of ``sp`` from the power in its three bins above
+    the null level ``Lp``: with a Hann window a sinusoid at a bin's centre puts 2/3 of its
+    power A^2/2 in that bin and 1/6 in each neighbour (the density's peak is A^2/2 over the
+    window's noise bandwidth, 1.5 bins)."""
+    df = sp.f[1] - sp.f[0]
+    return math.sqrt(max(2 * (sp.P[i - 1:i + 2].sum() - 3 * Lp[i]) * df, 0.0))
+
+
 def peak_claims(r, dt, min_amplitude=1e-3, f_min=2.5, speed=None, orders=(),
                 alpha=FALSE_ALARM, n_twins=N_TWINS, rng=None):
     """Narrow peaks of the residual's spectrum at fixed frequencies, judged against twins.
@@ -609,35 +657,17 @@ def peak_claims(r, dt, min_amplitude=1e-3, f_min=2.5, speed=None, orders=(),
     if speed is not None and len(speed) < n:
         raise ValueError(f"speed: {len(speed)} samples for a residual of {n}")
     sp = _line_spectrum(r, 1.0 / dt, nper, speed, orders)
-    f, K = sp.f, sp.K
-    Lq, Lp = _line_free_level(sp.Q, sp.width), _line_free_level(sp.P, sp.width)
-    h3 = 9.0 * sp.h / (3.0 + 4.0 * HANN_ADJACENT_RHO2)    # of the mean of three adjacent bins
-    ok = (f >= f_min) & np.isfinite(Lq) & np.isfinite(Lp)
-    ok[[0, -1]] = False
-    ok[1:-1] &= (K[:-2] > 0) & (K[1:-1] > 0) & (K[2:] > 0)
-    if not ok.any():
+    judged = judge_lines(sp, sp.f >= f_min, alpha, n_twins, rng)
+    if judged is None:
         return [], None, {}
-    ratio = np.full(f.size, -np.inf)
-    ratio[1:-1] = np.where(ok[1:-1], _ratios(sp.Q, np.where(ok, Lq, 1.0)), -np.inf)
-    z = np.full(f.size, -np.inf)
-    z[1:-1] = np.where(ok[1:-1], _normal_score(ratio[1:-1], h3[1:-1]), -np.inf)
-    # the twins' spectrum: the running median of the recording's, narrow lines removed (a
-    # line fills 3 of its 21 bins); not the flank level, which stands high beside a line
-    twins = _twin_heights(_running_median(sp.Q, sp.width), sp.h, h3, ok, sp.width, n_twins,
-                          rng or np.random.default_rng(20261128))
-    thr = gumbel_tail(twins, 0.0, alpha)[0]
-    lines, stat = _lines(sp, z, ratio, ok, thr, h3)
+    lines, stat, thr, twins, Lp = judged
     peaks, checks = [], {}
-    df = f[1] - f[0]
     for i, zi in lines.items():
-        # amplitude of a sinusoid from the power in its three bins: with a Hann window a
-        # sinusoid at a bin's centre puts 2/3 of its power A^2/2 in that bin and 1/6 in each
-        # neighbour (the density's peak is A^2/2 over the window's noise bandwidth, 1.5 bins)
-        amp = math.sqrt(max(2 * (sp.P[i - 1:i + 2].sum() - 3 * Lp[i]) * df, 0.0))
+        amp = line_amplitude(sp, Lp, i)
         if amp >= min_amplitude:
-            peaks.append((float(f[i]), amp))
-            checks[float(f[i])] = Check(zi, thr, gumbel_tail(twins, zi, alpha)[1],
-                                        float(alpha), int(n_twins), True)
+            peaks.append((float(sp.f[i]), amp))
+            checks[float(sp.f[i])] = Check(zi, thr, gumbel_tail(twins, zi, alpha)[1],
+                                           float(alpha), int(n_twins), True)
     search = Check(stat, thr, gumbel_tail(twins, stat, alpha)[1], float(alpha),
                    int(n_twins), bool(stat > thr))
     return sorted(peaks, key=lambda x: -x[1]), search, checks

@@ -166,13 +166,15 @@ def name_ripple(d, P, rem, n_folds=5):
     d.effect, d.effect_description, d.parameters, d.indistinguishable_from, \
         d.suggested_test = headline(effects, d.calibration, close)
     # the orders taken out of what is unexplained
-    outside = dict(un.get("orders") or {})
+    # the listed orders outside the library (the order scan's orders have a part of their own)
+    scanned = un.get("claims", {}).get("order_scan", {})
+    outside = {n: a for n, a in (un.get("orders") or {}).items() if n not in scanned}
     old = orders_part({**inside, **outside})
     left = math.sqrt(max(un.get("rms_Nm", 0.0) ** 2
                          - sum(a * a / 2 for a in inside.values()), 0.0))
     un["library_orders_left"] = {}
     b = un.get("bursts", {})
-    still = (rem.smooth or bool(outside) or bool(un.get("peaks_Hz_Nm"))
+    still = (rem.smooth or bool(un.get("orders")) or bool(un.get("peaks_Hz_Nm"))
              or any("reversal" in e or e == "load or speed steps" for e in b.get("tied", [])))
     if still:
         st = un["statement"]
