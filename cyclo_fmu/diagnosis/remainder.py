@@ -114,36 +114,9 @@ def structure(P, prob, S, tw, mix=None):
     best = min((f for f in fits if f.cv_mse <= lo * (1 + TIE_REL)),
                key=lambda f: len(f.terms[-1].cols))
     rms = fit_rms(prob, S0, best)
-    present = chk.stands and rms >= MIN_EXPLAINED_NM
-    if present and _library_holds(P, prob, S0, best.terms[-1]):
-        present = False
     if len(base) > len(S.terms):    # the fit reported: the selection and the group alone
         best = prob.fit(S.terms + (best.terms[-1],))
-    return present, best, chk, rms
-
-
-def _library_holds(P, prob, S0, g) -> bool:
-    """Whether one effect of the library, not selected and explaining less than
-    ``MIN_EXPLAINED_NM`` beside the fit ``S0``, leaves less than ``MIN_EXPLAINED_NM`` of what
-    the group ``g`` of the generic basis adds: then the structure is that effect below the
-    size at which it is named (a friction level 1.4 % off explains 0.48 mN*m, the more
-    flexible group 0.52), and "a mismatch that no effect of the library explains" would be
-    untrue. An effect that explains more was left out by the selection for a reason of its
-    own (a drift set aside as confounded with the operating point, an effect withdrawn): the
-    remainder stays reported, with that reason. Each term of each effect not in ``S0`` (every shape of
-    its grid; admissible fits only: a loss law fitted negative is no explanation) is fitted
-    beside ``S0`` and the group beside both; no significance is involved, only the size limit
-    the remainder is reported at."""
-    chosen = {t.effect for t in S0.terms}
-    for eid, terms in P.options.items():
-        if eid in chosen:
-            continue
-        for t in terms:
-            f = prob.fit(S0.terms + (t,), cv=False)
-            if f.admissible and fit_rms(prob, S0, f) < MIN_EXPLAINED_NM and fit_rms(
-                    prob, f, prob.fit(S0.terms + (t, g), cv=False)) < MIN_EXPLAINED_NM:
-                return True
-    return False
+    return chk.stands and rms >= MIN_EXPLAINED_NM, best, chk, rms
 
 
 def standardised_max(tw, base, groups, drops) -> tuple:
