@@ -133,7 +133,9 @@ def _sub(G, idx):
 class GramProblem:
     """Weighted least squares ``y ~ X b`` over blocks, with time-ordered folds."""
 
-    def __init__(self, X, y, weights, n_folds=5):
+    def __init__(self, X, y, weights, n_folds=5, out=None):
+        """``out``: an array of ``X``'s shape and dtype to hold the scaled columns (``Xs``),
+        written over (fresh memory costs the kernel's zeroing of its pages)."""
         n = len(y)
         self.n_folds = n_folds
         folds = np.minimum((np.arange(n) * n_folds) // max(n, 1), n_folds - 1)
@@ -144,7 +146,8 @@ class GramProblem:
         scale = np.sqrt(np.maximum(np.einsum("i,ij,ij->j", w, X, X) / max(w.sum(), 1e-300),
                                    1e-300))
         self.scale = scale
-        Xs = X / scale
+        Xs = X / scale if out is None or out.shape != X.shape or out.dtype != X.dtype \
+            or not out.flags.c_contiguous else np.divide(X, scale, out=out)
         self.G, self.c, self.yy, self.sw = [], [], [], []
         # kept for the twins (``twins.make_twins``): scaled and weighted columns, the folds
         self.Xs, self.w = Xs, w
