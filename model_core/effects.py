@@ -184,7 +184,10 @@ class Effect:
         """The columns of ``basis(s, shape, lead)`` after the lead's (``leads``): the same
         numbers, without the copy of the lead's columns (the mesh ripple's load columns,
         a's columns times |tau_out|/T_REF)."""
-        return _BASIS_BEYOND[self.id](s, shape, lead[1])
+        beyond = _BASIS_BEYOND.get(self.id)
+        if beyond is None:
+            return self.basis(s, shape, lead)[:, lead[1].shape[1]:]
+        return beyond(s, shape, lead[1])
 
     @property
     def nested(self) -> bool:
