@@ -180,6 +180,15 @@ class Effect:
             return _BASIS_AFTER[self.id](s, shape, lead[1])
         return _BASIS[self.id](s, shape)
 
+    def basis_beyond(self, s: dict, shape, lead) -> np.ndarray:
+        """The columns of ``basis(s, shape, lead)`` after the lead's (``leads``): the same
+        numbers, without the copy of the lead's columns (the mesh ripple's load columns,
+        a's columns times |tau_out|/T_REF)."""
+        beyond = _BASIS_BEYOND.get(self.id)
+        if beyond is None:
+            return self.basis(s, shape, lead)[:, lead[1].shape[1]:]
+        return beyond(s, shape, lead[1])
+
     @property
     def nested(self) -> bool:
         """True where the basis at one shape may begin with the basis at another (``leads``)."""
@@ -354,10 +363,21 @@ def _mesh_ripple(s, shape, lead=None):
             np.sin(arg, out=B[:, 2 * i])
             np.cos(arg, out=B[:, 2 * i + 1])
     if shape:
-        from .discovered import T_REF
-        v = np.abs(s["tau_out"]) / T_REF
-        np.multiply(B[:, :m], v[:, None], out=B[:, m:])
+        _ripple_load_columns(s, B[:, :m], B[:, m:])
     return B
+
+
+def _ripple_load_columns(s, a_cols, out=None):
+    """The mesh ripple's load columns (law 1, a + b |tau_out|/T_REF): the b parts, the
+    constant law's columns ``a_cols`` times |tau_out|/T_REF (into ``out``)."""
+    from .discovered import T_REF
+    v = np.abs(s["tau_out"]) / T_REF
+    return np.multiply(a_cols, v[:, None], out=out)
+
+
+def _mesh_ripple_beyond(s, shape, lead):
+    """``_mesh_ripple(s, shape, lead)[:, lead.shape[1]:]``: law 1's load columns alone."""
+    return _ripple_load_columns(s, lead)
 
 
 def _stribeck(s, shape):
@@ -407,6 +427,8 @@ def _none(s, shape):
 #: {effect: basis(s, shape, lead)} of the effects whose basis at one shape begins with the
 #: basis at another (``Effect.leads``): the later one from the earlier one's columns
 _BASIS_AFTER = {"mesh_ripple": _mesh_ripple}
+#: {effect: its basis's columns after the lead's} (``Effect.basis_beyond``)
+_BASIS_BEYOND = {"mesh_ripple": _mesh_ripple_beyond}
 _BASIS = {"load_independent_loss": _drag, "thermal_drift": _thermal,
           "viscosity_drift": _viscosity, "inertia": _inertia, "mesh_ripple": _mesh_ripple,
           "low_speed_friction": _stribeck, "torque_sensor_offset": _offset,

@@ -4,6 +4,7 @@ here (benchmarks/bench_diagnosis.py measures it)."""
 import math
 
 import numpy as np
+import pytest
 
 from cyclo_fmu.diagnosis.problem import masked_means
 from cyclo_fmu.diagnosis.residual import order_amplitudes
@@ -172,6 +173,8 @@ def test_a_ripple_law_from_the_constant_laws_columns_is_the_whole_one():
     whole = e.basis(sig, 1.0)
     assert np.array_equal(e.basis(sig, 1.0, (0.0, a)), whole)
     assert np.array_equal(whole[:, :a.shape[1]], a)
+    # the load columns alone (what the diagnosis filters and averages), the same numbers
+    assert np.array_equal(e.basis_beyond(sig, 1.0, (0.0, a)), whole[:, a.shape[1]:])
     mask = rng.random(n) > 0.05
     counts = mask.reshape(-1, m).sum(1)
     edges = np.array([2, 7, 100, 399])
@@ -202,3 +205,23 @@ def test_grid_cells_are_searchsorteds():
             i, lo, hi = grid_cell(g, xx, nodes=True)
             assert np.array_equal(i, ref) and np.array_equal(lo, g[ref])
             assert np.array_equal(hi, g[ref + 1])
+
+
+def test_the_subset_fits_least_squares_is_numpys_to_the_bit():
+    """``selection.lstsq`` (LAPACK's loop without numpy's wrapper) gives numpy.linalg.lstsq's
+    numbers for well-posed, nearly collinear and rank-deficient normal equations, and its
+    error where the SVD cannot run (a NaN)."""
+    from cyclo_fmu.diagnosis.selection import lstsq
+    rng = np.random.default_rng(11)
+    for k in (1, 2, 5, 12):
+        A = rng.normal(size=(200, k))
+        if k > 2:
+            A[:, -1] = A[:, 0] + 1e-9 * rng.normal(size=200)     # nearly collinear
+            A[:, -2] = A[:, 1]                                  # exactly: rank-deficient
+        G, c = A.T @ A, A.T @ rng.normal(size=200)
+        assert np.array_equal(lstsq(G, c), np.linalg.lstsq(G, c, rcond=1e-12)[0])
+    G[0, 0] = np.nan
+    with pytest.raises(np.linalg.LinAlgError):
+        np.linalg.lstsq(G, c, rcond=1e-12)
+    with pytest.raises(np.linalg.LinAlgError):
+        lstsq(G, c)

@@ -356,14 +356,26 @@ class _Patched:
         view[self.rows] = self.values
 
 
-def _fresh(x, k, B0, Y0, dt, bandwidth, mask, m, counts, edges):
+def _beyond_alone(k, extra) -> bool:
+    """Are the ``extra`` columns after ``k`` lead columns filtered and averaged alone
+    (``_fresh``)? Where both parts have at least two columns (averaged as a basis of several
+    columns is, ``masked_means``: the same numbers as the whole basis's)."""
+    return k >= 2 and extra >= 2
+
+
+def _fresh(x, k, B0, Y0, dt, bandwidth, mask, m, counts, edges, beyond=False):
     """(block means, filtered samples of the edge blocks) of the basis ``x`` (n x columns)
     through the low pass; its first ``k`` columns' are ``B0`` and ``Y0`` (another shape's,
     whose basis they are: ``Effect.leads``). The low pass and the block means act column by
     column, so only the other columns are filtered and averaged: the same numbers, where
     both parts have at least two columns and are averaged as a basis of several columns is
-    (``masked_means``); else all are."""
-    if k and (k < 2 or x.shape[1] - k < 2):
+    (``masked_means``, ``_beyond_alone``); else all are. ``beyond``: ``x`` holds only the
+    columns after the ``k`` lead columns (``_beyond_alone`` true)."""
+    if beyond:
+        y = first_order(x, dt, bandwidth)
+        return (np.hstack([B0, masked_means(y, mask, m, counts)]),
+                np.hstack([Y0, _edge_samples(y, edges, m)]))
+    if k and not _beyond_alone(k, x.shape[1] - k):
         k = 0
     y = first_order(x[:, k:] if k else x, dt, bandwidth)
     B, Y = masked_means(y, mask, m, counts), _edge_samples(y, edges, m)
@@ -442,15 +454,25 @@ def _candidates(P_sig, candidates, loaded, dt, bandwidth, mask, m, reuse=None, c
                 lead = prev if prev is not None and eff.leads(shape, prev[0]) else None
                 prev = None
                 sig.read = set()
-                x = eff.basis(sig, shape) if lead is None else eff.basis(sig, shape, lead[:2])
-                keys = frozenset(sig.read) | (lead[4] if lead is not None else frozenset())
                 k_lead, B0, Y0 = (0, None, None) if lead is None else (
                     lead[1].shape[1], lead[2], lead[3])
+                beyond = lead is not None and not eff.leads(True, shape)
+                # a basis that begins with the lead's and leads no other shape: only its
+                # columns after the lead's are filtered and averaged (``_fresh``), so only
+                # they are formed (``Effect.basis_beyond``, the same numbers)
+                x = (eff.basis(sig, shape) if lead is None else
+                     eff.basis_beyond(sig, shape, lead[:2]) if beyond else
+                     eff.basis(sig, shape, lead[:2]))
+                keys = frozenset(sig.read) | (lead[4] if lead is not None else frozenset())
+                if beyond and not _beyond_alone(k_lead, x.shape[1]):
+                    x = eff.basis(sig, shape, lead[:2])
+                    beyond = False
                 lead = None                   # (released before this basis is filtered)
-                B, Y = _fresh(x, k_lead, B0, Y0, dt, bandwidth, mask, m, counts, edges)
+                B, Y = _fresh(x, k_lead, B0, Y0, dt, bandwidth, mask, m, counts, edges,
+                              beyond)
                 # kept for the effect's next shape, whose basis may begin with this one
                 # (Effect.leads: the mesh ripple's load law a + b |T| begins with a's)
-                prev = (shape, x, B, Y, keys) if eff.nested else None
+                prev = (shape, x, B, Y, keys) if eff.nested and not beyond else None
                 del x
             columns[(eid, shape)] = (keys, B, Y)
             k0 = sum(c.shape[1] for c in cols)

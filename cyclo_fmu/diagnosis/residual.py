@@ -35,12 +35,15 @@ def robust_sigma(r) -> float:
     return float(1.4826 * np.median(np.abs(r - np.median(r)))) if len(r) else 0.0
 
 
-def robust_weights(X, y, iterations=4):
+def robust_weights(X, y, iterations=4, spare=None):
     """Spike exclusion and Huber weights from the fit of every candidate column at once.
 
     Returns (weights, n_spikes, sigma): weight 0 for blocks beyond ``SPIKE_SIGMA`` robust
     standard deviations (when they are at most ``MAX_SPIKE_SHARE`` of the blocks), Huber
-    weights min(1, c sigma / |r|) for the others; sigma is the robust scale of the residual."""
+    weights min(1, c sigma / |r|) for the others; sigma is the robust scale of the residual.
+    ``spare``: a list its work array of ``X``'s shape is appended to (free for the caller's
+    next array of that shape: a 600 000-sample recording's matrix is 68 MB, and fresh memory
+    costs the kernel's zeroing of its pages)."""
     n = len(y)
     w = np.ones(n)
     # (X * X).mean(0) without its n x k temporary: einsum sums the rows in the same order
@@ -57,6 +60,8 @@ def robust_weights(X, y, iterations=4):
         spikes = out if out.mean() <= MAX_SPIKE_SHARE else np.zeros(n, bool)
         w = np.minimum(1.0, HUBER_C * sigma / np.maximum(np.abs(r), 1e-300))
         w[spikes] = 0.0
+    if spare is not None:
+        spare.append(Xw)
     return w, int(spikes.sum()), sigma
 
 

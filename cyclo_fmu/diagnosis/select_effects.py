@@ -185,10 +185,11 @@ def _stability(prob, selectable, min_expl, forced_terms, S, forced, n_folds):
 
 def select(P, n_folds: int, forced=()) -> Selected:
     """Stage ``select`` on the problem ``P`` (``problem.Problem``)."""
-    w, n_spikes, sigma = R.robust_weights(P.X, P.y)
+    spare = []
+    w, n_spikes, sigma = R.robust_weights(P.X, P.y, spare=spare)
     spikes = w == 0
     w = w * P.valid
-    prob = GramProblem(P.X, P.y, w, n_folds)
+    prob = GramProblem(P.X, P.y, w, n_folds, out=spare.pop() if spare else None)
     min_expl = MIN_EXPLAINED_NM
     opts = {k: v for k, v in P.options.items() if v}
     back = back_blocks(P.blocks)

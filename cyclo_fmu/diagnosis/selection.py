@@ -81,6 +81,50 @@ class Fit:
         return [t.effect for t in self.terms]
 
 
+def _lstsq_kernel():
+    """``numpy.linalg.lstsq``'s compiled loop (LAPACK ``gelsd``), called without the wrapper's
+    checks and conversions: a selection fits tens of thousands of subsets of a few unknowns
+    (a four-quadrant recording with a refined Stribeck friction: 27 000), and the wrapper
+    costs as much as the solve. Checked once against ``numpy.linalg.lstsq`` (the same
+    numbers, a full-rank and a rank-deficient matrix); None where it is not found or differs
+    (another numpy): then the public function."""
+    try:
+        from numpy.linalg import _umath_linalg
+        kernel = _umath_linalg.lstsq
+        A = np.array([[4.0, 1.0, 0.5], [1.0, 3.0, 0.25], [0.5, 0.25, 2.0]])
+        D = np.array([[1.0, 2.0, 3.0], [2.0, 4.0, 6.0], [3.0, 6.0, 9.5]])
+        for G in (A, D, A[:1, :1]):
+            c = np.arange(1.0, len(G) + 1)
+            x = kernel(G, c[:, None], 1e-12, signature="ddd->ddid")[0][:, 0]
+            if not np.array_equal(x, np.linalg.lstsq(G, c, rcond=1e-12)[0]):
+                return None
+        return kernel
+    except (ImportError, AttributeError, TypeError, ValueError, np.linalg.LinAlgError):
+        return None
+
+
+_LSTSQ = []
+
+
+def _svd_failed(err, flag):
+    raise np.linalg.LinAlgError("SVD did not converge in Linear Least Squares")
+
+
+def lstsq(G, c, rcond=1e-12):
+    """``np.linalg.lstsq(G, c, rcond)[0]`` for a float matrix ``G`` (k x k, k >= 1) and vector
+    ``c``: the same numbers and the same error (``LinAlgError`` where the SVD does not
+    converge), a third of the time for a few unknowns (``_lstsq_kernel``)."""
+    if not _LSTSQ:
+        _LSTSQ.append(_lstsq_kernel())
+    kernel = _LSTSQ[0]
+    if kernel is None:
+        return np.linalg.lstsq(G, c, rcond=rcond)[0]
+    # numpy.linalg.lstsq's floating-point error handling around its loop
+    with np.errstate(call=_svd_failed, invalid="call", over="ignore", divide="ignore",
+                     under="ignore"):
+        return kernel(G, c[:, None], rcond, signature="ddd->ddid")[0][:, 0]
+
+
 def _sub(G, idx):
     """``G[np.ix_(idx, idx)]``, the same array, in a third of its time (fits are many)."""
     return G.take(idx, 0).take(idx, 1)
@@ -89,7 +133,9 @@ def _sub(G, idx):
 class GramProblem:
     """Weighted least squares ``y ~ X b`` over blocks, with time-ordered folds."""
 
-    def __init__(self, X, y, weights, n_folds=5):
+    def __init__(self, X, y, weights, n_folds=5, out=None):
+        """``out``: an array of ``X``'s shape and dtype to hold the scaled columns (``Xs``),
+        written over (fresh memory costs the kernel's zeroing of its pages)."""
         n = len(y)
         self.n_folds = n_folds
         folds = np.minimum((np.arange(n) * n_folds) // max(n, 1), n_folds - 1)
@@ -100,7 +146,8 @@ class GramProblem:
         scale = np.sqrt(np.maximum(np.einsum("i,ij,ij->j", w, X, X) / max(w.sum(), 1e-300),
                                    1e-300))
         self.scale = scale
-        Xs = X / scale
+        Xs = X / scale if out is None or out.shape != X.shape or out.dtype != X.dtype \
+            or not out.flags.c_contiguous else np.divide(X, scale, out=out)
         self.G, self.c, self.yy, self.sw = [], [], [], []
         # kept for the twins (``twins.make_twins``): scaled and weighted columns, the folds
         self.Xs, self.w = Xs, w
@@ -123,7 +170,7 @@ class GramProblem:
     def _solve(G, c):
         if len(c) == 0:
             return np.zeros(0)
-        return np.linalg.lstsq(G, c, rcond=1e-12)[0]
+        return lstsq(G, c)
 
     def _totals(self, fs):
         """(G, c, yy, sw) summed over the folds ``fs``, once per set of folds (a selection

@@ -62,13 +62,18 @@ def diagnose_recording(rec, mode, checks, design, progress=False, calibrate=True
     ``calibration_fit`` when a calibration effect is named). ``calibrate`` False leaves the
     calibration effects out of the candidates (``diagnose --no-calibrate``); ``bandwidth``
     [Hz]: the input torque transducer's (None: the Diagnoser's default)."""
+    from threadpoolctl import threadpool_limits
     from cyclo_fmu.diagnosis import Diagnoser
     kw = {} if bandwidth is None else {"bandwidth": float(bandwidth)}
-    est = Diagnoser(design, mode, progress=progress, calibrate=calibrate, **kw).fit(rec)
-    d = est.diagnosis_
-    d.updated = est.updated_design()      # (design, notes), checked against the recording
-    result = d.to_json()
-    fit = calibration_report(design, d)
+    # one BLAS thread throughout, as in Diagnoser.fit: the updated design's check and the
+    # calibration's report give the same numbers on any machine, and no BLAS thread is
+    # woken to spin beside the diagnosis
+    with threadpool_limits(limits=1, user_api="blas"):
+        est = Diagnoser(design, mode, progress=progress, calibrate=calibrate, **kw).fit(rec)
+        d = est.diagnosis_
+        d.updated = est.updated_design()  # (design, notes), checked against the recording
+        result = d.to_json()
+        fit = calibration_report(design, d)
     if fit is not None:
         result["calibration_fit"] = fit
     result["mode"] = mode
