@@ -61,7 +61,8 @@ MISTAKES = {
     "a_1e308_cell": (REF, one_huge_cell, "S1", ["'torque_in_Nm', row 701",
                                                 "1e+308 is not a measurement"]),
     "output_power_above_input": (scaled(torque_out_Nm=1.3), None, "S1",
-                                 ["on forward samples the power leaving the reducer is 1.1"]),
+                                 ["on forward samples at a steady speed the power leaving the "
+                                  "reducer is 1.1"]),
 }
 
 
@@ -139,7 +140,7 @@ def test_back_driven_recording_is_judged_in_its_own_direction(tmp_path):
     r, mode, checks = load_recording(write(tmp_path / "back.csv", back), "S1")
     assert "back-driven" in next(c["message"] for c in checks if c["id"] == "power_balance")
     bad = dict(back, torque_in_Nm=-REF["torque_in_Nm"] * 1.3)
-    with pytest.raises(RecordingError, match="on back-driven samples the power leaving"):
+    with pytest.raises(RecordingError, match="on back-driven samples at a steady speed the power leaving"):
         load_recording(write(tmp_path / "bad.csv", bad), "S1")
 
 
