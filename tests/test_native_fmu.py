@@ -635,11 +635,11 @@ def test_build_design_changes_every_reducer_fmu(calibrated_fmus, native, fmu):
     # the existing variables keep their value references; the new parameters come last, in
     # the order they were added (cycloid_drive.LATE_DESIGN_PARAMETERS)
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    assert vr["thermal_T_scale"] == max(vr.values())
+    assert vr["loss_transition"] == max(vr.values())
     assert (vr["nu_100"] < vr["load_loss_scale"] < vr["thermal_loss_per_10K"]
             < vr["thermal_T_ref"] < vr["ripple_2x"] < vr["ripple_out_1x"] < vr["ripple_out_2x"]
             < vr["ripple_out_2x_load_phase"] < vr["stribeck_transition"]
-            < vr["thermal_T_scale"])
+            < vr["thermal_T_scale"] < vr["loss_transition"])
 
 
 def test_bad_input_gives_fmi2error_with_a_message(native):
@@ -670,7 +670,9 @@ def test_bad_input_gives_fmi2error_with_a_message(native):
                                ("ripple_2x_phase", float("inf"), "ripple_2x_phase"),
                                ("stribeck_transition", -1.0, "stribeck_transition = -1"),
                                ("thermal_T_scale", 0.5, "thermal_T_scale = 0.5"),
-                               ("thermal_T_scale", -20.0, "thermal_T_scale = -20")):
+                               ("thermal_T_scale", -20.0, "thermal_T_scale = -20"),
+                               ("loss_transition", -0.1, "loss_transition = -0.1"),
+                               ("loss_transition", float("nan"), "loss_transition")):
         fresh.messages.clear()
         with pytest.raises(FMICallException) as exc:
             fresh.set(**{name: value})
