@@ -167,8 +167,8 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
     t = np.arange(int(round(duration * settings.sample_rate))) * dt
     hoist = plan == "hoist"
     if hoist and engine == "bench":
-        raise ValueError("plan = 'hoist': the bench's load is a brake (its torque opposes the "
-                         "motion), not a payload; use engine 'fast'")
+        raise CycloidInputError("plan", plan, "the bench's load is a brake (its torque "
+                                "opposes the motion), not a payload: use engine 'fast'")
     plan, hold = test_plan(duration, rng, plan)
     # speed: ramped setpoints, then the motor's first-order response
     n_set = np.zeros_like(t)
