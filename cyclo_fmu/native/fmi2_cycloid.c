@@ -227,11 +227,14 @@ static int shaft_ripple(const CDExtra *x)
 }
 
 /* CycloidDrive._gear_torque (map): the driving-shaft torque of the gear at a load torque */
-static double gear_torque(int mode, double w_in, double tau_out, double T)
+static double gear_torque(const CDExtra *x, int mode, double w_in, double tau_out, double T)
 {
     CDSolution r;
+    double lossless = -tau_out * CD_MAP.modes[mode].ratio_out;
     cd_solve_thermal(&CD_THERMAL, mode, w_in, tau_out, T, &r);
-    return r.torques[CD_MAP.modes[mode].a];
+    /* the losses through standstill, as evaluate() scales them (1 at loss_transition 0) */
+    if (x->loss_transition == 0) return r.torques[CD_MAP.modes[mode].a];
+    return lossless + cd_loss_transition(x, w_in) * (r.torques[CD_MAP.modes[mode].a] - lossless);
 }
 
 /* CycloidDrive._solve's output inertia: J_load and J_load_dec, secants of the driving torque
@@ -246,7 +249,7 @@ static void output_inertia(CDState *s, int mode, double tau_ext, double J_r, dou
         s->out[O_J_LOAD] = s->out[O_J_LOAD_DEC] = 0.0;
         return;
     }
-    static_ = gear_torque(mode, w_in, tau_ext, T);
+    static_ = gear_torque(&s->extra, mode, w_in, tau_ext, T);
     if (commit && s->has_key && fabs(w_in - s->key_w) <= SLOPE_REUSE * fabs(s->key_w)
         && fabs(tau_ext - s->key_tau) <= SLOPE_REUSE * fabs(s->key_tau)) {
         J_acc = s->key_J_acc;
@@ -254,8 +257,8 @@ static void output_inertia(CDState *s, int mode, double tau_ext, double J_r, dou
     } else {
         double A = w_in >= 0 ? s->alpha_ref : -s->alpha_ref;   /* speeding up */
         double lossless = J_r * CD_MAP.modes[mode].ratio_out;
-        J_acc = (gear_torque(mode, w_in, tau_ext - J_r * A, T) - static_) / A;
-        J_dec = (static_ - gear_torque(mode, w_in, tau_ext + J_r * A, T)) / A;
+        J_acc = (gear_torque(&s->extra, mode, w_in, tau_ext - J_r * A, T) - static_) / A;
+        J_dec = (static_ - gear_torque(&s->extra, mode, w_in, tau_ext + J_r * A, T)) / A;
         /* locked: the lossless reflection */
         if (!(isfinite(J_acc) && J_acc > 0)) J_acc = lossless;
         if (!(isfinite(J_dec) && J_dec > 0)) J_dec = lossless;

@@ -704,7 +704,15 @@ class CycloidDrive(UnitSlave):
         self.tau_in_static = self.tau_in - (gear - static)
 
     def _gear_torque(self, w_in, tau_out):
-        """Driving-shaft torque of the gear alone (map or exact core) at a load torque."""
+        """Driving-shaft torque of the gear alone (map or exact core) at a load torque, its
+        losses through standstill scaled as ``_update_at`` scales them."""
+        gear = self._gear_torque_full(w_in, tau_out)
+        if not self._transition:
+            return gear
+        lossless = -tau_out * self._ratio_out
+        return lossless + float(self._design.extra.loss_transition_share(w_in)) * (gear - lossless)
+
+    def _gear_torque_full(self, w_in, tau_out):
         if self._map is not None:
             return self._map.solve(w_in, tau_out, self._loss_T())[1][self._shaft_index[0]]
         if w_in == 0:
