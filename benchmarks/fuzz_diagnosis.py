@@ -15,7 +15,11 @@ from cyclo_fmu.diagnosis import Diagnoser
 from cyclo_fmu.synth import SynthSettings, synthesize
 from model_core.effects import EFFECTS
 
-LIBRARY = [e for e in EFFECTS if e not in ("none", "friction_miscalibrated", "torque_sensor_gain")]
+#: the losses through standstill (loss_transition) show only where a drive creeps at 1-3 r/min
+#: under load, which this plan (the synthesiser's 'full') never does: hidden, it could not be
+#: found; it stays a candidate of every diagnosis here (a wrong name of it counts)
+LIBRARY = [e for e in EFFECTS if e not in ("none", "friction_miscalibrated", "torque_sensor_gain",
+                                           "loss_transition")]
 
 
 def load_squared(s):

@@ -1079,7 +1079,9 @@ def build_parser() -> argparse.ArgumentParser:
     sy.add_argument("--out", required=True, help="recording CSV to write")
     sy.add_argument("--truth", help="also write the hidden truth as JSON here")
     sy.add_argument("--plan", default="full", help="test plan: full (speed, load, direction "
-                    "varied) or one_speed (load steps at 2000 r/min only)")
+                    "varied), one_speed (load steps at 2000 r/min only), four_quadrant (with "
+                    "back-driven holds) or hoist (payloads lifted and lowered at 1.5-30 r/min "
+                    "and 300-1200 r/min; engine fast)")
     sy.add_argument("--engine", default="fast", help="fast (the bench's components replayed "
                     "vectorised) or bench (the bench's FMUs co-simulated; slower)")
     sy.add_argument("--quiet", action="store_true", help="no progress bar")

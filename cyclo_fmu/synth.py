@@ -63,7 +63,11 @@ class SynthSettings:
     J_out: float = 2.0e-3           # kg m^2
 
 
-PLANS = ("full", "one_speed", "four_quadrant")
+PLANS = ("full", "one_speed", "four_quadrant", "hoist")
+#: [r/min] the hoist plan's creeping speeds (input shaft, both senses): from just above the
+#: diagnosis's rest bound (1 r/min) through the band where a drive's friction builds up
+#: (pre-sliding: a few r/min) to positioning speeds
+HOIST_CREEP_SPEEDS = (1.5, 2.0, 3.0, 5.0, 10.0, 30.0)
 
 
 def test_plan(duration: float, rng: np.random.Generator, plan: str = "full"):
@@ -71,7 +75,9 @@ def test_plan(duration: float, rng: np.random.Generator, plan: str = "full"):
     ``full`` varies speed (both directions), load and time; ``one_speed`` only steps the load
     at 2000 r/min forward, a poor plan under which some effects look alike;
     ``four_quadrant`` adds back-driven holds (a load machine driving the output: negative
-    brake torque), which separate a transducer gain error from a friction level."""
+    brake torque), which separate a transducer gain error from a friction level; ``hoist``
+    lifts and lowers payloads (a load torque of one sense whatever the motion: lowering is
+    back-driven) at creeping speeds (HOIST_CREEP_SPEEDS) and at 300 and 1200 r/min."""
     if plan not in PLANS:
         raise ValueError(f"plan = {plan!r}: must be one of {', '.join(PLANS)}")
     speeds = [300.0, 600.0, 1200.0, 2000.0, 2800.0] if plan != "one_speed" else [2000.0]
@@ -83,6 +89,9 @@ def test_plan(duration: float, rng: np.random.Generator, plan: str = "full"):
         steps += [(n, -T) for n in (600.0, 1600.0, -1600.0, 2800.0) for T in (2.0, 5.0)]
     if plan == "one_speed":
         steps = steps * 4
+    if plan == "hoist":
+        steps = [(s * n, T) for n in HOIST_CREEP_SPEEDS + (300.0, 1200.0) for s in (1, -1)
+                 for T in (2.0, 5.0)]
     hold = duration / len(steps)
     order = rng.permutation(len(steps))
     return [(k * hold, steps[i][0], steps[i][1]) for k, i in enumerate(order)], hold
@@ -156,6 +165,10 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
     duration = duration or SIZES[size]
     dt = 1.0 / settings.sample_rate
     t = np.arange(int(round(duration * settings.sample_rate))) * dt
+    hoist = plan == "hoist"
+    if hoist and engine == "bench":
+        raise CycloidInputError("plan", plan, "the bench's load is a brake (its torque "
+                                "opposes the motion), not a payload: use engine 'fast'")
     plan, hold = test_plan(duration, rng, plan)
     # speed: ramped setpoints, then the motor's first-order response
     n_set = np.zeros_like(t)
@@ -172,7 +185,10 @@ def synthesize(effect, seed: int, mode: str = "S1", size: str = "small",
     ratio = float(shaft_speeds(mode, 1.0, design.z1)[b])
     w_out = ratio * w_in
     alpha_out = np.gradient(w_out, t)
-    T_deliv = T_set * np.tanh(w_out / settings.brake_w_reg) + settings.J_out * alpha_out
+    # the brake's torque opposes the motion (regularised through standstill); a hoist's
+    # payload pulls one way whatever the motion
+    T_load = T_set if hoist else T_set * np.tanh(w_out / settings.brake_w_reg)
+    T_deliv = T_load + settings.J_out * alpha_out
     tau_out = -T_deliv
     # the true reducer: friction coefficient off by friction_error
     ids = set(hidden)

@@ -305,6 +305,11 @@ class ExtraPhysics:
                                 "as a lubricant's viscosity (a loss following nu^m: theta = "
                                 "1/|m d ln nu/dT|); 0: the linear law c (T - thermal_T_ref)/10 K "
                                 "(theta -> infinity); else at least 1 K")
+    loss_transition: float = _f(0.0, "rad/s", "transition width w_c of the whole loss through "
+                                "standstill: the model's loss torque (input torque minus the "
+                                "lossless one) times tanh(|w_in|/w_c) (pre-sliding, "
+                                "model_core.friction.loss_transition); 0: the losses at their "
+                                "full value at any speed (the model); 0 or more")
 
     #: fields no FMU carries: the diagnosis's replay uses them. Where the same physics has a
     #: form the FMUs carry, the diagnosis writes that too (model_core.effects): a viscosity
@@ -336,6 +341,13 @@ class ExtraPhysics:
                     self.stribeck_transition))[:, 0]
         return t.reshape(w.shape)
 
+
+    def loss_transition_share(self, w):
+        """Share tanh(|w|/w_c) of the model's loss torque a drive has built up at driving speed
+        w [rad/s] (``loss_transition`` w_c; 1 at w_c = 0): model_core.friction.loss_transition,
+        the one implementation (the replay, both FMUs and the diagnosis's effect)."""
+        from .friction import loss_transition
+        return loss_transition(w, self.loss_transition)
 
     def discovered_torque(self, w, tau_out):
         """Torque (N*m) of the discovered terms at driving speed w (rad/s) and load torque
@@ -745,6 +757,10 @@ def validate_design(d: DriveDesign) -> None:
     if not 0.0 <= d.extra.stribeck_transition < float("inf"):
         raise CycloidInputError("extra.stribeck_transition", d.extra.stribeck_transition,
                                 "must be 0 (a sharp sign) or a positive width in rad/s")
+    if not 0.0 <= d.extra.loss_transition < float("inf"):
+        raise CycloidInputError("extra.loss_transition", d.extra.loss_transition,
+                                "must be 0 (the losses at full value) or a positive width in "
+                                "rad/s")
     if not 0.0 <= d.extra.drag_exponent <= 2.0:
         raise CycloidInputError("extra.drag_exponent", d.extra.drag_exponent,
                                 "must lie between 0 and 2")

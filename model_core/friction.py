@@ -243,3 +243,42 @@ def reversal_sign(w, w_r):
                              f"got {w_r!r} rad/s")
         return np.sign(w)
     return np.tanh(w / w_r)
+
+
+def loss_transition(w, w_c):
+    """Share of the kinetic losses a drive has built up at driving speed w: the transition of
+    the whole friction through standstill.
+
+        s(w) = tanh(|w| / w_c)   for w_c > 0,      s(w) = 1   for w_c = 0
+
+    The model's losses take their full value at any speed above zero; a real drive's friction
+    builds up over a band of speeds above standstill (pre-sliding of every contact: pins,
+    rollers, bearings and seals alike; Dahl 1968, Armstrong-Helouvry et al. 1994): the loss
+    torque passes through zero with the speed. ``s`` is :func:`reversal_sign` of |w| (the
+    same regularised sign, applied to the whole loss rather than the Stribeck term alone);
+    ``w_c -> 0`` is the model (s = 1 wherever w != 0, and at w = 0 too, where the model's
+    own loss stands). 0 <= s <= 1 and s is even in w: the loss torque s L keeps the sign of
+    L, so a dissipative loss stays dissipative.
+
+    Parameters
+    ----------
+    w : array_like
+        Driving shaft speed [rad/s], signed.
+    w_c : float
+        Transition width [rad/s], 0 or more: at |w| = w_c the loss has reached tanh(1) = 76 %
+        of its value, at 3 w_c 99.5 %.
+
+    Returns
+    -------
+    numpy.ndarray
+        s(w) [1], in [0, 1], the shape of w.
+
+    References
+    ----------
+    P. R. Dahl, "A solid friction model", Aerospace Corp. TOR-0158(3107-18)-1, 1968.
+    B. Armstrong-Helouvry, P. Dupont, C. Canudas de Wit, Automatica 30 (1994) 1083-1138.
+    """
+    w = np.asarray(w, float)
+    if w_c == 0:
+        return np.ones(w.shape)
+    return reversal_sign(np.abs(w), w_c)

@@ -448,7 +448,9 @@ def replay_input_torque(design, mode, w_in, tau_out, grid=None, located=None, lo
     -------
     tau_in, loss_in : ndarray
         Model input torque [N*m] and its part beyond the lossless torque
-        ``-tau_out * w_out / w_in`` [N*m], from a ``ModeMap`` spanning the recording.
+        ``-tau_out * w_out / w_in`` [N*m], from a ``ModeMap`` spanning the recording; with
+        the design's ``extra.loss_transition`` w_c > 0 the loss part times tanh(|w_in|/w_c)
+        (``friction.loss_transition``: the losses through standstill).
     load_loss_in : ndarray
         With ``load_loss=True``: the gear's load-dependent loss torque at the driving shaft
         [N*m] (:func:`load_loss_torque`), the part of ``loss_in`` that PL1..PL6 make.
@@ -478,6 +480,13 @@ def replay_input_torque(design, mode, w_in, tau_out, grid=None, located=None, lo
         else:
             tau_in[sl] = m.input_torque_arrays(w_in[sl], tau_out[sl], loc)
     lossless = -tau_out * m.ratio[m._k]
+    if design.extra.loss_transition:
+        # the losses through standstill (friction.loss_transition): the loss torque, and its
+        # load-dependent part with it, times tanh(|w_in|/w_c), as both FMUs scale theirs
+        share = design.extra.loss_transition_share(w_in)
+        tau_in = lossless + share * (tau_in - lossless)
+        if load_loss:
+            load_in = share * load_in
     if load_loss:
         return tau_in, tau_in - lossless, load_in
     return tau_in, tau_in - lossless

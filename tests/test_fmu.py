@@ -151,7 +151,8 @@ def test_nan_input_is_fmi2error_with_message(fmu):
                                           (dict(idle_loss_scale=-1.0), "idle_loss_scale"),
                                           (dict(load_loss_scale=11.0), "load_loss_scale"),
                                           (dict(thermal_T_scale=0.5), "thermal_T_scale = 0.5"),
-                                          (dict(thermal_T_scale=-20.0), "thermal_T_scale")])
+                                          (dict(thermal_T_scale=-20.0), "thermal_T_scale"),
+                                          (dict(loss_transition=-0.1), "loss_transition")])
 def test_invalid_parameter_fails_at_initialization(fmu, params, word):
     md = read_model_description(fmu)
     inst = Instance.__new__(Instance)

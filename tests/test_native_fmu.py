@@ -356,6 +356,35 @@ def test_a_slow_speed_reversal_agrees_with_python_fmu(native, fmu, w_r):
     p.close()
 
 
+@pytest.mark.parametrize("w_c", [0.0, 0.3])
+def test_the_losses_through_standstill_agree_with_python_fmu(native, fmu, w_c):
+    """The whole loss through standstill (extra.loss_transition, tanh(|w_in|/w_c),
+    model_core.friction.loss_transition) along a slow reversal (-3 .. +3 rad/s in steps of
+    0.1 rad/s, both directions, at a back-driving load, with an output inertia so that the
+    secants J_load and tau_in_static are scaled too): native = Python FMU; the loss torque
+    (tau_in minus the lossless -tau_out w_out/w_in) is the model's times tanh(|w|/w_c), so the
+    partial losses still add up to P_loss and no loss feeds power (P_loss >= 0)."""
+    n = Inst(native, mode="S1", loss_transition=w_c, J_out=0.01)
+    p = Inst(fmu, mode="S1", loss_transition=w_c, J_out=0.01)
+    ref_n = Inst(native, mode="S1", J_out=0.01)
+    ws = [w for w in np.arange(-3.0, 3.01, 0.1)] + [w for w in np.arange(3.0, -3.01, -0.1)]
+    ratio = float(kinematics.shaft_speeds("S1", 1.0, DriveDesign().z1)["1"])
+    for k, w in enumerate(ws):
+        a, b, r = (x.step(w, -2.0, dt=2e-3) for x in (n, p, ref_n))
+        assert_same(a, b, (w_c, w))
+        assert a["P_loss"] >= -1e-12
+        pl = sum(a[f] for f in ("PL1", "PL2", "PL3", "PL5", "PL6", "PL_support", "PL_seal",
+                                "PL_churn", "PL_mesh"))
+        assert pl == pytest.approx(a["P_loss"], rel=1e-9, abs=1e-12)
+        tau = a["torque_out"]       # minus the load on the driven shaft
+        lossless = tau * ratio
+        share = math.tanh(abs(w) / w_c) if w_c else 1.0
+        assert a["tau_in"] - lossless == pytest.approx(share * (r["tau_in"] - lossless),
+                                                       rel=1e-9, abs=1e-12)
+    for x in (n, p, ref_n):
+        x.close()
+
+
 # -- one formula, two languages ----------------------------------------------------------------
 class CExtra(ctypes.Structure):
     _fields_ = [(e[0], ctypes.c_double) for e in nb.EXTRA]
@@ -635,11 +664,11 @@ def test_build_design_changes_every_reducer_fmu(calibrated_fmus, native, fmu):
     # the existing variables keep their value references; the new parameters come last, in
     # the order they were added (cycloid_drive.LATE_DESIGN_PARAMETERS)
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    assert vr["thermal_T_scale"] == max(vr.values())
+    assert vr["loss_transition"] == max(vr.values())
     assert (vr["nu_100"] < vr["load_loss_scale"] < vr["thermal_loss_per_10K"]
             < vr["thermal_T_ref"] < vr["ripple_2x"] < vr["ripple_out_1x"] < vr["ripple_out_2x"]
             < vr["ripple_out_2x_load_phase"] < vr["stribeck_transition"]
-            < vr["thermal_T_scale"])
+            < vr["thermal_T_scale"] < vr["loss_transition"])
 
 
 def test_bad_input_gives_fmi2error_with_a_message(native):
@@ -670,7 +699,9 @@ def test_bad_input_gives_fmi2error_with_a_message(native):
                                ("ripple_2x_phase", float("inf"), "ripple_2x_phase"),
                                ("stribeck_transition", -1.0, "stribeck_transition = -1"),
                                ("thermal_T_scale", 0.5, "thermal_T_scale = 0.5"),
-                               ("thermal_T_scale", -20.0, "thermal_T_scale = -20")):
+                               ("thermal_T_scale", -20.0, "thermal_T_scale = -20"),
+                               ("loss_transition", -0.1, "loss_transition = -0.1"),
+                               ("loss_transition", float("nan"), "loss_transition")):
         fresh.messages.clear()
         with pytest.raises(FMICallException) as exc:
             fresh.set(**{name: value})

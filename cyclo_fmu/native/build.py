@@ -127,7 +127,11 @@ EXTRA = (
     ("thermal_T_scale", "K", "TemperatureDifference", 0.0, False, "temperature scale theta "
      "of the warm-up's temperature law: the losses times (1 + c (theta/10 K)(1 - exp(-(T_oil "
      "- thermal_T_ref)/theta))), c = thermal_loss_per_10K (model_core.thermal."
-     "loss_temperature_law); 0: the linear law; else at least 1 K"),)
+     "loss_temperature_law); 0: the linear law; else at least 1 K"),
+    ("loss_transition", "rad/s", "AngularVelocity", 0.0, False, "transition width w_c of the "
+     "whole loss through standstill: the loss torque (input torque minus the lossless one) "
+     "and every partial loss times tanh(|w_in|/w_c) (pre-sliding; model_core.friction."
+     "loss_transition); 0: the losses at full value at any speed; >= 0"),)
 #: value references of EXTRA: its first EXTRA_FIRST at 30.., the others at EXTRA_VR1..
 #: (50..59 were taken when they came; fmi2_cycloid.c's extra_index)
 EXTRA_FIRST = 20

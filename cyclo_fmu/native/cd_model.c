@@ -159,6 +159,12 @@ static double reversal_sign(double w, double w_r)
     return w_r > 0 ? tanh(w / w_r) : sign(w);
 }
 
+/* model_core.friction.loss_transition: tanh(|w|/w_c), 1 at w_c = 0 */
+double cd_loss_transition(const CDExtra *x, double w)
+{
+    return x->loss_transition > 0 ? reversal_sign(fabs(w), x->loss_transition) : 1.0;
+}
+
 double cd_steady_torque(const CDExtra *x, double w)
 {
     double t = x->drag_torque * (sign(w) * pow(fabs(w) / CD_W_REF, x->drag_exponent));

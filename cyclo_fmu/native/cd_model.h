@@ -65,9 +65,12 @@ typedef struct {
     /* the warm-up's temperature law: its temperature scale theta, K (0: the linear law;
      * model_core.thermal.loss_temperature_law) */
     double thermal_T_scale;
+    /* the whole loss through standstill: its transition width w_c, rad/s (0: the losses at
+     * full value; model_core.friction.loss_transition) */
+    double loss_transition;
 } CDExtra;
 
-#define CD_N_EXTRA 34
+#define CD_N_EXTRA 35
 
 /* A discovered loss term (design [[extra.discovered]], model_core.discovered): the torque
  * coefficient * sgn(w) (|w|/300 rad/s)^speed_exponent (|tau_out|/10 N*m)^load_exponent. */
@@ -107,6 +110,10 @@ double cd_steady_torque(const CDExtra *x, double w);
 /* ExtraPhysics.thermal_per_10K_torque: the loss change per 10 K of the grease temperature T
  * (K) from thermal_T_ref (N*m), linear or (thermal_T_scale > 0) the exponential law. */
 double cd_thermal_per_10K_torque(const CDExtra *x, double T, double loss_in);
+
+/* ExtraPhysics.loss_transition_share: the share tanh(|w|/w_c) of the model's losses built up
+ * at driving speed w (rad/s); 1 at loss_transition 0 (model_core.friction.loss_transition). */
+double cd_loss_transition(const CDExtra *x, double w);
 
 /* ExtraPhysics.dynamic_torque: inertia, ripple and warm-up torque (N*m). */
 double cd_dynamic_torque(const CDExtra *x, double alpha, double theta, double order,

@@ -11,7 +11,8 @@
  *            10..29 outputs, in the order of OUT_NAMES
  *            30..49 extra physics parameters, in the order of CDExtra (its first 20)
  *            60..71 its fields 20..31 (the ripple at 2x, output 1x and 2x), 72 its field
- *            32 (stribeck_transition), 73 its field 33 (thermal_T_scale)
+ *            32 (stribeck_transition), 73 its field 33 (thermal_T_scale), 74 its field
+ *            34 (loss_transition)
  *            50 J_out, 51 alpha_ref (parameters of the output inertia)
  *            52 PL_mesh (output: the calibrated mesh loss; out[O_PL_MESH])
  *            53 T_oil, 54 Q_ambient (outputs of the temperature)
@@ -79,7 +80,8 @@ static const char *const EXTRA_NAMES[CD_N_EXTRA] = {
     "thermal_loss_per_10K", "thermal_T_ref", "ripple_2x", "ripple_2x_phase", "ripple_2x_load",
     "ripple_2x_load_phase", "ripple_out_1x", "ripple_out_1x_phase", "ripple_out_1x_load",
     "ripple_out_1x_load_phase", "ripple_out_2x", "ripple_out_2x_phase", "ripple_out_2x_load",
-    "ripple_out_2x_load_phase", "stribeck_transition", "thermal_T_scale"};
+    "ripple_out_2x_load_phase", "stribeck_transition", "thermal_T_scale",
+    "loss_transition"};
 
 /* index into CDExtra of a value reference, or -1 */
 static int extra_index(fmi2ValueReference r)
@@ -91,11 +93,12 @@ static int extra_index(fmi2ValueReference r)
 }
 
 #define STATE_MAGIC 0x43444e53u   /* "CDNS" */
-#define STATE_VERSION 9u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
+#define STATE_VERSION 10u   /* 3: PL_mesh (calibration); 4: CDExtra.stribeck_exponent, run-in,
                               * load ripple, CDState.distance; 5: the oil temperature;
                               * 6: CDExtra's warm-up per 10 K; 7: the ripple at 2x, output
                               * 1x and 2x; 8: CDExtra.stribeck_transition;
-                              * 9: CDExtra.thermal_T_scale */
+                              * 9: CDExtra.thermal_T_scale;
+                              * 10: CDExtra.loss_transition */
 
 /* Everything that defines the instance's behaviour from here on: inputs, parameters,
  * outputs and the dynamic state. Plain data: copied and serialised as it is. */
@@ -180,7 +183,7 @@ static double *extra_field(CDExtra *x, int i)
     f[27] = &x->ripple_out_1x_load_phase; f[28] = &x->ripple_out_2x;
     f[29] = &x->ripple_out_2x_phase; f[30] = &x->ripple_out_2x_load;
     f[31] = &x->ripple_out_2x_load_phase; f[32] = &x->stribeck_transition;
-    f[33] = &x->thermal_T_scale;
+    f[33] = &x->thermal_T_scale; f[34] = &x->loss_transition;
     return f[i];
 }
 
@@ -190,6 +193,7 @@ static const char *extra_problem(int i, double v)
     if (!isfinite(v)) return "must be a finite number";
     switch (i) {
     case 0: case 1: case 3: case 32:   /* case 32: the reversal's width, 0 = a sharp sign */
+    case 34:   /* the losses' transition width through standstill, 0 = the losses at full value */
     case 20: case 22: case 24: case 26: case 28: case 30:   /* the ripples' amplitudes */
         return v < 0 ? "must not be negative" : NULL;
     case 2: case 9:
@@ -223,11 +227,14 @@ static int shaft_ripple(const CDExtra *x)
 }
 
 /* CycloidDrive._gear_torque (map): the driving-shaft torque of the gear at a load torque */
-static double gear_torque(int mode, double w_in, double tau_out, double T)
+static double gear_torque(const CDExtra *x, int mode, double w_in, double tau_out, double T)
 {
     CDSolution r;
+    double lossless = -tau_out * CD_MAP.modes[mode].ratio_out;
     cd_solve_thermal(&CD_THERMAL, mode, w_in, tau_out, T, &r);
-    return r.torques[CD_MAP.modes[mode].a];
+    /* the losses through standstill, as evaluate() scales them (1 at loss_transition 0) */
+    if (x->loss_transition == 0) return r.torques[CD_MAP.modes[mode].a];
+    return lossless + cd_loss_transition(x, w_in) * (r.torques[CD_MAP.modes[mode].a] - lossless);
 }
 
 /* CycloidDrive._solve's output inertia: J_load and J_load_dec, secants of the driving torque
@@ -242,7 +249,7 @@ static void output_inertia(CDState *s, int mode, double tau_ext, double J_r, dou
         s->out[O_J_LOAD] = s->out[O_J_LOAD_DEC] = 0.0;
         return;
     }
-    static_ = gear_torque(mode, w_in, tau_ext, T);
+    static_ = gear_torque(&s->extra, mode, w_in, tau_ext, T);
     if (commit && s->has_key && fabs(w_in - s->key_w) <= SLOPE_REUSE * fabs(s->key_w)
         && fabs(tau_ext - s->key_tau) <= SLOPE_REUSE * fabs(s->key_tau)) {
         J_acc = s->key_J_acc;
@@ -250,8 +257,8 @@ static void output_inertia(CDState *s, int mode, double tau_ext, double J_r, dou
     } else {
         double A = w_in >= 0 ? s->alpha_ref : -s->alpha_ref;   /* speeding up */
         double lossless = J_r * CD_MAP.modes[mode].ratio_out;
-        J_acc = (gear_torque(mode, w_in, tau_ext - J_r * A, T) - static_) / A;
-        J_dec = (static_ - gear_torque(mode, w_in, tau_ext + J_r * A, T)) / A;
+        J_acc = (gear_torque(&s->extra, mode, w_in, tau_ext - J_r * A, T) - static_) / A;
+        J_dec = (static_ - gear_torque(&s->extra, mode, w_in, tau_ext + J_r * A, T)) / A;
         /* locked: the lossless reflection */
         if (!(isfinite(J_acc) && J_acc > 0)) J_acc = lossless;
         if (!(isfinite(J_dec) && J_dec > 0)) J_dec = lossless;
@@ -287,6 +294,7 @@ static void evaluate(Instance *c, double t, double dt, int commit)
                   || s->extra.run_in_change != 0 || s->extra.ripple_1x_load != 0
                   || s->extra.ripple_roller_load != 0 || s->extra.thermal_loss_per_10K != 0
                   || shaft_ripple(&s->extra);
+    int transition = s->extra.loss_transition != 0;
     /* CycloidDrive._temperature: the input, or the heat balance stepped with the loss at the
      * step's start held over the step: the step's inputs at the temperature of its start
      * (CycloidDrive._loss_at_start: evaluated without a step of the dynamic terms) */
@@ -330,6 +338,14 @@ static void evaluate(Instance *c, double t, double dt, int commit)
                CD_MAP_SPEED_MAX);
     }
     s->out[O_W_OUT] = r.speeds[m->b];
+    if (transition) {
+        /* the losses through standstill (ExtraPhysics.loss_transition_share): the loss torque
+         * beyond the lossless one and every partial loss times tanh(|w_in|/w_c) */
+        double share = cd_loss_transition(&s->extra, w_in), lossless = -tau_out * m->ratio_out;
+        int i;
+        r.torques[m->a] = lossless + share * (r.torques[m->a] - lossless);
+        for (i = 0; i < CD_N_LOSSES; i++) r.losses[i] = share * r.losses[i];
+    }
     tau_in = tau_in_gear = r.torques[m->a];
     s->out[O_PL1] = r.losses[0];
     s->out[O_PL2] = r.losses[1];
@@ -389,7 +405,7 @@ static void evaluate(Instance *c, double t, double dt, int commit)
     s->out[O_P_EXTRA] = (tau_in - tau_in_gear) * w_in;
     s->out[O_P_STORED] = p_stored;
     s->out[O_P_LOSS] = tau_in * w_in + tau_out * s->out[O_W_OUT] - p_stored;
-    if (steady || dynamic) {
+    if (steady || dynamic || transition) {
         double pa = tau_in * w_in, pb = tau_out * s->out[O_W_OUT];
         p_in = pa > pb ? pa : pb;
         p_out = -(pa < pb ? pa : pb);

@@ -166,7 +166,12 @@ LATE_DESIGN_PARAMETERS = [
     ("thermal_T_scale", "extra", "thermal_T_scale", "K", "temperature scale theta of the "
      "warm-up's temperature law: the losses times (1 + c (theta/10 K)(1 - exp(-(T_oil - "
      "thermal_T_ref)/theta))), c = thermal_loss_per_10K; 0: the linear law (1 + c (T_oil - "
-     "thermal_T_ref)/10 K); else at least 1 K", Real)]
+     "thermal_T_ref)/10 K); else at least 1 K", Real),
+    # the whole loss through standstill (model_core.friction.loss_transition)
+    ("loss_transition", "extra", "loss_transition", "rad/s", "transition width w_c of the "
+     "whole loss through standstill: the loss torque (input torque minus the lossless one) "
+     "and every partial loss times tanh(|w_in|/w_c) (pre-sliding); 0: the losses at full "
+     "value at any speed; >= 0", Real)]
 ALL_DESIGN_PARAMETERS = DESIGN_PARAMETERS + LATE_DESIGN_PARAMETERS
 #: design parameters of the heat balance only (run-time in both FMUs; not in the loss map)
 THERMAL_PARAMETERS = ("ambient_temperature", "housing_heat_capacity", "housing_heat_transfer",
@@ -209,7 +214,7 @@ PARAMETER_LIMITS = dict(
                                 "drag_torque", "stribeck_torque", "input_inertia",
                                 "ripple_2x", "ripple_2x_load", "ripple_out_1x",
                                 "ripple_out_1x_load", "ripple_out_2x", "ripple_out_2x_load",
-                                "stribeck_transition", "thermal_T_scale")},
+                                "stribeck_transition", "thermal_T_scale", "loss_transition")},
     # must be positive: FMI's min is inclusive, so the smallest positive normal double
     **{n: (sys.float_info.min, None) for n in ("stribeck_speed", "thermal_tau")},
     mu_boundary=(0.0, 1.0), mu_rolling=(0.0, 1.0), thermal_loss_change=(-1.0, None),
@@ -573,6 +578,7 @@ class CycloidDrive(UnitSlave):
             ex = self._design.extra
             self._steady_extra = bool(ex.drag_torque or ex.stribeck_torque)
             self._discovered = bool(ex.discovered)
+            self._transition = bool(ex.loss_transition)
             self._dynamic_extra = bool(ex.input_inertia or ex.has_ripple
                                        or ex.run_in_change
                                        or ex.thermal_loss_change
@@ -698,7 +704,15 @@ class CycloidDrive(UnitSlave):
         self.tau_in_static = self.tau_in - (gear - static)
 
     def _gear_torque(self, w_in, tau_out):
-        """Driving-shaft torque of the gear alone (map or exact core) at a load torque."""
+        """Driving-shaft torque of the gear alone (map or exact core) at a load torque, its
+        losses through standstill scaled as ``_update_at`` scales them."""
+        gear = self._gear_torque_full(w_in, tau_out)
+        if not self._transition:
+            return gear
+        lossless = -tau_out * self._ratio_out
+        return lossless + float(self._design.extra.loss_transition_share(w_in)) * (gear - lossless)
+
+    def _gear_torque_full(self, w_in, tau_out):
         if self._map is not None:
             return self._map.solve(w_in, tau_out, self._loss_T())[1][self._shaft_index[0]]
         if w_in == 0:
@@ -729,6 +743,16 @@ class CycloidDrive(UnitSlave):
                 self.tau_in += float(self._design.extra.steady_torque(w_in))
         else:
             speeds, torques, losses, eta, eta0, locked = self._exact(w_in, tau_out)
+        if self._transition:
+            # the losses through standstill (ExtraPhysics.loss_transition_share, the one
+            # formula): the gear's loss torque beyond the lossless one and every partial loss
+            # times tanh(|w_in|/w_c), as the native FMU and the replay scale them
+            share = float(self._design.extra.loss_transition_share(w_in))
+            change = (share - 1.0) * (self._tau_in_gear + tau_out * self._ratio_out)
+            self._tau_in_gear += change
+            self.tau_in += change
+            for n in OUTPUT_LOSSES:
+                setattr(self, n, share * getattr(self, n))
         if self._discovered:     # design [[extra.discovered]] (model_core.discovered)
             self.tau_in += float(self._design.extra.discovered_torque(w_in, tau_out))
         self.P_stored = 0.0
@@ -748,7 +772,7 @@ class CycloidDrive(UnitSlave):
         if not (math.isfinite(self.P_loss) and math.isfinite(self.tau_housing)):
             self.fail(f"w_in = {w_in!r} rad/s, tau_out = {tau_out!r} N.m give outputs that "
                       "are not finite numbers (inputs far beyond any drive): refused")
-        if self._steady_extra or self._dynamic_extra or self._discovered:
+        if self._steady_extra or self._dynamic_extra or self._discovered or self._transition:
             p_in = max(self.tau_in * w_in, tau_out * self.w_out)
             p_out = -min(self.tau_in * w_in, tau_out * self.w_out)
             eta = p_out / p_in if (p_in > 0 and p_out > 0 and not locked) else 0.0
