@@ -22,6 +22,9 @@ import run3 as R  # noqa: E402
 
 R.GEN = Path(__file__).resolve().parent / "gen4.py"
 R.CASES_JSON, R.RESULTS_JSON = "cases4.json", "results4.json"
+# gen4.build fades every loss through standstill as tanh(|w|/gen4.W_STICK), W_STICK = 0.1 rad/s,
+# in every recording: the library's loss_transition since the batch was fixed (README)
+R.ALWAYS_TOLERATED = ["loss_transition"]
 R.CATEGORIES = ("clean", "single", "forms", "triple", "outside")
 
 
