@@ -730,7 +730,8 @@ def cmd_diagnose(args) -> int:
         rec, mode, checks = load_recording(args.recording, args.mode, design,
                                            columns=args.columns, units=args.units)
         d, result = diagnose_recording(rec, mode, checks, design, progress=True,
-                                       calibrate=args.calibrate, bandwidth=bandwidth)
+                                       calibrate=args.calibrate, bandwidth=bandwidth,
+                                       with_effects=tuple(args.with_effect or ()))
     except (RecordingError, DiagnosisError) as exc:
         raise _recording_error(args.recording, exc) from None
     if args.verify:
@@ -1096,6 +1097,12 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--design", help="design file (TOML) or preset name (mackic-rig)")
     dg.add_argument("--out", help="folder for plots, diagnosis.json, design_updated.toml")
     _calibrate_options(dg)
+    from model_core.effects import OPT_IN
+    dg.add_argument("--with-effect", action="append", choices=OPT_IN, metavar="EFFECT",
+                    help="add an effect a diagnosis considers only when asked (repeatable; "
+                    f"{', '.join(OPT_IN)}: the losses' build-up through standstill over a "
+                    "width of speed w_c, for recordings that creep at a few r/min: hoists, "
+                    "positioning)")
     dg.add_argument("--bandwidth", type=float, default=None, metavar="HZ",
                     help="the input torque transducer's bandwidth [Hz] (its data sheet's -3 dB "
                     "frequency with the amplifier's filter): the model's torque is filtered by "

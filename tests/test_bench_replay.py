@@ -196,7 +196,9 @@ def _closure(effect, sets, tmp_path, duration=20.0, plan="full", engine="bench",
     path = tmp_path / f"{effect}.csv"
     write_synth(path, rec)
     r, mode, checks = load_recording(path, "S1")
-    d, _ = diagnose_recording(r, mode, checks, base, calibrate=calibrate)
+    from model_core.effects import OPT_IN
+    d, _ = diagnose_recording(r, mode, checks, base, calibrate=calibrate,
+                              with_effects=(effect,) if effect in OPT_IN else ())
     fixed, notes = d.updated
     toml = tmp_path / "design_updated.toml"
     toml.write_text(design_to_toml(fixed) + "".join(f"# {n}\n" for n in notes))

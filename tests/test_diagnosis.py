@@ -16,7 +16,7 @@ import pytest
 from cyclo_fmu.diagnosis import Diagnoser, DiagnosisError, ljung_box_p, updated_design
 from cyclo_fmu.synth import DEFAULT_EFFECTS, SynthSettings, paper_like, synthesize
 from model_core import DriveDesign
-from model_core.effects import DEFAULT_CANDIDATES, EFFECTS
+from model_core.effects import DEFAULT_CANDIDATES, EFFECTS, OPT_IN
 
 LIBRARY = [e for e in DEFAULT_CANDIDATES if e not in ("none", "friction_miscalibrated")]
 #: the plan under which each effect is identifiable: a transducer gain error needs back-driven
@@ -33,8 +33,8 @@ def as_recording(r):
                            torque_out=r["torque_out_Nm"], temperature=r.get("temperature_C"))
 
 
-def diagnose(r, mode, design=None):
-    return Diagnoser(design, mode).fit(as_recording(r)).diagnosis_
+def diagnose(r, mode, design=None, candidates=None):
+    return Diagnoser(design, mode, candidates=candidates).fit(as_recording(r)).diagnosis_
 
 
 def named(d):
@@ -70,7 +70,8 @@ def _single(effect, seed, closure=False):
     assert effect == "none" or abs(truth["friction_error"]) <= 0.15
     # concealed: the hidden torque is comparable with the transducer noise (0.003 N*m)
     assert truth["extra_torque_rms_Nm"] < 0.02
-    d = diagnose(r, mode)
+    # an opt-in effect (model_core.effects.OPT_IN) is found where it is asked for
+    d = diagnose(r, mode, candidates=DEFAULT_CANDIDATES + OPT_IN if effect in OPT_IN else None)
     assert d.effect == effect, (d.effect, [(e["id"], round(e["bic"])) for e in d.evidence[:3]])
     assert not d.unexplained["present"], d.unexplained["statement"]
     inside_bounds(d)
@@ -100,13 +101,13 @@ def _single(effect, seed, closure=False):
     return d
 
 
-@pytest.mark.parametrize("effect", list(DEFAULT_CANDIDATES))
+@pytest.mark.parametrize("effect", list(DEFAULT_CANDIDATES) + list(OPT_IN))
 def test_names_the_hidden_effect(effect):
     _single(effect, 11 if effect != "viscosity_drift" else 12)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("effect", list(DEFAULT_CANDIDATES))
+@pytest.mark.parametrize("effect", list(DEFAULT_CANDIDATES) + list(OPT_IN))
 @pytest.mark.parametrize("seed", [12, 13, 14])
 def test_names_the_hidden_effect_over_seeds(effect, seed):
     _single(effect, seed, closure=True)

@@ -70,5 +70,7 @@ def test_a_clean_hoist_names_nothing(seed, mode):
     rec = SimpleNamespace(time=r["time_s"], speed_in=r["speed_in_rpm"] * np.pi / 30,
                           torque_in=r["torque_in_Nm"], speed_out=r["speed_out_rpm"] * np.pi / 30,
                           torque_out=r["torque_out_Nm"], temperature=None)
-    d = Diagnoser(DriveDesign(), mode).fit(rec).diagnosis_
-    assert d.effects == [] and not d.unexplained["present"], d.unexplained["statement"]
+    from model_core.effects import DEFAULT_CANDIDATES, OPT_IN
+    for cands in (None, DEFAULT_CANDIDATES + OPT_IN):     # by default, and asked for
+        d = Diagnoser(DriveDesign(), mode, candidates=cands).fit(rec).diagnosis_
+        assert d.effects == [] and not d.unexplained["present"], d.unexplained["statement"]

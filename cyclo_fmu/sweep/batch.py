@@ -56,15 +56,20 @@ def calibration_report(design, d) -> dict | None:
 
 
 def diagnose_recording(rec, mode, checks, design, progress=False, calibrate=True,
-                       bandwidth=None):
+                       bandwidth=None, with_effects=()):
     """Diagnose a loaded recording: ``(diagnosis, result dict)`` with the JSON contract's
     keys (the diagnosis's own, ``mode``, ``checks``, ``read_notes``, ``excluded``, and
     ``calibration_fit`` when a calibration effect is named). ``calibrate`` False leaves the
     calibration effects out of the candidates (``diagnose --no-calibrate``); ``bandwidth``
-    [Hz]: the input torque transducer's (None: the Diagnoser's default)."""
+    [Hz]: the input torque transducer's (None: the Diagnoser's default); ``with_effects``:
+    effects of ``model_core.effects.OPT_IN`` added to the candidates."""
     from threadpoolctl import threadpool_limits
     from cyclo_fmu.diagnosis import Diagnoser
+    from model_core.effects import DEFAULT_CANDIDATES
     kw = {} if bandwidth is None else {"bandwidth": float(bandwidth)}
+    if with_effects:
+        kw["candidates"] = DEFAULT_CANDIDATES + tuple(
+            e for e in with_effects if e not in DEFAULT_CANDIDATES)
     # one BLAS thread throughout, as in Diagnoser.fit: the updated design's check and the
     # calibration's report give the same numbers on any machine, and no BLAS thread is
     # woken to spin beside the diagnosis
