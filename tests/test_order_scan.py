@@ -2,11 +2,16 @@
 input shaft, found in the angle domain where the speed varies and the time spectrum smears
 them, judged family-wise against twins like the fixed-frequency lines."""
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from cyclo_fmu.diagnosis.order_scan import SCAN_TURNS, order_scan
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from order_scan_false_alarm import noise as _noise  # noqa: E402  (white, AR(1), 1/f)
 
 FS = 1000.0
 LISTED = (1.0, 2.0, 3.0, 1 / 14, 2 / 14)
@@ -21,20 +26,6 @@ def _plan(kind, seconds=120.0):
     else:
         w = 250 * np.sin(2 * np.pi * t / 60)
     return w, np.cumsum(w) / FS
-
-
-def _noise(kind, n, rng, sd=0.005):
-    e = rng.standard_normal(n)
-    if kind == "ar1":
-        from scipy.signal import lfilter
-        e = lfilter([1.0], [1.0, -0.95], e)
-    elif kind == "flicker":
-        f = np.fft.rfftfreq(n)
-        X = np.fft.rfft(e)
-        X[1:] /= np.sqrt(f[1:])
-        X[0] = 0.0
-        e = np.fft.irfft(X, n)
-    return sd * e / np.std(e)
 
 
 @pytest.mark.parametrize("plan", ["drive cycle", "four quadrants"])
