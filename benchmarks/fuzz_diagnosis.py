@@ -17,7 +17,7 @@ from model_core.effects import EFFECTS
 
 #: the losses through standstill (loss_transition) show only where a drive creeps at 1-3 r/min
 #: under load, which this plan (the synthesiser's 'full') never does: hidden, it could not be
-#: found; it stays a candidate of every diagnosis here (a wrong name of it counts)
+#: found; nor is it a candidate here (model_core.effects.OPT_IN: only when asked)
 LIBRARY = [e for e in EFFECTS if e not in ("none", "friction_miscalibrated", "torque_sensor_gain",
                                            "loss_transition")]
 

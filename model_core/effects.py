@@ -64,46 +64,44 @@ from .thermal import T_STEP, loss_temperature_law  # noqa: E402
 THETA_GRID = (10.0, 20.0, 40.0, 80.0)
 
 
-class TemperatureScale(float):
+class _TaggedShape(float):
+    """A float shape value of one kind, told apart from a plain float (or another kind) of the
+    same value: equal only to a value of its own class (``_tag`` keys its hash)."""
+
+    __slots__ = ()
+    _tag = ""
+
+    def __repr__(self):
+        return f"{type(self).__name__}({float(self)!r})"
+
+    def __eq__(self, other):
+        return isinstance(other, type(self)) and float(self) == float(other)
+
+    def __ne__(self, other):
+        return not self == other
+
+    def __hash__(self):
+        return hash((self._tag, float(self)))
+
+
+class TemperatureScale(_TaggedShape):
     """A shape value of a warm-up's temperature form: the temperature scale theta [K] of the
     exponential temperature law (thermal.loss_temperature_law). A float, told apart from the
     time constant [s] the same effect has in its time form: equal only to another
     TemperatureScale of the same value."""
 
     __slots__ = ()
-
-    def __repr__(self):
-        return f"TemperatureScale({float(self)!r})"
-
-    def __eq__(self, other):
-        return isinstance(other, TemperatureScale) and float(self) == float(other)
-
-    def __ne__(self, other):
-        return not self == other
-
-    def __hash__(self):
-        return hash(("theta", float(self)))
+    _tag = "theta"
 
 
-class HeatBalanceTau(float):
+class HeatBalanceTau(_TaggedShape):
     """A shape value of a warm-up in time driven by the loss power: the time constant tau = R C
     [s] of the housing's lumped heat balance (thermal.housing_path), heated by the replayed
     model's loss power; told apart from the plain first-order time constant (a float) of the
     same value: equal only to another HeatBalanceTau of the same value."""
 
     __slots__ = ()
-
-    def __repr__(self):
-        return f"HeatBalanceTau({float(self)!r})"
-
-    def __eq__(self, other):
-        return isinstance(other, HeatBalanceTau) and float(self) == float(other)
-
-    def __ne__(self, other):
-        return not self == other
-
-    def __hash__(self):
-        return hash(("tau_housing", float(self)))
+    _tag = "tau_housing"
 
 
 def heat_balance_rise(s, tau):
